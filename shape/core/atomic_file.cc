@@ -1,0 +1,106 @@
+#include "shape/core/atomic_file.h"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <system_error>
+
+#include "shape/core/error.h"
+
+namespace pectus {
+namespace fs = std::filesystem;
+namespace {
+
+fs::path TempPathFor(const fs::path& target) {
+  static std::atomic<unsigned> counter{0};
+  const std::string name = "." + target.stem().string() + ".pectus-tmp-" + std::to_string(::getpid()) + "-" +
+                           std::to_string(counter++) + target.extension().string();
+  return target.parent_path() / name;
+}
+
+void EnsureParent(const fs::path& target) {
+  const fs::path parent = target.parent_path();
+  if (parent.empty()) return;
+  std::error_code ec;
+  fs::create_directories(parent, ec);
+  if (ec) ThrowFailure("cannot create folder: " + ec.message(), parent.string());
+}
+
+void RenameInto(const fs::path& temp, const fs::path& target) {
+  std::error_code ec;
+  fs::rename(temp, target, ec);
+  if (ec) {
+    fs::remove(temp, ec);
+    ThrowFailure("cannot move the finished file into place: " + ec.message(), target.string());
+  }
+}
+
+}  // namespace
+
+AtomicOutput::AtomicOutput(fs::path target) : target_(std::move(target)), buffer_(1 << 20) {
+  EnsureParent(target_);
+  temp_ = TempPathFor(target_);
+  stream_.rdbuf()->pubsetbuf(buffer_.data(), static_cast<std::streamsize>(buffer_.size()));
+  stream_.open(temp_, std::ios::binary | std::ios::trunc);
+  if (!stream_) ThrowFailure("cannot open for writing", target_.string());
+}
+
+AtomicOutput::~AtomicOutput() {
+  if (!committed_) {
+    stream_.close();
+    std::error_code ec;
+    fs::remove(temp_, ec);
+  }
+}
+
+void AtomicOutput::Commit() {
+  stream_.flush();
+  const bool ok = static_cast<bool>(stream_);
+  stream_.close();
+  if (!ok || stream_.fail()) ThrowFailure("write failed (disk full?)", target_.string());
+  RenameInto(temp_, target_);
+  committed_ = true;
+}
+
+void WriteFileAtomically(const fs::path& path, std::string_view contents) {
+  AtomicOutput out(path);
+  out.stream().write(contents.data(), static_cast<std::streamsize>(contents.size()));
+  out.Commit();
+}
+
+OutputTransaction::~OutputTransaction() {
+  if (committed_) return;
+  for (const auto& [temp, target] : staged_) {
+    std::error_code ec;
+    fs::remove_all(temp, ec);
+  }
+}
+
+fs::path OutputTransaction::Stage(const fs::path& target) {
+  EnsureParent(target);
+  fs::path temp = TempPathFor(target);
+  staged_.emplace_back(temp, target);
+  return temp;
+}
+
+void OutputTransaction::CommitAll() {
+  for (const auto& [temp, target] : staged_) {
+    std::error_code ec;
+    if (!fs::exists(temp, ec)) continue;  // a stage that was never written is simply skipped
+    if (fs::is_directory(target, ec) && fs::is_directory(temp, ec)) fs::remove_all(target, ec);
+    RenameInto(temp, target);
+  }
+  committed_ = true;
+}
+
+void RefuseOverwritingInputs(const fs::path& output, const std::vector<fs::path>& inputs) {
+  std::error_code ec;
+  const fs::path out = fs::weakly_canonical(output, ec);
+  for (const auto& in : inputs) {
+    const fs::path canon = fs::weakly_canonical(in, ec);
+    const bool same = (out == canon) || (fs::exists(output, ec) && fs::exists(in, ec) && fs::equivalent(output, in, ec));
+    if (same) ThrowUsage("output " + output.string() + " is also an input; pectus never overwrites its input");
+  }
+}
+
+}  // namespace pectus

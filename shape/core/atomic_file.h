@@ -1,0 +1,63 @@
+// pectus: outputs written atomically (temporary file in the same folder, then rename).
+#pragma once
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace pectus {
+
+/// Writes one file atomically: everything goes to a hidden temporary file beside the target, which
+/// Commit() renames over the target. If the object is destroyed without Commit() (an exception, an
+/// early return), the temporary file is removed and the target is untouched.
+class AtomicOutput {
+ public:
+  explicit AtomicOutput(std::filesystem::path target);
+  ~AtomicOutput();
+  AtomicOutput(const AtomicOutput&) = delete;
+  AtomicOutput& operator=(const AtomicOutput&) = delete;
+
+  /// Binary stream on the temporary file (1 MiB buffer).
+  std::ofstream& stream() { return stream_; }
+  /// Flushes, checks for write errors (Error(kFailure) naming the target), renames into place.
+  void Commit();
+
+ private:
+  std::filesystem::path target_;
+  std::filesystem::path temp_;
+  std::vector<char> buffer_;
+  std::ofstream stream_;
+  bool committed_ = false;
+};
+
+/// Writes `contents` to `path` atomically.
+void WriteFileAtomically(const std::filesystem::path& path, std::string_view contents);
+
+/// A set of outputs of one command, committed together: Stage() hands out a temporary path beside each
+/// target (same extension, so format detection still works); CommitAll() renames them all into place.
+/// Destroyed without CommitAll(), it removes every staged file, so a failed run leaves nothing behind.
+class OutputTransaction {
+ public:
+  OutputTransaction() = default;
+  ~OutputTransaction();
+  OutputTransaction(const OutputTransaction&) = delete;
+  OutputTransaction& operator=(const OutputTransaction&) = delete;
+
+  /// A temporary path to write `target` to. Creates the target's parent folder if needed.
+  std::filesystem::path Stage(const std::filesystem::path& target);
+  /// Renames every staged file onto its target.
+  void CommitAll();
+
+ private:
+  std::vector<std::pair<std::filesystem::path, std::filesystem::path>> staged_;  // temp, target
+  bool committed_ = false;
+};
+
+/// Throws Error(kUsage) if `output` names the same file as any of `inputs` (pectus never overwrites
+/// its input).
+void RefuseOverwritingInputs(const std::filesystem::path& output,
+                             const std::vector<std::filesystem::path>& inputs);
+
+}  // namespace pectus
