@@ -1,0 +1,81 @@
+// pectus: k-d tree over 3D points (nanoflann), the nearest-neighbour engine of ICP, merging, normals
+// and distance maps.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <nanoflann.hpp>
+#include <utility>
+#include <vector>
+
+#include "shape/core/geometry.h"
+
+namespace pectus {
+
+/// A static k-d tree over the rows of a #points by 3 matrix. The matrix is referenced, not copied: it
+/// must outlive the tree and stay unchanged. Queries are const and thread-safe.
+class KdTree3 {
+ public:
+  /// @param[in] points     #points by 3 positions (mm)
+  /// @param[in] leaf_size  points per leaf (10 to 20 is fastest for 3D)
+  explicit KdTree3(const Points3& points, int leaf_size = 12)
+      : adaptor_{&points},
+        index_(std::make_unique<Index>(3, adaptor_, nanoflann::KDTreeSingleIndexAdaptorParams(leaf_size))) {
+    if (points.rows() > 0) index_->buildIndex();
+  }
+
+  Eigen::Index size() const { return adaptor_.points->rows(); }
+
+  /// The nearest point to `query`: its row and squared distance (mm^2). False if the tree is empty.
+  bool Nearest(const Eigen::Vector3d& query, std::uint32_t* index, double* squared_distance) const {
+    if (size() == 0) return false;
+    nanoflann::KNNResultSet<double, std::uint32_t> result(1);
+    result.init(index, squared_distance);
+    index_->findNeighbors(result, query.data(), nanoflann::SearchParams(32, 0.0f, false));
+    return true;
+  }
+
+  /// The k nearest points, closest first: rows into `indices`, squared distances into
+  /// `squared_distances` (both resized to the number found, <= k).
+  void Knn(const Eigen::Vector3d& query, int k, std::vector<std::uint32_t>* indices,
+           std::vector<double>* squared_distances) const {
+    indices->resize(static_cast<std::size_t>(k));
+    squared_distances->resize(static_cast<std::size_t>(k));
+    if (size() == 0 || k <= 0) {
+      indices->clear();
+      squared_distances->clear();
+      return;
+    }
+    nanoflann::KNNResultSet<double, std::uint32_t> result(static_cast<std::uint32_t>(k));
+    result.init(indices->data(), squared_distances->data());
+    index_->findNeighbors(result, query.data(), nanoflann::SearchParams());
+    indices->resize(result.size());
+    squared_distances->resize(result.size());
+  }
+
+  /// Every point within `radius` (mm) of `query`: (row, squared distance) pairs, closest first when
+  /// `sorted`. Returns how many.
+  std::size_t Radius(const Eigen::Vector3d& query, double radius,
+                     std::vector<std::pair<std::uint32_t, double>>* matches, bool sorted = true) const {
+    matches->clear();
+    if (size() == 0) return 0;
+    return index_->radiusSearch(query.data(), radius * radius, *matches, nanoflann::SearchParams(32, 0.0f, sorted));
+  }
+
+ private:
+  struct Adaptor {
+    const Points3* points;
+    std::size_t kdtree_get_point_count() const { return static_cast<std::size_t>(points->rows()); }
+    double kdtree_get_pt(std::size_t i, std::size_t dim) const {
+      return (*points)(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(dim));
+    }
+    template <class BBox>
+    bool kdtree_get_bbox(BBox&) const { return false; }
+  };
+  using Index = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Adaptor>, Adaptor, 3,
+                                                    std::uint32_t>;
+  Adaptor adaptor_;
+  std::unique_ptr<Index> index_;
+};
+
+}  // namespace pectus
