@@ -1,0 +1,156 @@
+// The `pectus` binary as a user meets it: exit codes, reports, atomic outputs, refused overwrites.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace {
+namespace fs = std::filesystem;
+
+struct Run {
+  int code;
+  std::string output;  // stdout and stderr
+};
+
+Run Pectus(const std::string& args) {
+  const std::string cmd = std::string(PECTUS_EXECUTABLE) + " " + args + " 2>&1";
+  Run run{-1, {}};
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  if (pipe == nullptr) return run;
+  std::array<char, 4096> buf{};
+  while (std::fgets(buf.data(), buf.size(), pipe) != nullptr) run.output += buf.data();
+  const int status = ::pclose(pipe);
+  run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return run;
+}
+
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           (std::string("pectus_cli_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string P(const std::string& name) const { return (dir_ / name).string(); }
+  void Write(const std::string& name, const std::string& text) const { std::ofstream(dir_ / name) << text; }
+  std::size_t CountFiles() const { return static_cast<std::size_t>(std::distance(fs::directory_iterator(dir_), {})); }
+  fs::path dir_;
+};
+
+const std::string kBunny = std::string(PECTUS_SHARED_DIR) + "/datasets/stanford_bunny/";
+
+const char* kSquare =
+    "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+    "element face 2\nproperty list uchar int vertex_indices\nend_header\n"
+    "0 0 0\n100 0 0\n100 100 0\n0 100 0\n3 0 1 2\n3 0 2 3\n";
+
+TEST_F(CliTest, InfoReportsBunnyPointCount) {
+  const Run r = Pectus("info " + kBunny + "bun000.ply --report " + P("r.json"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::ifstream in(P("r.json"));
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["points"], 40256);
+  EXPECT_EQ(j["faces"], 0);
+  EXPECT_EQ(j["likely_units"], "m");
+  EXPECT_EQ(j["elements"][1]["name"], "range_grid");
+  EXPECT_EQ(j["elements"][1]["count"], 204800);
+  EXPECT_NE(r.output.find("--input-units m"), std::string::npos) << "info should say the file is in metres";
+}
+
+TEST_F(CliTest, ConvertRoundTripsThroughEveryWrittenFormat) {
+  Write("square.ply", kSquare);
+  std::string previous = P("square.ply");
+  for (const std::string ext : {"stl", "obj", "ply"}) {
+    const std::string next = P("square_via." + ext);
+    const Run r = Pectus("convert " + previous + " " + next + " --quiet");
+    ASSERT_EQ(r.code, 0) << ext << ": " << r.output;
+    previous = next;
+  }
+  const Run info = Pectus("info " + previous + " --report " + P("info.json"));
+  ASSERT_EQ(info.code, 0) << info.output;
+  std::ifstream in(P("info.json"));
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["points"], 4);  // STL's unshared vertices were welded back
+  EXPECT_EQ(j["faces"], 2);
+  EXPECT_DOUBLE_EQ(j["bounds"]["max"][0].get<double>(), 100.0);
+}
+
+TEST_F(CliTest, ConvertAppliesUnitsAndTransform) {
+  Write("square.ply", kSquare);
+  Write("T.json", R"({"T_target_source": [[0,-1,0,10],[1,0,0,20],[0,0,1,30],[0,0,0,1]]})");
+  const Run r = Pectus("convert " + P("square.ply") + " " + P("out.ply") + " --input-units cm --transform " +
+                       P("T.json") + " --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const Run info = Pectus("info " + P("out.ply") + " --report " + P("i.json"));
+  std::ifstream in(P("i.json"));
+  const auto j = nlohmann::json::parse(in);
+  // 100 cm = 1000 mm along x, rotated onto y, then translated.
+  EXPECT_NEAR(j["bounds"]["min"][0].get<double>(), -990.0, 1e-3);
+  EXPECT_NEAR(j["bounds"]["max"][1].get<double>(), 1020.0, 1e-3);
+  EXPECT_NEAR(j["bounds"]["min"][2].get<double>(), 30.0, 1e-3);
+}
+
+TEST_F(CliTest, BadInputExitsThreeNamesTheFileAndWritesNothing) {
+  Write("broken.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                      "property float z\nend_header\n0 0 0\n1 1\n");
+  const Run r = Pectus("convert " + P("broken.ply") + " " + P("out.ply") + " --report " + P("r.json"));
+  EXPECT_EQ(r.code, 3) << r.output;
+  EXPECT_NE(r.output.find("broken.ply"), std::string::npos) << r.output;
+  EXPECT_EQ(CountFiles(), 1u) << "a failed run must leave no output, no report and no temporary file";
+}
+
+TEST_F(CliTest, MissingFileIsBadInput) {
+  const Run r = Pectus("info " + P("nope.ply"));
+  EXPECT_EQ(r.code, 3) << r.output;
+  EXPECT_NE(r.output.find("nope.ply"), std::string::npos);
+}
+
+TEST_F(CliTest, UsageErrorsExitTwo) {
+  EXPECT_EQ(Pectus("").code, 2);
+  EXPECT_EQ(Pectus("frobnicate").code, 2);
+  EXPECT_EQ(Pectus("convert only_one_argument.ply").code, 2);
+  Write("square.ply", kSquare);
+  EXPECT_EQ(Pectus("convert " + P("square.ply") + " " + P("out.unknown")).code, 2);
+  EXPECT_EQ(Pectus("convert " + P("square.ply") + " " + P("o.ply") + " --input-units furlong").code, 2);
+}
+
+TEST_F(CliTest, RefusesToOverwriteItsInput) {
+  Write("square.ply", kSquare);
+  const auto before = fs::file_size(P("square.ply"));
+  const Run r = Pectus("convert " + P("square.ply") + " " + dir_.string() + "/./square.ply");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("input"), std::string::npos);
+  EXPECT_EQ(fs::file_size(P("square.ply")), before);
+}
+
+TEST_F(CliTest, HelpShowsAnExample) {
+  for (const std::string command : {"info", "convert", "place"}) {
+    const Run r = Pectus(command + " --help");
+    EXPECT_EQ(r.code, 0) << command;
+    EXPECT_NE(r.output.find("Example"), std::string::npos) << command << ": " << r.output;
+    EXPECT_NE(r.output.find("--report"), std::string::npos) << command;
+    EXPECT_NE(r.output.find("--threads"), std::string::npos) << command;
+  }
+}
+
+TEST_F(CliTest, PlaceWritesOneCloudOfAllSweeps) {
+  const Run r = Pectus("place --poses " + kBunny + "bun.conf --input-units m -o " + P("bunny.ply") +
+                       " --report " + P("r.json") + " --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::ifstream in(P("r.json"));
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["points"], 362272);
+  EXPECT_EQ(j["sweeps"].size(), 10u);
+  // The bunny is about 156 x 153 x 118 mm.
+  const double width = j["bounds_mm"]["max"][0].get<double>() - j["bounds_mm"]["min"][0].get<double>();
+  EXPECT_NEAR(width, 155.7, 1.0);
+}
+
+}  // namespace

@@ -1,0 +1,18 @@
+// libFuzzer target: the OBJ parser must never crash, hang or read out of bounds; bad input is an Error.
+#include <cstddef>
+#include <cstdint>
+#include <string_view>
+
+#include "shape/core/error.h"
+#include "shape/io/format_parsers.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  try {
+    pectus::FileSummary summary;
+    const pectus::TriangleMesh mesh =
+        pectus::ParseObj(std::string_view(reinterpret_cast<const char*>(data), size), "fuzz.obj", &summary);
+    mesh.Validate("fuzz.obj");
+  } catch (const pectus::Error&) {
+  }
+  return 0;
+}
