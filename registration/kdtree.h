@@ -35,6 +35,30 @@ class KdTree3 {
     return true;
   }
 
+  /// The nearest point within `max_distance` (mm) of `query`: its row and squared distance (mm^2).
+  /// False if there is none. Faster than Nearest() when most queries have no close neighbour, since
+  /// branches beyond `max_distance` are never visited.
+  bool NearestWithin(const Eigen::Vector3d& query, double max_distance, std::uint32_t* index,
+                     double* squared_distance) const {
+    if (size() == 0) return false;
+    BoundedNearest result(max_distance * max_distance);
+    index_->findNeighbors(result, query.data(), nanoflann::SearchParams(32, 0.0f, false));
+    if (!result.found) return false;
+    *index = result.index;
+    *squared_distance = result.best;
+    return true;
+  }
+
+  /// The k nearest points into caller-owned arrays of at least k entries, closest first; returns how
+  /// many were found (< k only when the tree holds fewer than k points). No allocation.
+  int Knn(const Eigen::Vector3d& query, int k, std::uint32_t* indices, double* squared_distances) const {
+    if (size() == 0 || k <= 0) return 0;
+    nanoflann::KNNResultSet<double, std::uint32_t> result(static_cast<std::uint32_t>(k));
+    result.init(indices, squared_distances);
+    index_->findNeighbors(result, query.data(), nanoflann::SearchParams());
+    return static_cast<int>(result.size());
+  }
+
   /// The k nearest points, closest first: rows into `indices`, squared distances into
   /// `squared_distances` (both resized to the number found, <= k).
   void Knn(const Eigen::Vector3d& query, int k, std::vector<std::uint32_t>* indices,
@@ -71,6 +95,25 @@ class KdTree3 {
     }
     template <class BBox>
     bool kdtree_get_bbox(BBox&) const { return false; }
+  };
+  // A nanoflann result set keeping the single nearest point under a squared-distance bound.
+  struct BoundedNearest {
+    using DistanceType = double;
+    using IndexType = std::uint32_t;
+    explicit BoundedNearest(double bound) : best(bound) {}
+    bool full() const { return true; }
+    bool addPoint(double dist, std::uint32_t i) {
+      if (dist < best) {
+        best = dist;
+        index = i;
+        found = true;
+      }
+      return true;
+    }
+    double worstDist() const { return best; }
+    double best;
+    std::uint32_t index = 0;
+    bool found = false;
   };
   using Index = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Adaptor>, Adaptor, 3,
                                                     std::uint32_t>;

@@ -12,14 +12,14 @@
 namespace {
 namespace fs = std::filesystem;
 
-struct Run {
+struct CliRun {
   int code;
   std::string output;  // stdout and stderr
 };
 
-Run Pectus(const std::string& args) {
+CliRun Pectus(const std::string& args) {
   const std::string cmd = std::string(PECTUS_EXECUTABLE) + " " + args + " 2>&1";
-  Run run{-1, {}};
+  CliRun run{-1, {}};
   FILE* pipe = ::popen(cmd.c_str(), "r");
   if (pipe == nullptr) return run;
   std::array<char, 4096> buf{};
@@ -52,7 +52,7 @@ const char* kSquare =
     "0 0 0\n100 0 0\n100 100 0\n0 100 0\n3 0 1 2\n3 0 2 3\n";
 
 TEST_F(CliTest, InfoReportsBunnyPointCount) {
-  const Run r = Pectus("info " + kBunny + "bun000.ply --report " + P("r.json"));
+  const CliRun r = Pectus("info " + kBunny + "bun000.ply --report " + P("r.json"));
   ASSERT_EQ(r.code, 0) << r.output;
   std::ifstream in(P("r.json"));
   const auto j = nlohmann::json::parse(in);
@@ -69,11 +69,11 @@ TEST_F(CliTest, ConvertRoundTripsThroughEveryWrittenFormat) {
   std::string previous = P("square.ply");
   for (const std::string ext : {"stl", "obj", "ply"}) {
     const std::string next = P("square_via." + ext);
-    const Run r = Pectus("convert " + previous + " " + next + " --quiet");
+    const CliRun r = Pectus("convert " + previous + " " + next + " --quiet");
     ASSERT_EQ(r.code, 0) << ext << ": " << r.output;
     previous = next;
   }
-  const Run info = Pectus("info " + previous + " --report " + P("info.json"));
+  const CliRun info = Pectus("info " + previous + " --report " + P("info.json"));
   ASSERT_EQ(info.code, 0) << info.output;
   std::ifstream in(P("info.json"));
   const auto j = nlohmann::json::parse(in);
@@ -85,10 +85,10 @@ TEST_F(CliTest, ConvertRoundTripsThroughEveryWrittenFormat) {
 TEST_F(CliTest, ConvertAppliesUnitsAndTransform) {
   Write("square.ply", kSquare);
   Write("T.json", R"({"T_target_source": [[0,-1,0,10],[1,0,0,20],[0,0,1,30],[0,0,0,1]]})");
-  const Run r = Pectus("convert " + P("square.ply") + " " + P("out.ply") + " --input-units cm --transform " +
+  const CliRun r = Pectus("convert " + P("square.ply") + " " + P("out.ply") + " --input-units cm --transform " +
                        P("T.json") + " --quiet");
   ASSERT_EQ(r.code, 0) << r.output;
-  const Run info = Pectus("info " + P("out.ply") + " --report " + P("i.json"));
+  const CliRun info = Pectus("info " + P("out.ply") + " --report " + P("i.json"));
   std::ifstream in(P("i.json"));
   const auto j = nlohmann::json::parse(in);
   // 100 cm = 1000 mm along x, rotated onto y, then translated.
@@ -100,14 +100,14 @@ TEST_F(CliTest, ConvertAppliesUnitsAndTransform) {
 TEST_F(CliTest, BadInputExitsThreeNamesTheFileAndWritesNothing) {
   Write("broken.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
                       "property float z\nend_header\n0 0 0\n1 1\n");
-  const Run r = Pectus("convert " + P("broken.ply") + " " + P("out.ply") + " --report " + P("r.json"));
+  const CliRun r = Pectus("convert " + P("broken.ply") + " " + P("out.ply") + " --report " + P("r.json"));
   EXPECT_EQ(r.code, 3) << r.output;
   EXPECT_NE(r.output.find("broken.ply"), std::string::npos) << r.output;
   EXPECT_EQ(CountFiles(), 1u) << "a failed run must leave no output, no report and no temporary file";
 }
 
 TEST_F(CliTest, MissingFileIsBadInput) {
-  const Run r = Pectus("info " + P("nope.ply"));
+  const CliRun r = Pectus("info " + P("nope.ply"));
   EXPECT_EQ(r.code, 3) << r.output;
   EXPECT_NE(r.output.find("nope.ply"), std::string::npos);
 }
@@ -124,7 +124,7 @@ TEST_F(CliTest, UsageErrorsExitTwo) {
 TEST_F(CliTest, RefusesToOverwriteItsInput) {
   Write("square.ply", kSquare);
   const auto before = fs::file_size(P("square.ply"));
-  const Run r = Pectus("convert " + P("square.ply") + " " + dir_.string() + "/./square.ply");
+  const CliRun r = Pectus("convert " + P("square.ply") + " " + dir_.string() + "/./square.ply");
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("input"), std::string::npos);
   EXPECT_EQ(fs::file_size(P("square.ply")), before);
@@ -132,7 +132,7 @@ TEST_F(CliTest, RefusesToOverwriteItsInput) {
 
 TEST_F(CliTest, HelpShowsAnExample) {
   for (const std::string command : {"info", "convert", "place"}) {
-    const Run r = Pectus(command + " --help");
+    const CliRun r = Pectus(command + " --help");
     EXPECT_EQ(r.code, 0) << command;
     EXPECT_NE(r.output.find("Example"), std::string::npos) << command << ": " << r.output;
     EXPECT_NE(r.output.find("--report"), std::string::npos) << command;
@@ -141,7 +141,7 @@ TEST_F(CliTest, HelpShowsAnExample) {
 }
 
 TEST_F(CliTest, PlaceWritesOneCloudOfAllSweeps) {
-  const Run r = Pectus("place --poses " + kBunny + "bun.conf --input-units m -o " + P("bunny.ply") +
+  const CliRun r = Pectus("place --poses " + kBunny + "bun.conf --input-units m -o " + P("bunny.ply") +
                        " --report " + P("r.json") + " --quiet");
   ASSERT_EQ(r.code, 0) << r.output;
   std::ifstream in(P("r.json"));

@@ -1,0 +1,349 @@
+// pectus register: bring scans into one frame. A pair (moving to fixed), or a whole cohort (every scan to
+// a reference, or groupwise by generalised Procrustes): landmarks for the coarse step, ICP for the fine.
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <map>
+#include <optional>
+
+#include "apps/command.h"
+#include "registration/cohort.h"
+#include "registration/pair_registration.h"
+#include "shape/core/error.h"
+#include "shape/core/log.h"
+#include "shape/io/landmark_io.h"
+#include "shape/io/mesh_io.h"
+#include "shape/io/transform_io.h"
+
+namespace pectus::cli {
+namespace {
+namespace fs = std::filesystem;
+
+nlohmann::json IcpJson(const IcpResult& r) {
+  nlohmann::json levels = nlohmann::json::array();
+  for (const IcpLevelReport& l : r.levels) {
+    levels.push_back({{"voxel_size_mm", l.voxel_size_mm},
+                      {"max_distance_mm", l.max_distance_mm},
+                      {"source_points", l.source_points},
+                      {"iterations", l.iterations},
+                      {"converged", l.converged},
+                      {"rms_mm", l.rms_mm}});
+  }
+  return {{"rms_mm", r.rms_mm},         {"inlier_fraction", r.inlier_fraction},
+          {"inliers", r.inliers},       {"iterations", r.iterations},
+          {"converged", r.converged},   {"success", r.success},
+          {"conditioning", r.conditioning}, {"seconds", r.seconds},
+          {"levels", levels},           {"message", r.message}};
+}
+
+nlohmann::json LandmarkJson(const LandmarkAlignmentResult& r) {
+  nlohmann::json residuals = nlohmann::json::object();
+  for (std::size_t i = 0; i < r.labels.size(); ++i) residuals[r.labels[i]] = r.residuals_mm(static_cast<Eigen::Index>(i));
+  return {{"labels", r.labels},
+          {"rms_mm", r.rms_mm},
+          {"residuals_mm", residuals},
+          {"unmatched", r.unmatched},
+          {"transform", TransformToJson(r.T_target_source)}};
+}
+
+// The landmark file beside a scan in a cohort folder: STEM.mrk.json, STEM.fcsv, STEM.csv or STEM.json.
+std::optional<fs::path> LandmarksBeside(const fs::path& scan) {
+  const fs::path dir = scan.parent_path();
+  const std::string stem = scan.stem().string();
+  for (const char* ext : {".mrk.json", ".fcsv", ".csv", ".json"}) {
+    const fs::path p = dir / (stem + ext);
+    if (fs::is_regular_file(p)) return p;
+  }
+  return std::nullopt;
+}
+
+class RegisterCommand : public Command {
+ public:
+  std::string Name() const override { return "register"; }
+  std::string Summary() const override {
+    return "Align scans: landmarks then ICP, for a pair or a whole cohort (to a reference or groupwise)";
+  }
+  std::string Example() const override {
+    return "  pectus register moving.ply --to fixed.ply --moving-landmarks a.mrk.json --fixed-landmarks b.mrk.json \\\n"
+           "      -o moved.ply --transform T.json --report r.json\n"
+           "  pectus register ../shared/datasets/stanford_bunny/bun045.ply --to ../shared/datasets/stanford_bunny/bun000.ply \\\n"
+           "      --input-units m --initial start.json --transform T.json\n"
+           "  pectus register --cohort scans/ --groupwise -o aligned/ --write-moved\n"
+           "  (cohort: every .ply/.obj/.stl/.pcd/.xyz in the folder; landmarks beside each scan as STEM.mrk.json,\n"
+           "   STEM.fcsv or STEM.csv; writes STEM.T.json per scan and summary.json)\n"
+           "  A poor fit is an error (exit 1) with the reason; nothing is written.";
+  }
+  void Configure(CLI::App* app) override {
+    app->add_option("moving", moving_, "Scan to move (pair mode)");
+    app->add_option("--to", fixed_, "Scan to align to (pair mode)");
+    app->add_option("--moving-landmarks", moving_landmarks_, "Landmarks on the moving scan (.mrk.json, .fcsv, .csv)");
+    app->add_option("--fixed-landmarks", fixed_landmarks_, "The same labels on the fixed scan");
+    app->add_option("--initial", initial_, "JSON with \"T_target_source\": the start pose when there are no landmarks");
+    app->add_option("-o,--output", output_, "Pair: the moved scan. Cohort: the folder for transforms and summary");
+    app->add_option("--transform", transform_, "Pair: write T_target_source (4x4, row-major, mm) as JSON");
+    app->add_option("--cohort", cohort_, "Folder of scans to bring into one frame (cohort mode)");
+    app->add_option("--reference", reference_, "Cohort: the reference scan's file name (default: the first)");
+    app->add_flag("--groupwise", groupwise_, "Cohort: generalised Procrustes to the evolving mean");
+    app->add_flag("--write-moved", write_moved_, "Cohort: also write every scan moved into the cohort frame");
+    app->add_flag("--keep-going", keep_going_,
+                  "Cohort: a scan that fails is left out (listed in summary.json) instead of failing the run");
+    app->add_flag("--scale", scale_, "Estimate a similarity (scale) from the landmarks");
+    app->add_option("--input-units", units_, "Unit of the scans' and landmarks' coordinates: mm, cm, m, in")
+        ->default_val("mm");
+    app->add_option("--method", method_, "ICP error: point-to-plane or symmetric")->default_val("point-to-plane");
+    app->add_option("--loss", loss_, "Robust loss: none, huber, cauchy, tukey")->default_val("cauchy");
+    app->add_option("--trim", options_.icp.trim_fraction, "Drop this fraction of the worst pairs each iteration")
+        ->default_val(0.0);
+    app->add_option("--max-distance", options_.icp.initial_max_distance_mm,
+                    "Correspondence gate of the first (coarsest) level, mm")
+        ->default_val(20.0);
+    app->add_option("--patch-radius", options_.patch_radius_mm,
+                    "ICP only on surface patches of this radius (mm) around the moving landmarks")
+        ->default_val(0.0);
+    app->add_option("--max-rms", options_.icp.max_rms_mm, "A fit with a larger RMS distance (mm) is a failure")
+        ->default_val(1.0);
+    app->add_option("--min-inliers", options_.icp.min_inlier_fraction,
+                    "A fit with a smaller fraction of the moving scan near the fixed one is a failure")
+        ->default_val(0.3);
+    app->add_flag("--no-refine", no_refine_, "Landmarks (or --initial) only, no ICP");
+  }
+  std::vector<fs::path> Inputs() const override {
+    std::vector<fs::path> in;
+    for (const std::string& s : {moving_, fixed_, moving_landmarks_, fixed_landmarks_, initial_}) {
+      if (!s.empty()) in.push_back(s);
+    }
+    for (const auto& s : cohort_files_) in.push_back(s);
+    return in;
+  }
+
+  void Run(Context* context) override {
+    options_.landmarks.estimate_scale = scale_;
+    options_.refine = !no_refine_;
+    options_.icp.method = ParseIcpMethod(method_);
+    options_.icp.loss = ParseRobustLoss(loss_);
+    read_options_.input_units = ParseLengthUnit(units_);
+    landmark_options_.input_units = read_options_.input_units;
+    std::string why;
+    if (!options_.IsValid(&why)) ThrowUsage(why);
+    if (!cohort_.empty()) {
+      if (!moving_.empty() || !fixed_.empty()) ThrowUsage("give either a pair (MOVING --to FIXED) or --cohort DIR");
+      RunCohort(context);
+    } else {
+      if (moving_.empty() || fixed_.empty()) ThrowUsage("give MOVING --to FIXED, or --cohort DIR");
+      if (groupwise_ || write_moved_ || keep_going_ || !reference_.empty()) {
+        ThrowUsage("--groupwise, --reference, --write-moved and --keep-going are for --cohort");
+      }
+      RunPair(context);
+    }
+  }
+
+ private:
+  void RunPair(Context* context) {
+    if (moving_landmarks_.empty() != fixed_landmarks_.empty()) {
+      ThrowUsage("give landmarks for both scans (--moving-landmarks and --fixed-landmarks) or for neither");
+    }
+    if (!initial_.empty() && !moving_landmarks_.empty()) ThrowUsage("--initial is for registration without landmarks");
+    fs::path staged_output, staged_transform;
+    if (!output_.empty()) {
+      FormatFromPath(output_);  // an unknown output type is a usage error before any work
+      staged_output = StageOutput(context, *this, output_);
+    }
+    if (!transform_.empty()) staged_transform = StageOutput(context, *this, transform_);
+    Report& report = context->report;
+
+    PointCloud moving, fixed;
+    std::optional<LandmarkSet> moving_lm, fixed_lm;
+    Similarity3 initial;
+    {
+      auto t = report.Stage("read");
+      moving = ReadPointCloud(moving_, read_options_);
+      fixed = ReadPointCloud(fixed_, read_options_);
+      if (!moving_landmarks_.empty()) {
+        moving_lm = ReadLandmarks(moving_landmarks_, landmark_options_);
+        fixed_lm = ReadLandmarks(fixed_landmarks_, landmark_options_);
+      }
+      if (!initial_.empty()) initial = ReadTransformJson(initial_);
+    }
+    if (initial.scale != 1.0) ThrowBadInput(initial_, "the initial pose must be rigid (scale 1)");
+    PairRegistrationResult r;
+    {
+      auto t = report.Stage("register");
+      r = RegisterPair(fixed, moving, fixed_lm ? &*fixed_lm : nullptr, moving_lm ? &*moving_lm : nullptr, initial,
+                       options_);
+    }
+    report["moving"] = moving_;
+    report["fixed"] = fixed_;
+    report["moving_points"] = moving.size();
+    report["fixed_points"] = fixed.size();
+    if (r.landmarks) {
+      report["landmarks"] = LandmarkJson(*r.landmarks);
+      report["landmark_rms_after_mm"] = r.landmark_rms_mm;
+      for (const std::string& label : r.landmarks->unmatched) {
+        Warn("landmark '" + label + "' is on one scan only and was not used");
+      }
+    }
+    if (r.icp) report["icp"] = IcpJson(*r.icp);
+    report["normal_seconds"] = r.normal_seconds;
+    report["transform"] = TransformToJson(r.T_target_source);
+    report["success"] = r.success;
+    report["message"] = r.message;
+    if (!r.success) {
+      ThrowFailure("registration of " + moving_ + " to " + fixed_ + " failed: " + r.message +
+                   " (nothing written; see --max-rms, --min-inliers, --max-distance)");
+    }
+    Info("registered " + moving_ + " to " + fixed_ + ": " + r.message);
+
+    auto t = report.Stage("write");
+    if (!transform_.empty()) {
+      nlohmann::json extra = {{"source", moving_}, {"target", fixed_}, {"success", true}, {"message", r.message}};
+      if (r.icp) {
+        extra["rms_mm"] = r.icp->rms_mm;
+        extra["inlier_fraction"] = r.icp->inlier_fraction;
+        extra["iterations"] = r.icp->iterations;
+        extra["converged"] = r.icp->converged;
+      }
+      if (r.landmarks) extra["landmark_rms_mm"] = r.landmarks->rms_mm;
+      WriteTransformJson(staged_transform, r.T_target_source, extra);
+    }
+    if (!output_.empty()) {
+      TriangleMesh mesh = ReadMesh(moving_, read_options_);  // keeps faces if the moving scan is a mesh
+      TransformInPlace(r.T_target_source, &mesh);
+      WriteMesh(staged_output, mesh);
+    }
+  }
+
+  void RunCohort(Context* context) {
+    if (output_.empty()) ThrowUsage("--cohort needs -o OUTDIR for the transforms and summary.json");
+    if (!transform_.empty() || !initial_.empty() || !moving_landmarks_.empty() || !fixed_landmarks_.empty()) {
+      ThrowUsage("--transform, --initial and --*-landmarks are for pair mode; a cohort's landmarks lie beside its scans");
+    }
+    if (!fs::is_directory(cohort_)) ThrowBadInput(cohort_, "is not a folder");
+    std::vector<fs::path> files;
+    for (const auto& entry : fs::directory_iterator(cohort_)) {
+      if (!entry.is_regular_file()) continue;
+      std::string ext = entry.path().extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+      if (ext == ".ply" || ext == ".obj" || ext == ".stl" || ext == ".pcd" || ext == ".xyz") files.push_back(entry.path());
+    }
+    std::sort(files.begin(), files.end());
+    if (files.size() < 2) ThrowBadInput(cohort_, "holds " + std::to_string(files.size()) + " scans; a cohort needs two or more");
+    cohort_files_ = files;
+
+    CohortOptions co;
+    co.pair = options_;
+    co.mode = groupwise_ ? CohortMode::kGroupwise : CohortMode::kToReference;
+    if (!reference_.empty()) {
+      const auto it = std::find_if(files.begin(), files.end(), [&](const fs::path& p) {
+        return p.filename() == fs::path(reference_).filename();
+      });
+      if (it == files.end()) ThrowUsage("reference '" + reference_ + "' is not a scan in " + cohort_);
+      co.reference = static_cast<int>(it - files.begin());
+    }
+
+    // Stage every output first: a refused overwrite fails before any work.
+    const fs::path out = output_;
+    std::vector<fs::path> staged_T(files.size()), staged_moved(files.size());
+    for (std::size_t i = 0; i < files.size(); ++i) {
+      staged_T[i] = StageOutput(context, *this, out / (files[i].stem().string() + ".T.json"));
+      if (write_moved_) staged_moved[i] = StageOutput(context, *this, out / (files[i].stem().string() + ".ply"));
+    }
+    const fs::path staged_summary = StageOutput(context, *this, out / "summary.json");
+
+    std::vector<CohortScan> scans(files.size());
+    {
+      auto t = context->report.Stage("read");
+      Progress progress("reading scans", static_cast<std::int64_t>(files.size()));
+      std::exception_ptr failure;
+#pragma omp parallel for schedule(dynamic)
+      for (std::size_t i = 0; i < files.size(); ++i) {
+        try {
+          scans[i].name = files[i].stem().string();
+          scans[i].cloud = ReadPointCloud(files[i], read_options_);
+          if (const auto lm = LandmarksBeside(files[i])) scans[i].landmarks = ReadLandmarks(*lm, landmark_options_);
+        } catch (...) {
+#pragma omp critical
+          failure = std::current_exception();
+        }
+        progress.Advance();
+      }
+      if (failure) std::rethrow_exception(failure);
+    }
+    CohortResult r;
+    {
+      auto t = context->report.Stage("register");
+      r = AlignCohort(scans, co);
+    }
+
+    nlohmann::json list = nlohmann::json::array();
+    std::vector<std::string> failed;
+    for (std::size_t i = 0; i < files.size(); ++i) {
+      list.push_back({{"name", scans[i].name},
+                      {"file", files[i].string()},
+                      {"landmarks", scans[i].landmarks.has_value()},
+                      {"success", static_cast<bool>(r.success[i])},
+                      {"rms_mm", r.rms_mm[i]},
+                      {"inlier_fraction", r.inlier_fraction[i]},
+                      {"message", r.messages[i]},
+                      {"transform", TransformToJson(r.T_frame_scan[i])}});
+      if (!r.success[i]) failed.push_back(scans[i].name + " (" + r.messages[i] + ")");
+    }
+    nlohmann::json summary = {{"mode", groupwise_ ? "groupwise" : "to-reference"},
+                              {"reference", scans[static_cast<std::size_t>(co.reference)].name},
+                              {"frame", "the reference scan's frame"},
+                              {"scans", list},
+                              {"all_succeeded", failed.empty()},
+                              {"failed", failed}};
+    if (groupwise_) {
+      summary["iterations"] = r.iterations;
+      summary["converged"] = r.converged;
+      if (r.procrustes) {
+        summary["landmark_procrustes"] = {{"iterations", r.procrustes->iterations},
+                                          {"rms_mm", r.procrustes->rms_mm},
+                                          {"skipped_labels", r.procrustes->skipped}};
+      }
+    }
+    context->report["cohort"] = summary;
+    if (!failed.empty()) {
+      std::string text;
+      for (const auto& f : failed) text += "\n  " + f;
+      if (!keep_going_) {
+        ThrowFailure(std::to_string(failed.size()) + " of " + std::to_string(files.size()) +
+                     " scans could not be registered (nothing written; --keep-going writes the others):" + text);
+      }
+      Warn(std::to_string(failed.size()) + " scans left out:" + text);
+    }
+
+    auto t = context->report.Stage("write");
+    for (std::size_t i = 0; i < files.size(); ++i) {
+      if (!r.success[i]) continue;
+      WriteTransformJson(staged_T[i], r.T_frame_scan[i],
+                         {{"source", files[i].string()},
+                          {"target", "cohort frame (reference " + summary["reference"].get<std::string>() + ")"},
+                          {"rms_mm", r.rms_mm[i]},
+                          {"inlier_fraction", r.inlier_fraction[i]}});
+      if (write_moved_) {
+        TriangleMesh mesh = ReadMesh(files[i], read_options_);
+        TransformInPlace(r.T_frame_scan[i], &mesh);
+        WriteMesh(staged_moved[i], mesh);
+      }
+    }
+    WriteFileAtomically(staged_summary, summary.dump(2) + "\n");
+    Info("registered " + std::to_string(files.size() - failed.size()) + " of " + std::to_string(files.size()) +
+         " scans into the frame of " + summary["reference"].get<std::string>() + " -> " + output_);
+  }
+
+  std::string moving_, fixed_, moving_landmarks_, fixed_landmarks_, initial_, output_, transform_, cohort_, reference_;
+  std::string units_, method_, loss_;
+  bool groupwise_ = false, write_moved_ = false, keep_going_ = false, scale_ = false, no_refine_ = false;
+  PairRegistrationOptions options_;
+  ReadOptions read_options_;
+  LandmarkReadOptions landmark_options_;
+  std::vector<fs::path> cohort_files_;
+};
+
+PECTUS_REGISTER_COMMAND(RegisterCommand, 50);
+
+}  // namespace
+}  // namespace pectus::cli

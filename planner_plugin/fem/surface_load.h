@@ -1,0 +1,29 @@
+// pectus planner: consistent nodal forces of tractions on 6-node boundary triangles.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "planner_plugin/fem/tet_mesh.h"
+#include "shape/core/geometry.h"
+
+namespace pectus::planner {
+
+/// Total area of the 6-node triangles `faces` (mm²), integrated with their quadratic geometry.
+/// @param[in] nodes  #nodes by 3 positions, mm
+double FacesArea(const Points3& nodes, const Tri6Connectivity& faces);
+
+/// Adds to `forces` the consistent nodal forces f_a = integral N_a t dA of a uniform traction t over
+/// `faces` (3-point rule per face, exact for flat faces).
+/// @param[in]     nodes     #nodes by 3 positions, mm
+/// @param[in]     faces     6-node boundary triangles
+/// @param[in]     traction  traction vector, N/mm² (MPa)
+/// @param[in,out] forces    3 #nodes nodal forces (x, y, z per node), N
+void AddUniformTraction(const Points3& nodes, const Tri6Connectivity& faces, const Eigen::Vector3d& traction,
+                        Eigen::VectorXd* forces);
+
+/// Spreads a total force over a contact patch as a uniform traction F / area (so the nodal forces sum
+/// to F exactly). Throws Error(kBadInput) if the patch is empty or has zero area.
+void AddForceOverPatch(const Points3& nodes, const Tri6Connectivity& patch, const Eigen::Vector3d& force_n,
+                       Eigen::VectorXd* forces);
+
+}  // namespace pectus::planner

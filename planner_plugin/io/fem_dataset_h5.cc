@@ -1,0 +1,194 @@
+#include "planner_plugin/io/fem_dataset_h5.h"
+
+#include <hdf5.h>
+
+#include <algorithm>
+#include <system_error>
+
+#include "shape/core/error.h"
+
+namespace pectus::planner {
+namespace {
+
+// Checks an HDF5 return value; throws naming the file and what was being written.
+hid_t Check(hid_t id, const std::filesystem::path& path, const std::string& what) {
+  if (id < 0) ThrowFailure("HDF5 could not write " + what, path.string());
+  return id;
+}
+
+void WriteDataset(hid_t parent, const std::string& name, hid_t file_type, hid_t memory_type,
+                  const std::vector<hsize_t>& dims, const void* data, const std::filesystem::path& path,
+                  bool compress = false) {
+  const hid_t space = Check(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), path, name);
+  const hid_t properties = H5Pcreate(H5P_DATASET_CREATE);
+  if (compress) {
+    std::vector<hsize_t> chunk = dims;
+    chunk[0] = 1;  // one load case per chunk
+    H5Pset_chunk(properties, static_cast<int>(chunk.size()), chunk.data());
+    H5Pset_shuffle(properties);
+    H5Pset_deflate(properties, 4);
+  }
+  const hid_t set = Check(H5Dcreate2(parent, name.c_str(), file_type, space, H5P_DEFAULT, properties, H5P_DEFAULT),
+                          path, name);
+  Check(H5Dwrite(set, memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), path, name);
+  H5Dclose(set);
+  H5Pclose(properties);
+  H5Sclose(space);
+}
+
+void WriteAttribute(hid_t object, const std::string& name, double value, const std::filesystem::path& path) {
+  const hid_t space = H5Screate(H5S_SCALAR);
+  const hid_t attribute =
+      Check(H5Acreate2(object, name.c_str(), H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT), path, name);
+  H5Awrite(attribute, H5T_NATIVE_DOUBLE, &value);
+  H5Aclose(attribute);
+  H5Sclose(space);
+}
+
+void WriteAttribute(hid_t object, const std::string& name, const std::string& value,
+                    const std::filesystem::path& path) {
+  const hid_t type = H5Tcopy(H5T_C_S1);
+  H5Tset_size(type, std::max<std::size_t>(1, value.size()));
+  const hid_t space = H5Screate(H5S_SCALAR);
+  const hid_t attribute = Check(H5Acreate2(object, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT), path, name);
+  H5Awrite(attribute, type, value.c_str());
+  H5Aclose(attribute);
+  H5Sclose(space);
+  H5Tclose(type);
+}
+
+hid_t Group(hid_t parent, const std::string& name, const std::filesystem::path& path) {
+  return Check(H5Gcreate2(parent, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), path, name);
+}
+
+}  // namespace
+
+struct FemDatasetWriter::File {
+  hid_t id = -1;
+  hid_t patients = -1;
+  ~File() {
+    if (patients >= 0) H5Gclose(patients);
+    if (id >= 0) H5Fclose(id);
+  }
+};
+
+FemDatasetWriter::FemDatasetWriter(const std::filesystem::path& path, const GenericRibcage& generic,
+                                   std::vector<BarLoad> loads)
+    : file_(std::make_unique<File>()), path_(path), loads_(std::move(loads)) {
+  temp_ = path_.parent_path() / ("." + path_.filename().string() + ".partial");
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported through pectus::Error
+  file_->id = Check(H5Fcreate(temp_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), path_, "the file");
+  const hid_t root = file_->id;
+  WriteAttribute(root, "description",
+                 "pectus planner finite element dataset: surface-node displacements of patient-specific ribcages "
+                 "(Rechowicz 2012, section 4.1.2) under the Nuss bar's push",
+                 path_);
+  WriteAttribute(root, "units", "mm, N, MPa", path_);
+  WriteAttribute(root, "frame", "LPS (x left, y posterior, z superior), origin at the sternal notch", path_);
+  WriteAttribute(root, "load_case_order", "as /load_cases: bar position major, force minor", path_);
+  // Load cases.
+  std::vector<double> position, force;
+  for (const BarLoad& l : loads_) {
+    if (l.position_in_mm) ThrowUsage("FE dataset: bar positions must be fractions of the sternal length");
+    position.push_back(l.position);
+    force.push_back(l.force_n);
+  }
+  const hid_t cases = Group(root, "load_cases", path_);
+  WriteDataset(cases, "position", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {loads_.size()}, position.data(), path_);
+  WriteDataset(cases, "force_n", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {loads_.size()}, force.data(), path_);
+  H5Gclose(cases);
+  // Topology: the bone surface over its corner nodes.
+  Eigen::VectorXi face_tet;
+  const Faces3 faces = ExtractLinearBoundary(generic.tets, &face_tet);
+  std::vector<std::int32_t> index(static_cast<std::size_t>(generic.nodes.rows()), -1);
+  for (Eigen::Index f = 0; f < faces.rows(); ++f) {
+    for (int i = 0; i < 3; ++i) index[faces(f, i)] = 0;
+  }
+  for (std::size_t i = 0; i < index.size(); ++i) {
+    if (index[i] == 0) {
+      index[i] = static_cast<std::int32_t>(surface_nodes_.size());
+      surface_nodes_.push_back(static_cast<std::int32_t>(i));
+    }
+  }
+  std::vector<std::int32_t> tri, region, part;
+  for (Eigen::Index f = 0; f < faces.rows(); ++f) {
+    for (int i = 0; i < 3; ++i) tri.push_back(index[faces(f, i)]);
+    region.push_back(generic.regions(face_tet(f)));
+    part.push_back(generic.tet_parts(face_tet(f)));
+  }
+  const hid_t topology = Group(root, "topology", path_);
+  const hsize_t nf = static_cast<hsize_t>(faces.rows());
+  WriteDataset(topology, "faces", H5T_STD_I32LE, H5T_NATIVE_INT32, {nf, 3}, tri.data(), path_);
+  WriteDataset(topology, "face_region", H5T_STD_I32LE, H5T_NATIVE_INT32, {nf}, region.data(), path_);
+  WriteDataset(topology, "face_part", H5T_STD_I32LE, H5T_NATIVE_INT32, {nf}, part.data(), path_);
+  H5Gclose(topology);
+  file_->patients = Group(root, "patients", path_);
+}
+
+FemDatasetWriter::~FemDatasetWriter() {
+  file_.reset();
+  if (!committed_) {
+    std::error_code ignored;
+    std::filesystem::remove(temp_, ignored);
+  }
+}
+
+void FemDatasetWriter::AddPatient(const PatientRibcage& ribcage, const std::vector<BarResult>& results,
+                                  const std::vector<ForceToLift>& force_to_lift, double ct_haller_index) {
+  if (results.size() != loads_.size()) {
+    ThrowFailure("FE dataset: patient " + ribcage.patient + " has " + std::to_string(results.size()) +
+                 " results for " + std::to_string(loads_.size()) + " load cases");
+  }
+  const hid_t group = Group(file_->patients, ribcage.patient, path_);
+  const std::size_t n = surface_nodes_.size();
+  std::vector<double> nodes(n * 3);
+  std::vector<float> displacement(results.size() * n * 3);
+  std::vector<double> lift;
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int c = 0; c < 3; ++c) nodes[3 * i + c] = ribcage.mesh.nodes(surface_nodes_[i], c);
+  }
+  for (std::size_t k = 0; k < results.size(); ++k) {
+    for (std::size_t i = 0; i < n; ++i) {
+      for (int c = 0; c < 3; ++c) {
+        displacement[(k * n + i) * 3 + c] = static_cast<float>(results[k].displacement(surface_nodes_[i], c));
+      }
+    }
+    lift.push_back(results[k].sternum_lift_mm);
+  }
+  WriteDataset(group, "nodes", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {n, 3}, nodes.data(), path_);
+  WriteDataset(group, "displacements", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {results.size(), n, 3}, displacement.data(),
+               path_, true);
+  WriteDataset(group, "sternum_lift", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {lift.size()}, lift.data(), path_);
+  const PatientMeasurements& t = ribcage.targets;
+  const RibcageMeasurements& m = ribcage.measured;
+  WriteAttribute(group, "ct_width_mm", t.TrueWidth(), path_);
+  WriteAttribute(group, "ct_depth_mm", t.TrueDepth(), path_);
+  WriteAttribute(group, "ct_sternal_length_mm", t.SternalLength(), path_);
+  WriteAttribute(group, "ct_depression_mm", t.TrueDepression(), path_);
+  WriteAttribute(group, "ct_haller_index", ct_haller_index, path_);
+  WriteAttribute(group, "model_width_mm", m.width_mm, path_);
+  WriteAttribute(group, "model_depth_mm", m.depth_mm, path_);
+  WriteAttribute(group, "model_sternal_length_mm", m.sternal_length_mm, path_);
+  WriteAttribute(group, "model_depression_mm", m.depression_mm, path_);
+  WriteAttribute(group, "model_haller_index", m.haller_index, path_);
+  WriteAttribute(group, "map_scale_x", ribcage.parameters.scale.x(), path_);
+  WriteAttribute(group, "map_scale_y", ribcage.parameters.scale.y(), path_);
+  WriteAttribute(group, "map_scale_z", ribcage.parameters.scale.z(), path_);
+  WriteAttribute(group, "map_sternal_displacement_mm", ribcage.parameters.depression_mm, path_);
+  for (const ForceToLift& f : force_to_lift) {
+    char name[64];
+    std::snprintf(name, sizeof(name), "force_to_lift_n_at_%.2f", f.position.position);
+    WriteAttribute(group, name, f.force_n, path_);
+  }
+  H5Gclose(group);
+}
+
+void FemDatasetWriter::Commit() {
+  file_.reset();
+  std::error_code error;
+  std::filesystem::rename(temp_, path_, error);
+  if (error) ThrowFailure("could not move the dataset into place: " + error.message(), path_.string());
+  committed_ = true;
+}
+
+}  // namespace pectus::planner

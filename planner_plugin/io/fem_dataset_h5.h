@@ -1,0 +1,60 @@
+// pectus planner: the finite element dataset (dissertation §4.1.2: 62 patients x 24 load cases = 1488
+// results) written as one HDF5 file. Layout, all lengths in mm, forces in N, frame LPS with the origin
+// at each patient's sternal notch (docs in the file's attributes too):
+//   /                      attrs: description, units, frame, load_case_order
+//   /load_cases/position   (24) bar position, fraction of the sternal length from the notch
+//   /load_cases/force_n    (24) bar force, N
+//   /topology/faces        (#faces x 3) int32, triangles of the bone surface over the surface nodes
+//   /topology/face_region  (#faces) int32: 0 sternum, 1 rib, 2 costal cartilage
+//   /topology/face_part    (#faces) int32: 0 sternum, k left rib k, -k right rib k
+//   /patients/<id>/        attrs: CT width, depth, sternal length, depression, Haller index; the same
+//                          measured on the model; the fitted map; force to lift per bar position
+//   /patients/<id>/nodes          (#surface nodes x 3) float64, undeformed positions
+//   /patients/<id>/displacements  (24 x #surface nodes x 3) float32, one slab per load case
+//   /patients/<id>/sternum_lift   (24) float64, anterior lift of the sternum at the deepest level
+// The surface nodes are the corner nodes of the quadratic mesh that lie on its boundary; the topology
+// is the same for every patient (the generic mesh mapped), so a node index means the same anatomical
+// point in every patient.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "planner_plugin/ribcage/generic_ribcage.h"
+#include "planner_plugin/ribcage/ribcage_fem.h"
+
+namespace pectus::planner {
+
+/// Writes the dataset patient by patient; nothing is visible at `path` until Commit().
+class FemDatasetWriter {
+ public:
+  /// @param[in] path     the .h5 file to write (replaced on Commit)
+  /// @param[in] generic  the generic ribcage every patient is made from (defines the surface topology)
+  /// @param[in] loads    the load cases, the same for every patient (positions as fractions)
+  /// Throws Error(kFailure) naming the file if HDF5 cannot create it.
+  FemDatasetWriter(const std::filesystem::path& path, const GenericRibcage& generic, std::vector<BarLoad> loads);
+  ~FemDatasetWriter();
+  FemDatasetWriter(const FemDatasetWriter&) = delete;
+  FemDatasetWriter& operator=(const FemDatasetWriter&) = delete;
+
+  /// Adds one patient: `results` in the order of the constructor's `loads`; `force_to_lift` per
+  /// position; `ct_haller_index` from the patient table (0 if unknown).
+  void AddPatient(const PatientRibcage& ribcage, const std::vector<BarResult>& results,
+                  const std::vector<ForceToLift>& force_to_lift, double ct_haller_index);
+  /// Closes the file and moves it into place.
+  void Commit();
+  /// Number of surface nodes per patient.
+  Eigen::Index num_surface_nodes() const { return static_cast<Eigen::Index>(surface_nodes_.size()); }
+
+ private:
+  struct File;
+  std::unique_ptr<File> file_;
+  std::filesystem::path path_, temp_;
+  std::vector<BarLoad> loads_;
+  std::vector<std::int32_t> surface_nodes_;
+  bool committed_ = false;
+};
+
+}  // namespace pectus::planner

@@ -1,0 +1,306 @@
+#include "registration/cohort.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <set>
+
+#include "registration/pose_error.h"
+#include "registration/voxel_downsample.h"
+#include "shape/core/error.h"
+#include "shape/core/log.h"
+
+namespace pectus {
+namespace {
+
+Points3 Apply(const Similarity3& T, const Points3& x) {
+  Points3 y(x.rows(), 3);
+  const Eigen::Matrix3d A = T.scale * T.rotation;
+  for (Eigen::Index i = 0; i < x.rows(); ++i) y.row(i) = (A * x.row(i).transpose() + T.translation).transpose();
+  return y;
+}
+
+Rigid3 ToRigid(const Similarity3& T) {
+  Rigid3 r = Rigid3::Identity();
+  r.linear() = T.rotation;
+  r.translation() = T.translation;
+  return r;
+}
+
+std::string NameOf(const std::vector<std::string>& names, std::size_t i) {
+  return i < names.size() ? names[i] : "landmark set " + std::to_string(i + 1);
+}
+
+}  // namespace
+
+bool ProcrustesOptions::IsValid(std::string* why) const {
+  auto fail = [&](const char* text) {
+    if (why) *why = text;
+    return false;
+  };
+  if (reference < 0) return fail("reference must be >= 0");
+  if (max_iterations < 1) return fail("max_iterations must be >= 1");
+  if (!(tolerance_mm > 0.0)) return fail("tolerance_mm must be > 0");
+  if (!(min_spread_ratio >= 0.0 && min_spread_ratio < 1.0)) return fail("min_spread_ratio must be in [0, 1)");
+  return true;
+}
+
+ProcrustesResult GeneralisedProcrustes(const std::vector<LandmarkSet>& shapes, const ProcrustesOptions& options,
+                                       const std::vector<std::string>& names) {
+  std::string why;
+  if (!options.IsValid(&why)) ThrowUsage("Procrustes: " + why);
+  if (shapes.size() < 2) ThrowBadInput("Procrustes", "needs at least two landmark sets");
+  const auto ref = static_cast<std::size_t>(options.reference);
+  if (ref >= shapes.size()) ThrowUsage("Procrustes: reference index out of range");
+  for (std::size_t i = 0; i < shapes.size(); ++i) shapes[i].Validate(NameOf(names, i));
+
+  // Labels present in every set, in the reference's order.
+  ProcrustesResult result;
+  std::vector<std::string> labels;
+  std::set<std::string> skipped;
+  for (const Landmark& l : shapes[ref].items) {
+    bool everywhere = true;
+    for (const LandmarkSet& s : shapes) everywhere = everywhere && s.Find(l.label) != nullptr;
+    if (everywhere) {
+      labels.push_back(l.label);
+    } else {
+      skipped.insert(l.label);
+    }
+  }
+  for (const LandmarkSet& s : shapes) {
+    for (const Landmark& l : s.items) {
+      if (std::find(labels.begin(), labels.end(), l.label) == labels.end()) skipped.insert(l.label);
+    }
+  }
+  result.skipped.assign(skipped.begin(), skipped.end());
+  if (labels.size() < 3) {
+    ThrowBadInput("Procrustes", "only " + std::to_string(labels.size()) +
+                                    " landmark labels are present in every set; need at least 3");
+  }
+  const auto L = static_cast<Eigen::Index>(labels.size());
+  std::vector<Points3> X(shapes.size(), Points3(L, 3));
+  for (std::size_t i = 0; i < shapes.size(); ++i) {
+    for (Eigen::Index k = 0; k < L; ++k) {
+      X[i].row(k) = shapes[i].Find(labels[static_cast<std::size_t>(k)])->position.transpose();
+    }
+  }
+
+  Points3 mean = X[ref];
+  result.T_mean_shape.resize(shapes.size());
+  const Eigen::VectorXd no_weights;
+  for (result.iterations = 1; result.iterations <= options.max_iterations; ++result.iterations) {
+    // Align every shape to the current mean, average.
+    Points3 next = Points3::Zero(L, 3);
+    for (std::size_t i = 0; i < shapes.size(); ++i) {
+      result.T_mean_shape[i] = UmeyamaAlignment(X[i], mean, no_weights, options.estimate_scale,
+                                                options.min_spread_ratio, NameOf(names, i));
+      next += Apply(result.T_mean_shape[i], X[i]);
+    }
+    next /= static_cast<double>(shapes.size());
+    // Fix the gauge: the mean in the reference's frame and, with scale, of the reference's size.
+    const Similarity3 G =
+        UmeyamaAlignment(next, X[ref], no_weights, options.estimate_scale, options.min_spread_ratio, "mean shape");
+    next = Apply(G, next);
+    const double moved = (next - mean).rowwise().norm().maxCoeff();
+    mean = next;
+    if (moved < options.tolerance_mm) {
+      result.converged = true;
+      break;
+    }
+  }
+  result.iterations = std::min(result.iterations, options.max_iterations);
+  double sum = 0.0;
+  for (std::size_t i = 0; i < shapes.size(); ++i) {
+    result.T_mean_shape[i] = UmeyamaAlignment(X[i], mean, no_weights, options.estimate_scale,
+                                              options.min_spread_ratio, NameOf(names, i));
+    sum += (Apply(result.T_mean_shape[i], X[i]) - mean).squaredNorm();
+  }
+  result.rms_mm = std::sqrt(sum / static_cast<double>(shapes.size() * static_cast<std::size_t>(L)));
+  for (Eigen::Index k = 0; k < L; ++k) {
+    result.mean.items.push_back({labels[static_cast<std::size_t>(k)], mean.row(k).transpose(), ""});
+  }
+  return result;
+}
+
+bool CohortOptions::IsValid(std::string* why) const {
+  auto fail = [&](const char* text) {
+    if (why) *why = text;
+    return false;
+  };
+  if (!pair.IsValid(why)) return false;
+  if (reference < 0) return fail("reference must be >= 0");
+  if (max_groupwise_iterations < 1) return fail("max_groupwise_iterations must be >= 1");
+  if (!(groupwise_tolerance_mm > 0.0)) return fail("groupwise_tolerance_mm must be > 0");
+  if (mean_points < 10) return fail("mean_points must be >= 10");
+  if (!(mean_max_distance_mm > 0.0)) return fail("mean_max_distance_mm must be > 0");
+  return true;
+}
+
+bool CohortResult::all_succeeded() const {
+  return std::all_of(success.begin(), success.end(), [](bool s) { return s; });
+}
+
+CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) ThrowUsage("cohort registration: " + why);
+  const std::size_t n = scans.size();
+  const auto ref = static_cast<std::size_t>(options.reference);
+  if (n < 2) ThrowUsage("cohort registration needs at least two scans");
+  if (ref >= n) ThrowUsage("cohort registration: reference index out of range");
+  const std::size_t with_landmarks = static_cast<std::size_t>(
+      std::count_if(scans.begin(), scans.end(), [](const CohortScan& s) { return s.landmarks.has_value(); }));
+  if (with_landmarks != 0 && with_landmarks != n) {
+    ThrowUsage("cohort registration: " + std::to_string(with_landmarks) + " of " + std::to_string(n) +
+               " scans have landmarks; give landmarks for all scans or for none");
+  }
+  const bool landmarks = with_landmarks == n;
+
+  CohortResult result;
+  result.T_frame_scan.assign(n, Similarity3{});
+  result.success.assign(n, true);
+  result.messages.assign(n, "reference");
+  result.rms_mm.assign(n, 0.0);
+  result.inlier_fraction.assign(n, 1.0);
+  auto record = [&](std::size_t i, const PairRegistrationResult& r) {
+    result.T_frame_scan[i] = r.T_target_source;
+    result.success[i] = r.success;
+    result.messages[i] = r.message;
+    if (r.icp) {
+      result.rms_mm[i] = r.icp->rms_mm;
+      result.inlier_fraction[i] = r.icp->inlier_fraction;
+    }
+  };
+
+  // Every scan to the reference: the whole of kToReference, and the start of kGroupwise without landmarks.
+  if (options.mode == CohortMode::kToReference || !landmarks) {
+    const CohortScan& r = scans[ref];
+    const IcpTarget target = r.cloud.has_normals() ? IcpTarget(r.cloud.positions, r.cloud.normals, r.name)
+                                                   : IcpTarget(r.cloud.positions, options.pair.normals, r.name);
+    Progress progress("registering to " + r.name, static_cast<std::int64_t>(n));
+    for (std::size_t i = 0; i < n; ++i) {
+      if (i != ref) {
+        const PairRegistrationResult pr =
+            RegisterPair(target, scans[i].cloud, landmarks ? &*r.landmarks : nullptr,
+                         landmarks ? &*scans[i].landmarks : nullptr, Similarity3{}, options.pair);
+        record(i, pr);
+      }
+      progress.Advance();
+    }
+    if (options.mode == CohortMode::kToReference) return result;
+  } else {
+    // Groupwise with landmarks: generalised Procrustes of the landmarks gives the start.
+    std::vector<LandmarkSet> sets;
+    std::vector<std::string> names;
+    for (const CohortScan& s : scans) {
+      sets.push_back(*s.landmarks);
+      names.push_back(s.name);
+    }
+    ProcrustesOptions po;
+    po.estimate_scale = options.pair.landmarks.estimate_scale;
+    po.reference = options.reference;
+    po.min_spread_ratio = options.pair.landmarks.min_spread_ratio;
+    result.procrustes = GeneralisedProcrustes(sets, po, names);
+    result.T_frame_scan = result.procrustes->T_mean_shape;
+    for (std::size_t i = 0; i < n; ++i) result.messages[i] = "landmark Procrustes";
+  }
+
+  // Groupwise refinement on the surfaces. Each scan is prepared once as an ICP target (positions scaled by
+  // its fixed scale); the mean surface, sampled at points of the reference scan, is moved onto each scan.
+  std::vector<std::unique_ptr<IcpTarget>> targets(n);
+  std::vector<Rigid3> rigid(n);  // scaled scan frame -> cohort frame
+  for (std::size_t i = 0; i < n; ++i) {
+    const double s = result.T_frame_scan[i].scale;
+    const Points3 scaled = scans[i].cloud.positions * s;
+    targets[i] = scans[i].cloud.has_normals()
+                     ? std::make_unique<IcpTarget>(scaled, scans[i].cloud.normals, scans[i].name)
+                     : std::make_unique<IcpTarget>(scaled, options.pair.normals, scans[i].name);
+    rigid[i] = ToRigid(result.T_frame_scan[i]);
+  }
+  const Points3& ref_points = scans[ref].cloud.positions;
+  const double area = static_cast<double>(ref_points.rows()) * std::pow(targets[ref]->spacing_mm(), 2);
+  const std::vector<std::uint32_t> rows =
+      ref_points.rows() > options.mean_points
+          ? VoxelDownsample(ref_points, std::sqrt(area / options.mean_points))
+          : std::vector<std::uint32_t>();
+  Points3 mean(rows.empty() ? ref_points.rows() : static_cast<Eigen::Index>(rows.size()), 3);
+  for (Eigen::Index k = 0; k < mean.rows(); ++k) {
+    mean.row(k) = ref_points.row(rows.empty() ? k : rows[static_cast<std::size_t>(k)]);
+  }
+  mean = Apply(result.T_frame_scan[ref], mean);
+
+  IcpOptions icp = options.pair.icp;
+  icp.patch_centres.clear();
+  const Eigen::VectorXd no_weights;
+  Progress progress("groupwise registration", options.max_groupwise_iterations);
+  result.converged = false;
+  for (result.iterations = 1; result.iterations <= options.max_groupwise_iterations; ++result.iterations) {
+    // The mean surface: each mean point moves to the average of its nearest points on the scans.
+    Points3 sum = Points3::Zero(mean.rows(), 3);
+    Eigen::VectorXi count = Eigen::VectorXi::Zero(mean.rows());
+    for (std::size_t i = 0; i < n; ++i) {
+      const Rigid3 to_scan = rigid[i].inverse();
+      const IcpTarget& t = *targets[i];
+      for (Eigen::Index k = 0; k < mean.rows(); ++k) {
+        const Eigen::Vector3d q = to_scan * Eigen::Vector3d(mean.row(k).transpose()) - t.origin();
+        std::uint32_t j = 0;
+        double d2 = 0.0;
+        if (!t.tree().NearestWithin(q, options.mean_max_distance_mm, &j, &d2)) continue;
+        sum.row(k) += (rigid[i] * (Eigen::Vector3d(t.centred_positions().row(j).transpose()) + t.origin())).transpose();
+        ++count(k);
+      }
+    }
+    Points3 next = mean;
+    for (Eigen::Index k = 0; k < mean.rows(); ++k) {
+      if (2 * count(k) >= static_cast<int>(n)) next.row(k) = sum.row(k) / count(k);
+    }
+    // Gauge: the new mean placed on the old one, so that the cohort frame does not drift.
+    next = Apply(UmeyamaAlignment(next, mean, no_weights, false, 0.0, "mean surface"), next);
+    mean = next;
+
+    // Every scan to the mean: ICP of the mean points onto the scan, inverted.
+    double moved = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const IcpResult r = AlignIcp(*targets[i], mean, Points3(), rigid[i].inverse(), icp);
+      const Rigid3 updated = r.T_target_source.inverse();
+      moved = std::max(moved, RmsDisplacement(mean, Similarity3::FromRigid(rigid[i].inverse()),
+                                              Similarity3::FromRigid(r.T_target_source)));
+      rigid[i] = updated;
+      result.success[i] = r.success;
+      result.messages[i] = r.message;
+      result.rms_mm[i] = r.rms_mm;
+      result.inlier_fraction[i] = r.inlier_fraction;
+    }
+    progress.Advance();
+    if (moved < options.groupwise_tolerance_mm) {
+      result.converged = true;
+      break;
+    }
+  }
+  result.iterations = std::min(result.iterations, options.max_groupwise_iterations);
+  // The cohort frame is the reference scan's frame in both modes: re-express everything relative to it.
+  const Rigid3 gauge = rigid[ref].inverse();
+  const double ref_scale = result.T_frame_scan[ref].scale;
+  for (std::size_t i = 0; i < n; ++i) {
+    Similarity3 T = Similarity3::FromRigid(gauge * rigid[i]);
+    T.scale = result.T_frame_scan[i].scale / ref_scale;
+    T.translation /= ref_scale;
+    result.T_frame_scan[i] = T;
+  }
+  Similarity3 to_frame = Similarity3::FromRigid(gauge);
+  to_frame.scale = 1.0 / ref_scale;
+  to_frame.translation /= ref_scale;
+  mean = Apply(to_frame, mean);
+  if (!result.converged) {
+    for (std::size_t i = 0; i < n; ++i) {
+      if (result.success[i]) {
+        result.success[i] = false;
+        result.messages[i] = "groupwise registration did not settle in " +
+                             std::to_string(options.max_groupwise_iterations) + " rounds";
+      }
+    }
+  }
+  result.mean_points = mean;
+  return result;
+}
+
+}  // namespace pectus

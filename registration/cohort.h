@@ -1,0 +1,95 @@
+// pectus: bringing a whole cohort of scans into one frame: every scan to a chosen reference, or
+// groupwise by generalised Procrustes analysis to the evolving mean (Gower 1975).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "registration/pair_registration.h"
+#include "shape/core/geometry.h"
+#include "shape/core/landmarks.h"
+
+namespace pectus {
+
+/// Options of GeneralisedProcrustes (landmarks only).
+struct ProcrustesOptions {
+  bool estimate_scale = false;   ///< similarity transforms (the mean keeps the reference's size)
+  int reference = 0;             ///< the shape whose frame the mean is expressed in
+  int max_iterations = 100;
+  double tolerance_mm = 1e-6;    ///< stop when no mean landmark moves by more than this (mm)
+  double min_spread_ratio = 0.02;  ///< see LandmarkAlignmentOptions
+
+  /// False, with the reason in `why`, if a value is out of range.
+  bool IsValid(std::string* why) const;
+};
+
+/// What GeneralisedProcrustes found.
+struct ProcrustesResult {
+  std::vector<Similarity3> T_mean_shape;  ///< per shape: its frame to the mean's frame
+  LandmarkSet mean;  ///< mean landmarks (mm), placed on the reference shape by a least-squares fit
+  std::vector<std::string> skipped;       ///< labels not present in every shape (not used)
+  int iterations = 0;
+  bool converged = false;
+  double rms_mm = 0.0;                    ///< RMS distance of the aligned landmarks to the mean (mm)
+};
+
+/// Generalised Procrustes analysis of labelled landmark sets (Gower 1975; Dryden and Mardia 2016,
+/// Alg. 7.1): align every shape to the current mean (Umeyama), average, express the new mean in the
+/// reference shape's frame (so the gauge does not drift), repeat until the mean stops moving. Uses the
+/// labels present in every set (at least 3, non-collinear). Throws Error(kBadInput) naming the set at
+/// fault (via `names`) for fewer than two sets or too few common labels.
+/// @param[in] shapes  two or more landmark sets (mm)
+/// @param[in] names   a name per set for messages (file names), or empty
+ProcrustesResult GeneralisedProcrustes(const std::vector<LandmarkSet>& shapes, const ProcrustesOptions& options = {},
+                                       const std::vector<std::string>& names = {});
+
+/// How a cohort is aligned.
+enum class CohortMode {
+  kToReference,  ///< every scan registered to the reference scan (landmarks, then ICP)
+  kGroupwise,    ///< generalised Procrustes: every scan to the evolving mean surface
+};
+
+/// One scan of a cohort.
+struct CohortScan {
+  std::string name;                        ///< for messages and outputs (the file's stem)
+  PointCloud cloud;                        ///< mm; normals estimated if absent
+  std::optional<LandmarkSet> landmarks;    ///< all scans or none must have them
+};
+
+/// Options of AlignCohort.
+struct CohortOptions {
+  CohortMode mode = CohortMode::kToReference;
+  int reference = 0;                  ///< index of the reference scan (its frame is the cohort's frame)
+  PairRegistrationOptions pair;       ///< landmark and ICP options of every registration
+  int max_groupwise_iterations = 10;  ///< kGroupwise: rounds of mean update and realignment
+  double groupwise_tolerance_mm = 0.01;  ///< kGroupwise: stop when no scan moves more than this (mm, RMS)
+  int mean_points = 4000;             ///< kGroupwise: points of the mean surface
+  double mean_max_distance_mm = 5.0;  ///< kGroupwise: a scan contributes to a mean point within this (mm)
+
+  /// False, with the reason in `why`, if a value is out of range.
+  bool IsValid(std::string* why) const;
+};
+
+/// What AlignCohort found.
+struct CohortResult {
+  /// Per scan: its frame to the cohort frame (mm). The cohort frame is the reference scan's frame in both
+  /// modes: the reference gets the identity.
+  std::vector<Similarity3> T_frame_scan;
+  std::vector<bool> success;              ///< per scan: the registration is good
+  std::vector<std::string> messages;      ///< per scan: what was found or why it failed
+  std::vector<double> rms_mm;             ///< per scan: RMS surface distance (to reference or mean)
+  std::vector<double> inlier_fraction;    ///< per scan
+  Points3 mean_points;                    ///< kGroupwise: the mean surface samples (cohort frame)
+  std::optional<ProcrustesResult> procrustes;  ///< kGroupwise with landmarks: the landmark GPA
+  int iterations = 0;                     ///< kGroupwise: rounds run
+  bool converged = true;                  ///< kGroupwise: stopped on the tolerance
+  bool all_succeeded() const;
+};
+
+/// Aligns a cohort (see CohortMode). The reference scan gets the identity (kToReference). A scan whose
+/// fit is poor is marked success = false with the reason; nothing is dropped silently. Throws
+/// Error(kUsage) for invalid options or an inconsistent cohort (some scans with landmarks, some without).
+CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptions& options = {});
+
+}  // namespace pectus

@@ -1,0 +1,133 @@
+#include "registration/pair_registration.h"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "shape/core/error.h"
+
+namespace pectus {
+namespace {
+
+double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+double LandmarkRms(const LandmarkAlignmentResult& lm, const LandmarkSet& moving, const LandmarkSet& fixed,
+                   const Similarity3& T) {
+  double sum = 0.0;
+  for (const std::string& label : lm.labels) {
+    sum += (T * moving.Find(label)->position - fixed.Find(label)->position).squaredNorm();
+  }
+  return std::sqrt(sum / static_cast<double>(lm.labels.size()));
+}
+
+}  // namespace
+
+bool PairRegistrationOptions::IsValid(std::string* why) const {
+  if (!landmarks.IsValid(why) || !icp.IsValid(why) || !normals.IsValid(why)) return false;
+  if (!(patch_radius_mm >= 0.0) || !std::isfinite(patch_radius_mm)) {
+    if (why) *why = "patch_radius_mm must be >= 0";
+    return false;
+  }
+  if (!(max_landmark_rms_mm > 0.0)) {
+    if (why) *why = "max_landmark_rms_mm must be > 0";
+    return false;
+  }
+  return true;
+}
+
+PairRegistrationResult RegisterPair(const IcpTarget& fixed, const PointCloud& moving,
+                                    const LandmarkSet* fixed_landmarks, const LandmarkSet* moving_landmarks,
+                                    const Similarity3& initial, const PairRegistrationOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string why;
+  if (!options.IsValid(&why)) ThrowUsage("registration: " + why);
+  if ((fixed_landmarks == nullptr) != (moving_landmarks == nullptr)) {
+    ThrowUsage("registration: landmarks are needed on both scans or on neither");
+  }
+  const bool with_landmarks = fixed_landmarks != nullptr;
+  if (options.patch_radius_mm > 0.0 && !with_landmarks) {
+    ThrowUsage("registration: surface patches are placed around landmarks; give landmarks for both scans");
+  }
+  PairRegistrationResult result;
+  result.prepare_seconds = fixed.seconds();
+  result.normal_seconds = fixed.normal_seconds();
+
+  // Coarse step: landmarks matched by label (Umeyama), or the given pose.
+  Similarity3 T = initial;
+  if (with_landmarks) {
+    result.landmarks = AlignLandmarks(*moving_landmarks, *fixed_landmarks, options.landmarks);
+    T = result.landmarks->T_target_source;
+  }
+  auto finish = [&]() {
+    if (with_landmarks) result.landmark_rms_mm = LandmarkRms(*result.landmarks, *moving_landmarks, *fixed_landmarks,
+                                                             result.T_target_source);
+    result.seconds = Seconds(start);
+    return result;
+  };
+  if (!options.refine) {
+    result.T_target_source = T;
+    result.success = true;
+    result.message = with_landmarks ? "landmarks only: " + result.landmarks->message : "initial pose only";
+    return finish();
+  }
+
+  // Fine step: rigid ICP of the (scaled) moving surface, optionally on patches around its landmarks.
+  Points3 source = moving.positions;
+  if (T.scale != 1.0) source *= T.scale;
+  Points3 source_normals;
+  const bool need_normals = options.icp.method == IcpMethod::kSymmetric || options.icp.max_normal_angle_deg > 0.0;
+  if (need_normals) {
+    if (moving.has_normals()) {
+      source_normals = moving.normals;
+    } else {
+      NormalResult n = EstimateNormals(source, options.normals);
+      source_normals = std::move(n.normals);
+      result.normal_seconds += n.seconds;
+    }
+  }
+  IcpOptions icp = options.icp;
+  if (options.patch_radius_mm > 0.0) {
+    icp.patch_centres.clear();
+    for (const std::string& label : result.landmarks->labels) {
+      icp.patch_centres.push_back(T.scale * moving_landmarks->Find(label)->position);
+    }
+    icp.patch_radius_mm = options.patch_radius_mm;
+  }
+  Rigid3 start_pose = Rigid3::Identity();
+  start_pose.linear() = T.rotation;
+  start_pose.translation() = T.translation;
+  result.icp = AlignIcp(fixed, source, source_normals, start_pose, icp);
+  result.T_target_source.scale = T.scale;
+  result.T_target_source.rotation = result.icp->T_target_source.linear();
+  result.T_target_source.translation = result.icp->T_target_source.translation();
+  result.success = result.icp->success;
+  result.message = result.icp->message;
+  finish();
+  if (result.success && with_landmarks && result.landmark_rms_mm > options.max_landmark_rms_mm) {
+    std::ostringstream msg;
+    msg.precision(3);
+    msg << "the surfaces slid away from the landmarks: landmark RMS " << result.landmark_rms_mm
+        << " mm after the fine step (limit " << options.max_landmark_rms_mm << " mm, " << result.landmarks->rms_mm
+        << " mm after the landmark step)";
+    result.success = false;
+    result.message = msg.str();
+  }
+  return result;
+}
+
+PairRegistrationResult RegisterPair(const PointCloud& fixed, const PointCloud& moving,
+                                    const LandmarkSet* fixed_landmarks, const LandmarkSet* moving_landmarks,
+                                    const Similarity3& initial, const PairRegistrationOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string why;
+  if (!options.IsValid(&why)) ThrowUsage("registration: " + why);
+  const IcpTarget target = fixed.has_normals() ? IcpTarget(fixed.positions, fixed.normals, "fixed scan")
+                                               : IcpTarget(fixed.positions, options.normals, "fixed scan");
+  PairRegistrationResult result = RegisterPair(target, moving, fixed_landmarks, moving_landmarks, initial, options);
+  result.seconds = Seconds(start);
+  return result;
+}
+
+}  // namespace pectus

@@ -1,0 +1,72 @@
+// pectus: registration of one scan to another, the analyst's two steps (dissertation, Sec. 4, "All scans
+// have to be brought into correspondence"): a coarse alignment from landmarks, then a fine one of the
+// surfaces, optionally on circular patches around the landmarks.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "registration/icp.h"
+#include "registration/landmark_alignment.h"
+#include "registration/normals.h"
+#include "shape/core/geometry.h"
+#include "shape/core/landmarks.h"
+
+namespace pectus {
+
+/// Options of RegisterPair.
+struct PairRegistrationOptions {
+  LandmarkAlignmentOptions landmarks;  ///< coarse step; estimate_scale gives a similarity
+  IcpOptions icp;                      ///< fine step (its patch_centres are set from the landmarks)
+  bool refine = true;                  ///< run the fine step; false = landmarks (or the initial pose) only
+  /// > 0: the fine step uses only the moving scan's points within this radius (mm) of its landmarks,
+  /// as the dissertation's surface patches; 0 = the whole surface.
+  double patch_radius_mm = 0.0;
+  /// After the fine step, the RMS distance (mm) between the moved landmarks and the fixed ones may not
+  /// exceed this: a larger value means the surfaces slid away from what the landmarks say.
+  double max_landmark_rms_mm = 20.0;
+  /// Normals for scans that have none (the sign does not matter to ICP).
+  NormalOptions normals = [] {
+    NormalOptions o;
+    o.orientation = NormalOrientation::kNone;
+    o.k = 12;
+    return o;
+  }();
+
+  /// False, with the reason in `why`, if a value is out of range.
+  bool IsValid(std::string* why) const;
+};
+
+/// What RegisterPair found.
+struct PairRegistrationResult {
+  Similarity3 T_target_source;                       ///< moving (source) to fixed (target), mm
+  std::optional<LandmarkAlignmentResult> landmarks;  ///< the coarse step, when landmarks were given
+  std::optional<IcpResult> icp;                      ///< the fine step, when it ran
+  double landmark_rms_mm = 0.0;  ///< RMS |T x_moving - x_fixed| over the matched landmarks at the end
+  bool success = false;                              ///< false: the fit is poor, see message
+  std::string message;
+  double normal_seconds = 0.0;   ///< estimating missing normals
+  double prepare_seconds = 0.0;  ///< centring the fixed scan and building its k-d tree
+  double seconds = 0.0;          ///< everything
+};
+
+/// Registers `moving` to `fixed`: T_target_source = landmark alignment (when both landmark sets are
+/// given, else `initial`), refined by ICP on the surfaces. A scale from the landmarks (estimate_scale)
+/// is applied to the moving scan before the rigid fine step. Normals missing from a cloud are estimated.
+/// Never reports a poor fit as a success. Throws Error(kBadInput) for unusable landmarks (see
+/// AlignLandmarks) and Error(kUsage) for invalid options.
+/// @param[in] fixed             target scan (mm); its normals are used if present
+/// @param[in] moving            source scan (mm)
+/// @param[in] fixed_landmarks   landmarks on the fixed scan, or nullptr
+/// @param[in] moving_landmarks  the same labels on the moving scan, or nullptr
+/// @param[in] initial           T_target_source to start from when there are no landmarks
+PairRegistrationResult RegisterPair(const PointCloud& fixed, const PointCloud& moving,
+                                    const LandmarkSet* fixed_landmarks, const LandmarkSet* moving_landmarks,
+                                    const Similarity3& initial = {}, const PairRegistrationOptions& options = {});
+
+/// The same against a prepared fixed scan (reused across many moving scans, as in a cohort).
+PairRegistrationResult RegisterPair(const IcpTarget& fixed, const PointCloud& moving,
+                                    const LandmarkSet* fixed_landmarks, const LandmarkSet* moving_landmarks,
+                                    const Similarity3& initial = {}, const PairRegistrationOptions& options = {});
+
+}  // namespace pectus

@@ -1,0 +1,395 @@
+#include "shape/rbf_implicit.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <numeric>
+#include <optional>
+#include <vector>
+
+#include "registration/kdtree.h"
+#include "shape/core/error.h"
+#include "shape/local_rbf.h"
+#include "shape/sparse_grid.h"
+
+namespace pectus {
+namespace {
+
+// Wendland's C2 function, support [0, 1].
+inline double Wendland(double r) {
+  if (r >= 1.0) return 0.0;
+  const double a = 1.0 - r;
+  const double a2 = a * a;
+  return a2 * a2 * (4.0 * r + 1.0);
+}
+
+// Points averaged per cube (and per side of a thin sheet: points whose normals oppose the first point
+// of their cube are averaged apart), with their counts. Deterministic.
+struct Level {
+  double spacing = 0.0;
+  Points3 positions;
+  Points3 normals;
+  Eigen::VectorXd counts;
+  Eigen::VectorXd eps_plus, eps_minus;  // off-surface distances per point (centre levels only)
+  std::unique_ptr<KdTree3> tree;
+};
+
+void AverageByVoxel(const Points3& positions, const Points3& normals, const Eigen::VectorXd& counts,
+                    double spacing, Level* level) {
+  const Eigen::Index n = positions.rows();
+  const Bounds3 b = ComputeBounds(positions);
+  CheckGridFits(b.extent().maxCoeff() + spacing, spacing, "RBF centre grid");
+  std::vector<std::pair<GridKey, std::uint32_t>> keyed(static_cast<std::size_t>(n));
+#pragma omp parallel for schedule(static)
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::Vector3d u = (positions.row(i).transpose() - b.min) / spacing;
+    keyed[static_cast<std::size_t>(i)] = {
+        PackGridKey(std::int64_t(u.x()), std::int64_t(u.y()), std::int64_t(u.z())), std::uint32_t(i)};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<Eigen::Vector3d> pos, nor;
+  std::vector<double> cnt;
+  pos.reserve(keyed.size() / 4 + 1);
+  nor.reserve(keyed.size() / 4 + 1);
+  cnt.reserve(keyed.size() / 4 + 1);
+  for (std::size_t s = 0; s < keyed.size();) {
+    std::size_t e = s;
+    while (e < keyed.size() && keyed[e].first == keyed[s].first) ++e;
+    const Eigen::Vector3d ref = normals.row(keyed[s].second).transpose();
+    for (int side = 0; side < 2; ++side) {
+      Eigen::Vector3d sp = Eigen::Vector3d::Zero(), sn = Eigen::Vector3d::Zero();
+      double sc = 0.0;
+      for (std::size_t t = s; t < e; ++t) {
+        const Eigen::Index i = keyed[t].second;
+        const Eigen::Vector3d nv = normals.row(i).transpose();
+        if ((nv.dot(ref) >= 0.0) != (side == 0)) continue;
+        sp += counts(i) * positions.row(i).transpose();
+        sn += counts(i) * nv;
+        sc += counts(i);
+      }
+      if (sc > 0.0 && sn.norm() > 1e-12) {
+        pos.push_back(sp / sc);
+        nor.push_back(sn.normalized());
+        cnt.push_back(sc);
+      }
+    }
+    s = e;
+  }
+  level->spacing = spacing;
+  level->positions.resize(Eigen::Index(pos.size()), 3);
+  level->normals.resize(Eigen::Index(pos.size()), 3);
+  level->counts.resize(Eigen::Index(pos.size()));
+  for (std::size_t i = 0; i < pos.size(); ++i) {
+    level->positions.row(Eigen::Index(i)) = pos[i].transpose();
+    level->normals.row(Eigen::Index(i)) = nor[i].transpose();
+    level->counts(Eigen::Index(i)) = cnt[i];
+  }
+  level->tree = std::make_unique<KdTree3>(level->positions);
+}
+
+}  // namespace
+
+bool RbfImplicitOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& text) {
+    if (why) *why = text;
+    return false;
+  };
+  auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
+  if (!positive(cell_size)) return fail("cell size must be > 0 mm");
+  if (!(fit_radius_factor >= 1.0) || !std::isfinite(fit_radius_factor)) {
+    return fail("fit radius factor must be >= 1 (a fit must cover its cell's support)");
+  }
+  if (!(hole_context >= 0.0) || !std::isfinite(hole_context)) return fail("hole context must be >= 0");
+  if (!positive(centre_spacing)) return fail("centre spacing must be > 0 mm");
+  if (!positive(off_surface_distance)) return fail("off-surface distance must be > 0 mm");
+  if (!positive(off_surface_weight)) return fail("off-surface weight must be > 0");
+  if (!(smoothing >= 0.0) || !std::isfinite(smoothing)) return fail("smoothing must be >= 0");
+  if (!(max_fill_distance >= 0.0) || !std::isfinite(max_fill_distance)) {
+    return fail("max fill distance must be >= 0 mm");
+  }
+  if (max_centres < 4 || max_centres > 400) return fail("max centres must be in [4, 400]");
+  return true;
+}
+
+struct RbfImplicit::Impl {
+  RbfImplicitOptions options;
+  Points3 positions;                 // input points (for the fitting accuracy)
+  std::deque<Level> levels;          // [0] constraints at centre_spacing / 2, [1] centres, coarser after
+  Eigen::Vector3d grid_origin;       // corner of cell (0, 0, 0)
+  GridKeyMap<std::int32_t> cell_of;  // cell key -> index into fits, -1 = undefined
+  std::vector<LocalRbf> fits;
+  std::vector<Eigen::Vector3d> fit_centres;
+  std::int64_t undefined_cells = 0;
+
+  Eigen::Vector3d CellCentre(GridKey key) const {
+    return grid_origin + (UnpackGridKey(key).cast<double>().array() + 0.5).matrix() * options.cell_size;
+  }
+
+  // Off-surface distances of a centre level (Carr et al. 2001, Sec. 3.1: an off-surface point must not
+  // lie nearer to other data than to its own point).
+  void ValidateOffSurface(Level* level) const {
+    const Level& fine = levels[0];
+    const Eigen::Index n = level->positions.rows();
+    level->eps_plus.resize(n);
+    level->eps_minus.resize(n);
+#pragma omp parallel for schedule(static)
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Eigen::Vector3d p = level->positions.row(i).transpose();
+      const Eigen::Vector3d nv = level->normals.row(i).transpose();
+      for (int side = 0; side < 2; ++side) {
+        double eps = options.off_surface_distance;
+        const double sign = side == 0 ? 1.0 : -1.0;
+        int tries = 0;
+        for (; tries < 4; ++tries, eps *= 0.5) {
+          std::uint32_t idx;
+          double d2;
+          fine.tree->Nearest(p + sign * eps * nv, &idx, &d2);
+          if (d2 >= 0.49 * eps * eps) break;
+        }
+        (side == 0 ? level->eps_plus : level->eps_minus)(i) = tries < 4 ? eps : 0.0;
+      }
+    }
+  }
+
+  // The local fit of one cell, or nullopt if the cell is undefined.
+  std::optional<LocalRbf> FitCell(GridKey key) const {
+    const Eigen::Vector3d c = CellCentre(key);
+    std::uint32_t nearest;
+    double d2;
+    if (!levels[0].tree->NearestWithin(c, options.max_fill_distance, &nearest, &d2)) return std::nullopt;
+    const double radius =
+        options.fit_radius_factor * options.cell_size + options.hole_context * std::sqrt(d2);
+    // Centres: the finest level with at most 4 max_centres in the ball, thinned evenly (the k-d tree
+    // returns them in leaf order, so every n-th is spread over the ball) to at most max_centres.
+    // Constraints: the finest level with at most 8 max_centres in the ball, and never coarser than the
+    // centres' parent level.
+    std::vector<std::pair<std::uint32_t, double>> centres, rows;
+    const std::size_t max_centres = std::size_t(options.max_centres);
+    std::size_t k = 1;
+    for (; k + 1 < levels.size(); ++k) {
+      levels[k].tree->Radius(c, radius, &centres, false);
+      if (centres.size() <= 4 * max_centres) break;
+    }
+    if (k + 1 == levels.size()) levels[k].tree->Radius(c, radius, &centres, false);
+    if (centres.size() > max_centres) {
+      const std::size_t stride = (centres.size() + max_centres - 1) / max_centres;
+      std::size_t kept = 0;
+      for (std::size_t i = 0; i < centres.size(); i += stride) centres[kept++] = centres[i];
+      centres.resize(kept);
+    }
+    std::size_t j = 0;
+    for (; j + 1 < k; ++j) {
+      levels[j].tree->Radius(c, radius, &rows, false);
+      if (rows.size() <= 8 * max_centres) break;
+    }
+    if (j + 1 == k) levels[j].tree->Radius(c, radius, &rows, false);
+    const Level& cl = levels[k];
+    const Level& rl = levels[j];
+    const Eigen::Index m = Eigen::Index(centres.size());
+    const Eigen::Index nr = Eigen::Index(rows.size());
+
+    LocalRbfProblem problem;
+    problem.origin = c;
+    problem.scale = radius;
+    problem.centres.resize(m, 3);
+    problem.points.resize(nr + 2 * m, 3);
+    problem.values.resize(nr + 2 * m);
+    problem.weights.resize(nr + 2 * m);
+    for (Eigen::Index r = 0; r < nr; ++r) {
+      const auto i = Eigen::Index(rows[std::size_t(r)].first);
+      problem.points.row(r) = rl.positions.row(i);
+      problem.values(r) = 0.0;
+      problem.weights(r) = rl.counts(i) * Wendland(std::sqrt(rows[std::size_t(r)].second) / radius);
+    }
+    Eigen::Index row = nr;
+    for (Eigen::Index j = 0; j < m; ++j) {
+      const auto i = Eigen::Index(centres[std::size_t(j)].first);
+      problem.centres.row(j) = cl.positions.row(i);
+      const double w = options.off_surface_weight * cl.counts(i) *
+                       Wendland(std::sqrt(centres[std::size_t(j)].second) / radius);
+      for (int side = 0; side < 2; ++side) {
+        const double eps = side == 0 ? cl.eps_plus(i) : -cl.eps_minus(i);
+        if (eps == 0.0 || w <= 0.0) continue;
+        problem.points.row(row) = cl.positions.row(i) + eps * cl.normals.row(i);
+        problem.values(row) = eps;
+        problem.weights(row) = w;
+        ++row;
+      }
+    }
+    problem.points.conservativeResize(row, 3);
+    problem.values.conservativeResize(row);
+    problem.weights.conservativeResize(row);
+    LocalRbf fit;
+    if (!fit.Fit(problem, options.smoothing)) return std::nullopt;
+    if (getenv("DBG") && std::hypot(c.x(), c.y()) < 8 && c.z() > -3 && c.z() < 3) {
+      double zt = std::sqrt(1e4 - c.x()*c.x() - c.y()*c.y()) - 100;
+      // zero crossing along z
+      double best = NAN; double prev = fit.Evaluate({c.x(), c.y(), zt - 5});
+      for (double dz = -5; dz <= 5; dz += 0.01) { double v = fit.Evaluate({c.x(), c.y(), zt + dz}); if ((v < 0) != (prev < 0)) { best = dz; break; } prev = v; }
+      fprintf(stderr, "cell %.1f %.1f %.1f d %.1f R %.1f level %zu centres %ld rows %ld zero-offset %.3f\n", c.x(), c.y(), c.z(), std::sqrt(d2), radius, k, long(m), long(nr), best);
+    }
+    return fit;
+  }
+
+  // Fits every cell that a query needs and that is not known yet.
+  void EnsureCells(const Points3& queries) {
+    const Eigen::Index n = queries.rows();
+    const double h = options.cell_size;
+    std::vector<std::vector<GridKey>> missing(static_cast<std::size_t>(omp_get_max_threads()));
+#pragma omp parallel
+    {
+      std::vector<GridKey>& mine = missing[std::size_t(omp_get_thread_num())];
+      GridKey last[8];
+      std::fill(last, last + 8, ~GridKey{0});
+#pragma omp for schedule(static)
+      for (Eigen::Index q = 0; q < n; ++q) {
+        const Eigen::Vector3d u = (queries.row(q).transpose() - grid_origin) / h - Eigen::Vector3d::Constant(0.5);
+        const std::int64_t a = std::int64_t(std::floor(u.x())), b = std::int64_t(std::floor(u.y())),
+                           cc = std::int64_t(std::floor(u.z()));
+        int slot = 0;
+        for (int dz = 0; dz < 2; ++dz)
+          for (int dy = 0; dy < 2; ++dy)
+            for (int dx = 0; dx < 2; ++dx, ++slot) {
+              if (!GridIndexInRange(a + dx, b + dy, cc + dz)) continue;
+              const GridKey key = PackGridKey(a + dx, b + dy, cc + dz);
+              if (key == last[slot]) continue;  // neighbouring queries share cells
+              last[slot] = key;
+              if (!cell_of.Find(key)) mine.push_back(key);
+            }
+      }
+    }
+    std::vector<GridKey> todo;
+    {
+      GridKeyMap<char> seen(1024);
+      for (const auto& list : missing)
+        for (GridKey key : list)
+          if (seen.Insert(key, 1).second) todo.push_back(key);
+    }
+    if (todo.empty()) return;
+    std::sort(todo.begin(), todo.end());
+    std::vector<std::optional<LocalRbf>> fitted(todo.size());
+#pragma omp parallel for schedule(dynamic, 16)
+    for (std::size_t t = 0; t < todo.size(); ++t) fitted[t] = FitCell(todo[t]);
+    for (std::size_t t = 0; t < todo.size(); ++t) {
+      if (fitted[t]) {
+        cell_of.Insert(todo[t], std::int32_t(fits.size()));
+        fits.push_back(std::move(*fitted[t]));
+        fit_centres.push_back(CellCentre(todo[t]));
+      } else {
+        cell_of.Insert(todo[t], -1);
+        ++undefined_cells;
+      }
+    }
+  }
+
+  double EvaluateOne(const Eigen::Vector3d& x) const {
+    const double h = options.cell_size;
+    const Eigen::Vector3d u = (x - grid_origin) / h - Eigen::Vector3d::Constant(0.5);
+    const std::int64_t a = std::int64_t(std::floor(u.x())), b = std::int64_t(std::floor(u.y())),
+                       c = std::int64_t(std::floor(u.z()));
+    double sum = 0.0, weight = 0.0;
+    for (int dz = 0; dz < 2; ++dz)
+      for (int dy = 0; dy < 2; ++dy)
+        for (int dx = 0; dx < 2; ++dx) {
+          if (!GridIndexInRange(a + dx, b + dy, c + dz)) continue;
+          const std::int32_t* cell = cell_of.Find(PackGridKey(a + dx, b + dy, c + dz));
+          if (cell == nullptr || *cell < 0) continue;
+          const double w = Wendland((x - fit_centres[std::size_t(*cell)]).norm() / h);
+          if (w <= 0.0) continue;
+          sum += w * fits[std::size_t(*cell)].Evaluate(x);
+          weight += w;
+        }
+    return weight > 1e-9 ? sum / weight : std::numeric_limits<double>::quiet_NaN();
+  }
+};
+
+RbfImplicit::RbfImplicit(const Points3& positions, const Points3& normals, const RbfImplicitOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  std::string why;
+  if (!options.IsValid(&why)) ThrowUsage("RBF implicit: " + why);
+  if (normals.rows() != positions.rows()) ThrowUsage("RBF implicit: one normal per point is needed");
+  if (positions.rows() < 4) ThrowBadInput("", "RBF implicit: at least 4 points are needed");
+  Impl& im = *impl_;
+  im.options = options;
+  im.positions = positions;
+  const Bounds3 bounds = ComputeBounds(positions);
+  const double margin = options.max_fill_distance + 2.0 * options.cell_size;
+  CheckGridFits(bounds.extent().maxCoeff() + 2.0 * margin, options.cell_size, "RBF cell grid");
+  im.grid_origin = bounds.min;
+
+  // Level 0 (constraints) at half the centre spacing, level 1 (centres) at the centre spacing, then
+  // doubled until a level is small enough to hold every hole cell's centres.
+  const Eigen::VectorXd ones = Eigen::VectorXd::Ones(positions.rows());
+  im.levels.emplace_back();
+  AverageByVoxel(positions, normals, ones, 0.5 * options.centre_spacing, &im.levels.back());
+  for (double spacing = options.centre_spacing;; spacing *= 2.0) {
+    // In place: a level's k-d tree refers to its positions (a deque never moves its elements).
+    im.levels.emplace_back();
+    const Level& prev = im.levels[im.levels.size() - 2];
+    AverageByVoxel(prev.positions, prev.normals, prev.counts, spacing, &im.levels.back());
+    im.ValidateOffSurface(&im.levels.back());
+    if (im.levels.back().positions.rows() <= options.max_centres / 2 || im.levels.size() > 24) break;
+  }
+}
+
+RbfImplicit::~RbfImplicit() = default;
+
+void RbfImplicit::Evaluate(const Points3& queries, Eigen::VectorXd* values) {
+  impl_->EnsureCells(queries);
+  const Eigen::Index n = queries.rows();
+  values->resize(n);
+  const Impl& im = *impl_;
+#pragma omp parallel for schedule(static)
+  for (Eigen::Index q = 0; q < n; ++q) (*values)(q) = im.EvaluateOne(queries.row(q).transpose());
+}
+
+RbfFittingAccuracy RbfImplicit::FittingAccuracy() {
+  RbfFittingAccuracy acc;
+  Eigen::VectorXd s;
+  Evaluate(impl_->positions, &s);
+  std::vector<double> abs_values;
+  abs_values.reserve(std::size_t(s.size()));
+  double sum2 = 0.0;
+  for (Eigen::Index i = 0; i < s.size(); ++i) {
+    if (!std::isfinite(s(i))) continue;
+    abs_values.push_back(std::abs(s(i)));
+    sum2 += s(i) * s(i);
+  }
+  acc.num_on_surface = std::int64_t(abs_values.size());
+  if (!abs_values.empty()) {
+    acc.on_surface_rms_mm = std::sqrt(sum2 / double(abs_values.size()));
+    const auto p95 = abs_values.begin() + std::ptrdiff_t(0.95 * double(abs_values.size() - 1));
+    std::nth_element(abs_values.begin(), p95, abs_values.end());
+    acc.on_surface_p95_mm = *p95;
+    acc.on_surface_max_mm = *std::max_element(abs_values.begin(), abs_values.end());
+  }
+  const Level& cl = impl_->levels[1];
+  const Eigen::Index m = cl.positions.rows();
+  Points3 off(2 * m, 3);
+  Eigen::VectorXd target(2 * m);
+  Eigen::Index k = 0;
+  for (Eigen::Index i = 0; i < m; ++i) {
+    for (int side = 0; side < 2; ++side) {
+      const double eps = side == 0 ? cl.eps_plus(i) : -cl.eps_minus(i);
+      if (eps == 0.0) continue;
+      off.row(k) = cl.positions.row(i) + eps * cl.normals.row(i);
+      target(k++) = eps;
+    }
+  }
+  off.conservativeResize(k, 3);
+  Evaluate(off, &s);
+  for (Eigen::Index i = 0; i < k; ++i) {
+    if (std::isfinite(s(i))) acc.off_surface_max_mm = std::max(acc.off_surface_max_mm, std::abs(s(i) - target(i)));
+  }
+  acc.num_off_surface = k;
+  acc.fitting_accuracy_mm = std::max(acc.on_surface_max_mm, acc.off_surface_max_mm);
+  return acc;
+}
+
+const Points3& RbfImplicit::Seeds() const { return impl_->levels[1].positions; }
+std::int64_t RbfImplicit::num_cells() const { return std::int64_t(impl_->cell_of.size()); }
+std::int64_t RbfImplicit::num_undefined_cells() const { return impl_->undefined_cells; }
+
+}  // namespace pectus

@@ -1,0 +1,231 @@
+#include "shape/reconstruct.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "registration/kdtree.h"
+#include "registration/normals.h"
+#include "shape/core/error.h"
+#include "shape/marching_cubes.h"
+
+namespace pectus {
+namespace {
+
+constexpr Eigen::Index kMinPoints = 16;
+
+class StageClock {
+ public:
+  explicit StageClock(std::vector<std::pair<std::string, double>>* out) : out_(out) {}
+  void Lap(const std::string& stage) {
+    const auto now = std::chrono::steady_clock::now();
+    out_->emplace_back(stage, std::chrono::duration<double>(now - last_).count());
+    last_ = now;
+  }
+
+ private:
+  std::vector<std::pair<std::string, double>>* out_;
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
+
+// Side of the square each point covers: from the radius r of the k nearest neighbours, pi r^2 = k s^2,
+// median over up to 512 evenly picked points. Unlike the nearest-neighbour distance it does not shrink
+// where overlapping sweeps interleave.
+double PointSpacing(const Points3& points, const KdTree3& tree) {
+  constexpr int k = 16;
+  const Eigen::Index n = points.rows();
+  const Eigen::Index samples = std::min<Eigen::Index>(n, 512);
+  std::vector<double> s(static_cast<std::size_t>(samples));
+#pragma omp parallel for schedule(static)
+  for (Eigen::Index i = 0; i < samples; ++i) {
+    std::uint32_t idx[k + 1];
+    double d2[k + 1];
+    const int found = tree.Knn(points.row(i * n / samples).transpose(), k + 1, idx, d2);
+    s[static_cast<std::size_t>(i)] = std::sqrt(d2[found - 1] * M_PI / double(found - 1));
+  }
+  std::nth_element(s.begin(), s.begin() + samples / 2, s.end());
+  return s[static_cast<std::size_t>(samples / 2)];
+}
+
+// Rejects clouds that cannot bound a surface: all points on a line or at one place.
+void CheckNotDegenerate(const Points3& p, const std::string& what) {
+  const Eigen::RowVector3d mean = p.colwise().mean();
+  const Eigen::Matrix3d cov = (p.rowwise() - mean).transpose() * (p.rowwise() - mean) / double(p.rows());
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov, Eigen::EigenvaluesOnly);
+  const Eigen::Vector3d l = eig.eigenvalues();  // ascending
+  if (!(l(2) > 0.0)) ThrowBadInput(what, "all " + std::to_string(p.rows()) + " points are at the same place");
+  if (l(1) <= 1e-10 * l(2)) {
+    ThrowBadInput(what, "all " + std::to_string(p.rows()) +
+                            " points lie on one line; a surface needs points spread in two directions");
+  }
+}
+
+// Unit normals per vertex: area-weighted face normals.
+Points3 VertexNormals(const TriangleMesh& mesh) {
+  Points3 n = Points3::Zero(mesh.num_vertices(), 3);
+  for (Eigen::Index f = 0; f < mesh.num_faces(); ++f) {
+    const Eigen::Vector3d a = mesh.vertices.positions.row(mesh.faces(f, 0)).transpose();
+    const Eigen::Vector3d b = mesh.vertices.positions.row(mesh.faces(f, 1)).transpose();
+    const Eigen::Vector3d c = mesh.vertices.positions.row(mesh.faces(f, 2)).transpose();
+    const Eigen::RowVector3d fn = (b - a).cross(c - a).transpose();
+    for (int i = 0; i < 3; ++i) n.row(mesh.faces(f, i)) += fn;
+  }
+  for (Eigen::Index v = 0; v < n.rows(); ++v) {
+    const double len = n.row(v).norm();
+    n.row(v) = len > 0.0 ? Eigen::RowVector3d(n.row(v) / len) : Eigen::RowVector3d(0.0, 0.0, 1.0);
+  }
+  return n;
+}
+
+}  // namespace
+
+bool ReconstructOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& text) {
+    if (why) *why = text;
+    return false;
+  };
+  auto non_negative = [](double v) { return v >= 0.0 && std::isfinite(v); };
+  if (!non_negative(spacing)) return fail("spacing must be >= 0 mm (0 = automatic)");
+  if (target_faces < 0) return fail("target faces must be >= 0");
+  if (!non_negative(detail)) return fail("detail must be >= 0 mm (0 = automatic)");
+  if (!non_negative(smoothing)) return fail("smoothing must be >= 0");
+  if (!non_negative(fill_holes)) return fail("fill-holes size must be >= 0 mm");
+  if (!non_negative(margin)) return fail("margin must be >= 0 mm (0 = automatic)");
+  if (!non_negative(off_surface_distance)) return fail("off-surface distance must be >= 0 mm (0 = automatic)");
+  if (normal_neighbours < 3 || normal_neighbours > 256) return fail("normal neighbours must be in [3, 256]");
+  if (viewpoint && !viewpoint->allFinite()) return fail("viewpoint must be finite");
+  return true;
+}
+
+ReconstructResult ReconstructSurface(const PointCloud& cloud, const ReconstructOptions& options,
+                                     const std::string& what) {
+  std::string why;
+  if (!options.IsValid(&why)) ThrowUsage("reconstruct: " + why);
+  ReconstructResult result;
+  StageClock clock(&result.timings_s);
+
+  // 1. Check the input.
+  cloud.Validate(what);
+  result.input_points = cloud.size();
+  if (cloud.size() < kMinPoints) {
+    ThrowBadInput(what, "has " + std::to_string(cloud.size()) + " points; a surface needs at least " +
+                            std::to_string(kMinPoints));
+  }
+  CheckNotDegenerate(cloud.positions, what);
+  const KdTree3 tree(cloud.positions);
+  result.point_spacing_mm = PointSpacing(cloud.positions, tree);
+  if (!(result.point_spacing_mm > 0.0)) {
+    ThrowBadInput(what, "has no two distinct points among the neighbours sampled (all duplicates?)");
+  }
+
+  // 2. Oriented normals: given, toward the scanner, or by propagation (Hoppe et al. 1992).
+  Points3 normals;
+  if (cloud.has_normals() && !options.recompute_normals) {
+    normals = cloud.normals;
+    Eigen::Index bad = 0;
+    for (Eigen::Index i = 0; i < normals.rows(); ++i) {
+      const double len = normals.row(i).norm();
+      if (len > 0.5 && std::isfinite(len)) {
+        normals.row(i) /= len;
+      } else {
+        normals.row(i).setZero();
+        ++bad;
+      }
+    }
+    result.normals_source = "input";
+    if (bad > normals.rows() / 10) normals.resize(0, 3);  // mostly unusable: estimate instead
+  }
+  if (normals.rows() == 0) {
+    NormalOptions no;
+    no.k = options.normal_neighbours;
+    no.propagation_k = std::min(8, no.k);
+    no.orientation = options.viewpoint ? NormalOrientation::kTowardViewpoint : NormalOrientation::kPropagate;
+    if (options.viewpoint) no.viewpoint = *options.viewpoint;
+    normals = EstimateNormals(cloud.positions, no, &tree).normals;
+    result.normals_source = options.viewpoint ? "viewpoint" : "propagated";
+  }
+  std::vector<Eigen::Index> usable;
+  usable.reserve(std::size_t(normals.rows()));
+  for (Eigen::Index i = 0; i < normals.rows(); ++i)
+    if (normals.row(i).squaredNorm() > 0.25) usable.push_back(i);
+  if (Eigen::Index(usable.size()) < std::max(kMinPoints, cloud.size() / 2)) {
+    ThrowBadInput(what, "no normals obtainable: only " + std::to_string(usable.size()) + " of " +
+                            std::to_string(cloud.size()) +
+                            " points have neighbourhoods spread in two directions (scan lines too far "
+                            "apart, or points on a line?)");
+  }
+  Points3 positions(Eigen::Index(usable.size()), 3), oriented(Eigen::Index(usable.size()), 3);
+  for (std::size_t k = 0; k < usable.size(); ++k) {
+    positions.row(Eigen::Index(k)) = cloud.positions.row(usable[k]);
+    oriented.row(Eigen::Index(k)) = normals.row(usable[k]);
+  }
+  result.used_points = positions.rows();
+  clock.Lap("normals");
+
+  // 3. Scales: grid step, centre spacing, cell size, off-surface distance.
+  const double s = result.point_spacing_mm;
+  double h = options.spacing;
+  if (h == 0.0 && options.target_faces > 0) {
+    // Marching cubes gives about 2.2 triangles per h^2 of area; the area is about points * s^2.
+    h = std::sqrt(2.2 * double(positions.rows()) * s * s / double(options.target_faces));
+  }
+  if (h == 0.0) h = 1.5 * s;
+  const double detail = options.detail > 0.0 ? options.detail : std::max(2.0 * h, 3.0 * s);
+  result.spacing_mm = h;
+  result.centre_spacing_mm = detail;
+  RbfImplicitOptions ro;
+  ro.centre_spacing = detail;
+  ro.cell_size = 2.0 * detail;
+  ro.off_surface_distance = options.off_surface_distance > 0.0 ? options.off_surface_distance : 0.5 * detail;
+  ro.smoothing = options.smoothing;
+  ro.max_fill_distance = 0.5 * options.fill_holes + ro.cell_size;
+  result.cell_size_mm = ro.cell_size;
+
+  // 4. The implicit s(x), fitted lazily where marching cubes asks for it.
+  RbfImplicit implicit(positions, oriented, ro);
+  clock.Lap("centres");
+  MarchingCubesOptions mo;
+  mo.spacing = h;
+  mo.origin = ComputeBounds(positions).min;
+  MarchingCubesResult mc = ExtractIsosurface(
+      [&](const Points3& q, Eigen::VectorXd* v) { implicit.Evaluate(q, v); }, implicit.Seeds(), mo);
+  if (mc.reached_limit) {
+    ThrowFailure("reconstruct: the surface grew beyond " + std::to_string(mo.max_cubes) +
+                     " cubes; use a larger --spacing",
+                 what);
+  }
+  result.cells = implicit.num_cells();
+  result.surface_cubes = mc.surface_cubes;
+  clock.Lap("fit_and_isosurface");
+
+  // 5. Trim to the scanned region, keeping hole fillings.
+  TrimOptions to;
+  to.margin = options.margin > 0.0 ? options.margin : detail;
+  to.max_hole_size = options.fill_holes;
+  result.trim = TrimToData(tree, &mc.mesh, to);
+  result.mesh = std::move(mc.mesh);
+  if (result.mesh.num_faces() == 0) {
+    ThrowFailure("reconstruct: no surface was found near the data (normals inconsistent?)", what);
+  }
+  result.mesh.vertices.normals = VertexNormals(result.mesh);
+  clock.Lap("trim");
+
+  // 6. Fitting accuracy (dissertation Eq. 11) and the CGAL check.
+  result.accuracy = implicit.FittingAccuracy();
+  clock.Lap("fitting_accuracy");
+  if (options.check) {
+    result.check = CheckMesh(result.mesh);
+    clock.Lap("check");
+  }
+  std::ostringstream msg;
+  msg << result.mesh.num_vertices() << " vertices, " << result.mesh.num_faces() << " triangles from "
+      << result.used_points << " points; " << result.trim.holes_filled << " holes filled"
+      << (result.trim.boundary_edges == 0 ? ", watertight" : "")
+      << "; fitting accuracy " << result.accuracy.fitting_accuracy_mm << " mm";
+  result.message = msg.str();
+  return result;
+}
+
+}  // namespace pectus

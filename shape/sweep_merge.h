@@ -1,0 +1,75 @@
+// pectus: align the overlapping sweeps of a hand-held scan and merge them into one cloud.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "registration/icp.h"
+#include "shape/core/geometry.h"
+
+namespace pectus {
+
+/// Options of MergeSweeps. Distances in mm; the defaults suit laser sweeps with ~0.5-1 mm spacing.
+struct SweepMergeOptions {
+  // --- Alignment ---
+  bool refine_poses = true;            ///< false: keep the given poses, only merge
+  std::size_t anchor = 0;              ///< the sweep whose pose is kept (fixes the common frame)
+  double overlap_distance_mm = 5.0;    ///< a point overlaps another sweep if one of its points is this close
+  double min_overlap_fraction = 0.05;  ///< pairs overlapping less (of the smaller sweep) are not linked
+  IcpOptions pairwise;                 ///< pairwise point-to-plane ICP (robust, gated, coarse to fine)
+  int global_rounds = 4;               ///< rounds of correspondence search + joint solve over all poses
+  int global_points_per_pair = 4000;   ///< source samples per linked pair and round
+  /// Gate of the joint solve (mm); 0 = 4 times the median point spacing of the sweeps.
+  double global_max_distance_mm = 0.0;
+
+  // --- Merging ---
+  /// Blending radius (mm): each point moves along its normal to the weighted mean surface of all sweeps
+  /// within this radius (Gaussian weights, sigma = radius / 2). 0 = no blending. Small keeps detail; large
+  /// joins sweeps that are not perfectly aligned.
+  double smoothing_mm = 0.0;
+  int outlier_neighbours = 16;        ///< statistical outlier removal: k nearest neighbours (0 = off)
+  double outlier_std_ratio = 3.0;     ///< drop points whose mean kNN distance > mean + ratio * std
+  double target_spacing_mm = 0.0;     ///< voxel decimation to this spacing; 0 = keep every point
+
+  /// False, with the reason in `why`, if a value is out of range.
+  bool IsValid(std::string* why) const;
+};
+
+/// Overlap between two linked sweeps, before and after alignment.
+struct SweepPairReport {
+  std::size_t i = 0, j = 0;           ///< sweep indices, i < j
+  double overlap_fraction = 0.0;      ///< of the smaller sweep's samples
+  double rms_before_mm = 0.0;         ///< RMS point-to-plane distance of gated correspondences at the start
+  double rms_after_mm = 0.0;          ///< the same at the final poses
+  double median_after_mm = 0.0;       ///< median nearest-point distance at the final poses
+  bool pairwise_success = false;      ///< the pairwise ICP passed its acceptance tests
+};
+
+/// What MergeSweeps did.
+struct SweepMergeResult {
+  std::vector<Rigid3> T_world_sweep;  ///< final pose of each sweep (x_world = T x_sweep, mm)
+  std::vector<double> correction_deg; ///< rotation of each sweep's correction T_final T_initial^-1
+  std::vector<double> correction_mm;  ///< translation of the correction at the sweep's centroid (mm)
+  std::vector<SweepPairReport> pairs;
+  PointCloud merged;                  ///< world frame; normals; scalar "sweep" = source sweep index
+  std::int64_t points_in = 0;
+  std::int64_t outliers_removed = 0;
+  std::int64_t points_out = 0;
+  double seconds_normals = 0, seconds_overlap = 0, seconds_pairwise = 0, seconds_global = 0,
+         seconds_blend = 0, seconds_filter = 0;
+  std::string message;                ///< one line on what happened
+};
+
+/// Aligns and merges sweeps (Chen and Medioni pairwise ICP, then a joint point-to-plane adjustment of all
+/// poses with Ceres so that errors do not pile up around a loop), blends overlaps, removes outliers,
+/// decimates. Deterministic for any number of threads.
+/// @param[in] sweeps               each sweep in its own (scanner) frame, mm; normals are estimated here
+/// @param[in] T_world_sweep_start  starting pose of each sweep (from the scanner, a .conf, or identity)
+/// @param[in] options              see SweepMergeOptions
+/// Throws Error(kUsage) for invalid options, Error(kBadInput) for fewer than one sweep, a sweep with
+/// fewer than 10 points or a size mismatch, and Error(kFailure) if a sweep overlaps no other sweep.
+SweepMergeResult MergeSweeps(const std::vector<PointCloud>& sweeps, const std::vector<Rigid3>& T_world_sweep_start,
+                             const SweepMergeOptions& options = {});
+
+}  // namespace pectus

@@ -1,0 +1,108 @@
+#include "planner_plugin/ribcage/patient_ribcage.h"
+
+#include <gtest/gtest.h>
+
+#include "planner_plugin/ribcage/patient_table.h"
+#include "shape/core/error.h"
+
+namespace pectus::planner {
+namespace {
+
+const std::string kTable = std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv";
+
+class PatientRibcageTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { generic_ = new GenericRibcage(BuildGenericRibcage()); }
+  static void TearDownTestSuite() { delete generic_; }
+  static GenericRibcage* generic_;
+};
+GenericRibcage* PatientRibcageTest::generic_ = nullptr;
+
+// Measuring the generated ribcage gives back the CT measurements it was made from.
+TEST_F(PatientRibcageTest, MeasuringTheRibcageGivesBackItsInputsWithinOneMillimetre) {
+  const std::vector<PatientRow> rows = ReadPatientTable(kTable);
+  ASSERT_EQ(rows.size(), 62u);
+  // The deepest (3, 40 mm), a flat chest (48, 0 mm), the validation case (57), the smallest ribcage (43)
+  // and the widest (20).
+  for (const std::string id : {"3", "48", "57", "43", "20"}) {
+    const PatientRow& row = FindPatient(rows, id);
+    const PatientMeasurements& t = row.measurements;
+    const PatientRibcage r = MakePatientRibcage(*generic_, t);
+    SCOPED_TRACE(r.message);
+    EXPECT_NEAR(r.measured.width_mm, t.width_mm, 1.0);
+    EXPECT_NEAR(r.measured.depth_mm, t.depth_mm, 1.0);
+    EXPECT_NEAR(r.measured.sternal_length_mm, t.sternal_length_mm, 1.0);
+    EXPECT_NEAR(r.measured.depression_mm, t.depression_mm, 1.0);
+    EXPECT_LT(r.residual_mm, 0.5);
+    // The Haller index is computed from the generated ribcage: severe for 57 (CT: 6.5).
+    EXPECT_GT(r.measured.haller_index, 2.0);
+    if (id == "57") EXPECT_GT(r.measured.haller_index, 4.0);
+    r.mesh.Validate("patient " + id);
+    EXPECT_EQ(r.landmarks.size(), 4u);
+    EXPECT_LT(r.landmarks.Position("sternal_notch", "landmarks").norm(), 1e-9);  // the scale is about the notch
+  }
+}
+
+TEST_F(PatientRibcageTest, TorsionMagnificationAndSliceCountsAreHonoured) {
+  PatientMeasurements t;
+  t.patient = "synthetic";
+  t.magnification = 1.1;  // image lengths are 10 % too long
+  t.width_mm = 1.1 * 240;
+  t.depth_mm = 1.1 * 130;
+  t.depression_mm = 1.1 * 25;
+  t.first_sternum_slice = 12;  // 30 slices of 5 mm: 150 mm
+  t.last_sternum_slice = 42;
+  t.slice_spacing_mm = 5;
+  t.torsion_deg = 30;
+  const PatientRibcage r = MakePatientRibcage(*generic_, t);
+  SCOPED_TRACE(r.message);
+  EXPECT_NEAR(r.measured.width_mm, 240, 1.0);
+  EXPECT_NEAR(r.measured.depth_mm, 130, 1.0);
+  EXPECT_NEAR(r.measured.depression_mm, 25, 1.0);
+  EXPECT_NEAR(r.measured.sternal_length_mm, 150, 1.0);
+  EXPECT_NEAR(r.measured.torsion_deg, 30, 1.0);
+  r.mesh.Validate("twisted sternum");
+}
+
+TEST_F(PatientRibcageTest, RejectsMeasurementsOutOfRangeNamingThePatient) {
+  PatientMeasurements t;
+  t.patient = "p9";
+  t.width_mm = 250;
+  t.depth_mm = 140;
+  t.sternal_length_mm = 150;
+  t.depression_mm = 70;  // beyond the modeller's 60 mm
+  try {
+    MakePatientRibcage(*generic_, t);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("p9"), std::string::npos) << e.what();
+  }
+  t.depression_mm = 20;
+  t.torsion_deg = 50;
+  EXPECT_THROW(MakePatientRibcage(*generic_, t), Error);
+  t.torsion_deg = 0;
+  t.magnification = 0;
+  EXPECT_THROW(MakePatientRibcage(*generic_, t), Error);
+}
+
+TEST(PatientTable, ParsesColumnsByNameAndReportsTheLine) {
+  const auto rows = ParsePatientTable(
+      "depth_mm,patient,width_mm,sternal_length_mm,depression_mm,torsion_deg\n140,a,250,150,20,-10\n", "t.csv");
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].measurements.patient, "a");
+  EXPECT_EQ(rows[0].measurements.depth_mm, 140);
+  EXPECT_EQ(rows[0].measurements.torsion_deg, -10);
+  try {
+    ParsePatientTable("patient,width_mm,sternal_length_mm,depth_mm,depression_mm\n1,250,150,140,20\n2,25x,150,140,20\n",
+                      "t.csv");
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.file(), "t.csv");
+    EXPECT_EQ(e.line(), 3);
+  }
+  EXPECT_THROW(ParsePatientTable("patient,width_mm\n1,250\n", "t.csv"), Error);  // missing columns
+  EXPECT_THROW(FindPatient(rows, "zz"), Error);
+}
+
+}  // namespace
+}  // namespace pectus::planner

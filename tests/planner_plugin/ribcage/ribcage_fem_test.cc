@@ -1,0 +1,103 @@
+#include "planner_plugin/ribcage/ribcage_fem.h"
+
+#include <gtest/gtest.h>
+
+#include "planner_plugin/fem/surface_load.h"
+#include "planner_plugin/ribcage/patient_table.h"
+#include "shape/core/error.h"
+
+namespace pectus::planner {
+namespace {
+
+const std::string kTable = std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv";
+
+// Patient 57 on a somewhat coarser mesh than the default (8 mm cells), to keep the test quick.
+class RibcageFemTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    GenericRibcageOptions o;
+    o.sternum_cells_along = 28;
+    o.rib_cell_length_mm = 8.0;
+    generic_ = new GenericRibcage(BuildGenericRibcage(o));
+    const auto rows = ReadPatientTable(kTable);
+    patient_ = new PatientRibcage(MakePatientRibcage(*generic_, FindPatient(rows, "57").measurements));
+    fem_ = new RibcageFem(*patient_);
+  }
+  static void TearDownTestSuite() {
+    delete fem_;
+    delete patient_;
+    delete generic_;
+  }
+  static GenericRibcage* generic_;
+  static PatientRibcage* patient_;
+  static RibcageFem* fem_;
+};
+GenericRibcage* RibcageFemTest::generic_ = nullptr;
+PatientRibcage* RibcageFemTest::patient_ = nullptr;
+RibcageFem* RibcageFemTest::fem_ = nullptr;
+
+TEST_F(RibcageFemTest, TwentyFourLoadCasesOnOneFactorisation) {
+  const std::vector<BarLoad> loads = DissertationLoadCases();
+  ASSERT_EQ(loads.size(), 24u);
+  const std::vector<BarResult> results = fem_->Solve(loads);
+  ASSERT_EQ(results.size(), 24u);
+  EXPECT_EQ(fem_->solver().factorization().factorizations(), 1);
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const BarResult& r = results[i];
+    EXPECT_GT(r.sternum_lift_mm, 0.0) << r.load.Name();
+    EXPECT_GE(r.contact_faces, 8) << r.load.Name();
+    // The patch is the bar's width across the sternum's back: 12 mm x 20-40 mm.
+    EXPECT_GT(r.contact_area_mm2, 12.0 * 15.0) << r.load.Name();
+    EXPECT_LT(r.contact_area_mm2, 2.0 * 12.0 * 45.0) << r.load.Name();
+    // Linear: lift proportional to force at each position.
+    const BarResult& first = results[i - i % 8];
+    EXPECT_NEAR(r.sternum_lift_mm / first.sternum_lift_mm, r.load.force_n / first.load.force_n, 1e-9);
+  }
+  // The rib heads do not move.
+  for (std::int32_t n : patient_->fixed_nodes) ASSERT_EQ(results[23].displacement.row(n).norm(), 0.0);
+}
+
+TEST_F(RibcageFemTest, ReactionsAtTheSpineBalanceTheBar) {
+  const BarLoad bar{0.75, false, 400.0};
+  LoadCase load{"bar", fem_->NodalForces(bar), {}};
+  EXPECT_NEAR(load.nodal_forces.reshaped(3, load.nodal_forces.size() / 3).rowwise().sum()(1), -400.0, 1e-9);
+  const Points3 u = fem_->solver().Solve({load}).front();
+  const Eigen::VectorXd r = fem_->solver().Reactions(u, load);
+  Eigen::Vector3d total = Eigen::Vector3d::Zero();
+  const auto& prescribed = fem_->solver().partition().prescribed;
+  for (std::size_t k = 0; k < prescribed.size(); ++k) total(prescribed[k] % 3) += r(static_cast<Eigen::Index>(k));
+  EXPECT_LT((total - Eigen::Vector3d(0, 400.0, 0)).norm(), 1e-6 * 400.0) << total.transpose();
+}
+
+TEST_F(RibcageFemTest, ForceToLiftTheSternumByItsDepression) {
+  const std::vector<ForceToLift> f = fem_->ForceToLiftSternum({{0.65, false, 1}, {0.75, false, 1}, {0.85, false, 1}});
+  ASSERT_EQ(f.size(), 3u);
+  for (const ForceToLift& x : f) {
+    // 21 mm of depression; in vivo about 175-200 N (Weber 2006); the dissertation's model about 1000 N.
+    EXPECT_GT(x.force_n, 20.0);
+    EXPECT_LT(x.force_n, 2000.0);
+    EXPECT_NEAR(x.force_n * x.lift_per_newton_mm, patient_->measured.depression_mm, 1e-9);
+  }
+  // Pushing nearer the deepest point (the lower sternum) lifts it with less force.
+  EXPECT_LT(f[2].force_n, f[1].force_n);
+  EXPECT_LT(f[1].force_n, f[0].force_n);
+  // The cartilage carries the load: twice as stiff a cartilage needs more force, but less than twice
+  // (the ribs and sternum bend too).
+  RibcageFemOptions stiffer;
+  stiffer.materials.cartilage.youngs_modulus_mpa *= 2;
+  const RibcageFem fem2(*patient_, stiffer);
+  const ForceToLift g = fem2.ForceToLiftSternum({{0.75, false, 1}}).front();
+  EXPECT_GT(g.force_n / f[1].force_n, 1.2);
+  EXPECT_LT(g.force_n / f[1].force_n, 2.0);
+}
+
+TEST_F(RibcageFemTest, BarOffTheSternumIsRefused) {
+  EXPECT_THROW(fem_->Solve({{1.2, false, 100}}), Error);
+  EXPECT_THROW(fem_->Solve({{0.8, false, -5}}), Error);
+  const double length = patient_->measured.sternal_length_mm;
+  // In millimetres from the notch, the same level as the fraction.
+  EXPECT_NEAR(fem_->BarLevelZ({0.5 * length, true, 1}), fem_->BarLevelZ({0.5, false, 1}), 1e-12);
+}
+
+}  // namespace
+}  // namespace pectus::planner

@@ -1,0 +1,52 @@
+#include "planner_plugin/ribcage/skin_surface.h"
+
+#include <gtest/gtest.h>
+
+#include "planner_plugin/ribcage/patient_table.h"
+#include "planner_plugin/ribcage/ribcage_fem.h"
+#include "shape/core/error.h"
+
+namespace pectus::planner {
+namespace {
+
+TEST(SkinSurface, LiesOverTheChestWallAndFollowsTheRibcage) {
+  GenericRibcageOptions o;
+  o.sternum_cells_along = 28;
+  o.rib_cell_length_mm = 8.0;
+  const GenericRibcage generic = BuildGenericRibcage(o);
+  const auto rows = ReadPatientTable(std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv");
+  const PatientRibcage patient = MakePatientRibcage(generic, FindPatient(rows, "57").measurements);
+  SkinSurfaceOptions options;
+  options.rows = 24;
+  options.columns = 32;
+  const SkinSurface skin = BuildSkinSurface(patient, options);
+  skin.mesh.Validate("skin");
+  EXPECT_EQ(skin.mesh.num_vertices(), 24 * 32);
+  // Over the sternum, the skin lies the soft-tissue thickness in front of the bone (the notch).
+  const LandmarkSet on_skin = SkinLandmarks(skin, skin.mesh.vertices.positions, patient);
+  const Eigen::Vector3d notch = patient.landmarks.Position("sternal_notch", "bone");
+  const Eigen::Vector3d skin_notch = on_skin.Position("sternal_notch", "skin");
+  EXPECT_NEAR(skin_notch.z(), notch.z(), 1e-9);
+  EXPECT_NEAR(notch.y() - skin_notch.y(), options.soft_tissue_mm, 4.0);
+  // The depression shows on the skin: the skin over the lower sternum lies behind the skin over the
+  // manubrium, by about the depression less the sternum's own slope.
+  const double sunk = on_skin.Position("xiphisternal_junction", "skin").y() - skin_notch.y();
+  EXPECT_GT(sunk, 10.0);
+  // Rigid motion of the ribcage moves the skin rigidly (the ties are a partition of unity).
+  const Points3 shift = Points3::Constant(patient.mesh.num_nodes(), 3, 0).rowwise() + Eigen::RowVector3d(1, -2, 3);
+  const Points3 moved = skin.Deformed(shift);
+  EXPECT_LT(((moved - skin.mesh.vertices.positions).rowwise() - Eigen::RowVector3d(1, -2, 3)).cwiseAbs().maxCoeff(), 1e-9);
+  // Lifted by the bar, the skin over the sternum comes forward with it.
+  const RibcageFem fem(patient);
+  const BarResult r = fem.Solve({{0.85, false, 60.0}}).front();
+  const LandmarkSet lifted = SkinLandmarks(skin, skin.Deformed(r.displacement), patient);
+  const double skin_lift = on_skin.Position("xiphisternal_junction", "s").y() - lifted.Position("xiphisternal_junction", "s").y();
+  EXPECT_GT(skin_lift, 0.5 * r.sternum_lift_mm);
+  EXPECT_LT(skin_lift, 1.5 * r.sternum_lift_mm);
+  SkinSurfaceOptions bad;
+  bad.rows = 1;
+  EXPECT_THROW(BuildSkinSurface(patient, bad), Error);
+}
+
+}  // namespace
+}  // namespace pectus::planner

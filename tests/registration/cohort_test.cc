@@ -1,0 +1,178 @@
+#include "registration/cohort.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "registration/pose_error.h"
+#include "shape/core/error.h"
+#include "synthetic_chest.h"
+
+namespace pectus {
+namespace {
+
+Similarity3 Then(const Similarity3& a, const Similarity3& b) {  // a after b
+  Similarity3 c;
+  c.scale = a.scale * b.scale;
+  c.rotation = a.rotation * b.rotation;
+  c.translation = a.scale * (a.rotation * b.translation) + a.translation;
+  return c;
+}
+
+LandmarkSet Landmarks(const Similarity3& T, double noise_mm, std::uint64_t seed) {
+  const testing::ChestSurface s;
+  const std::vector<std::tuple<std::string, double, double>> where = {
+      {"notch", 0.0, 300.0}, {"xiphoid", 0.0, 130.0}, {"nipple_l", -0.6, 200.0}, {"nipple_r", 0.6, 205.0},
+      {"umbilicus", 0.05, 20.0}};
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0.0, noise_mm);
+  LandmarkSet set;
+  for (const auto& [label, phi, h] : where) {
+    Eigen::Vector3d p = T * s.Point(phi, h);
+    if (noise_mm > 0.0) p += Eigen::Vector3d(g(rng), g(rng), g(rng));
+    set.items.push_back({label, p, ""});
+  }
+  return set;
+}
+
+// Exact landmark sets placed by known similarities: GPA recovers T_mean_shape = T_ref T_i^-1 (to 1e-9),
+// with and without scale, and the mean is the reference shape.
+TEST(GeneralisedProcrustes, RecoversKnownTransforms) {
+  for (const bool scale : {false, true}) {
+    std::mt19937_64 rng(71);
+    std::vector<Similarity3> T;  // base -> shape i
+    std::vector<LandmarkSet> shapes;
+    for (int i = 0; i < 5; ++i) {
+      Similarity3 t = Similarity3::FromRigid(testing::RandomPose(&rng, 30.0, 200.0));
+      if (scale) t.scale = 0.9 + 0.05 * i;
+      T.push_back(t);
+      shapes.push_back(Landmarks(t, 0.0, 0));
+    }
+    ProcrustesOptions o;
+    o.estimate_scale = scale;
+    o.reference = 2;
+    const ProcrustesResult r = GeneralisedProcrustes(shapes, o);
+    EXPECT_TRUE(r.converged);
+    EXPECT_LT(r.rms_mm, 1e-9);
+    for (int i = 0; i < 5; ++i) {
+      const Similarity3 expected = Then(T[2], T[static_cast<std::size_t>(i)].Inverse());
+      const PoseError e = ComparePoses(r.T_mean_shape[static_cast<std::size_t>(i)], expected,
+                                       shapes[static_cast<std::size_t>(i)].items[0].position);
+      EXPECT_LT(e.rotation_deg, 1e-9) << i;
+      EXPECT_LT(e.translation_mm, 1e-9) << i;
+      EXPECT_NEAR(e.scale_ratio, 1.0, 1e-12) << i;
+    }
+    for (std::size_t k = 0; k < r.mean.size(); ++k) {
+      EXPECT_LT((r.mean.items[k].position - shapes[2].items[k].position).norm(), 1e-9);
+    }
+  }
+}
+
+// With noise the mean lies closer to the noise-free shape than any single noisy shape does on average.
+TEST(GeneralisedProcrustes, MeanAveragesNoise) {
+  std::vector<LandmarkSet> shapes;
+  for (int i = 0; i < 20; ++i) shapes.push_back(Landmarks({}, 3.0, 100 + static_cast<std::uint64_t>(i)));
+  const ProcrustesResult r = GeneralisedProcrustes(shapes);
+  const LandmarkSet truth = Landmarks({}, 0.0, 0);
+  std::vector<LandmarkSet> mean_only = {r.mean, truth};
+  const ProcrustesResult fit = GeneralisedProcrustes(mean_only);
+  EXPECT_LT(fit.rms_mm, 1.5);  // single shapes: about 3 * sqrt(3) = 5.2 mm from the truth
+}
+
+TEST(GeneralisedProcrustes, TooFewCommonLabelsIsAClearError) {
+  LandmarkSet a = Landmarks({}, 0.0, 0), b = a;
+  b.items.resize(2);
+  try {
+    GeneralisedProcrustes({a, b});
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kBadInput);
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("need at least 3"));
+  }
+}
+
+// Four chest scans (different samplings, 0.2 mm noise, landmarks with 3 mm noise) at known poses.
+std::vector<CohortScan> Cohort(std::vector<Rigid3>* poses) {
+  std::vector<CohortScan> scans;
+  std::mt19937_64 rng(81);
+  for (int i = 0; i < 4; ++i) {
+    const Rigid3 T = i == 0 ? Rigid3(Rigid3::Identity()) : testing::RandomPose(&rng, 20.0, 100.0);  // scan -> world
+    poses->push_back(T);
+    CohortScan s;
+    s.name = "scan" + std::to_string(i);
+    s.cloud = testing::Transformed(testing::SampleChest(15000, 90 + static_cast<std::uint64_t>(i), 0.2), T.inverse());
+    s.landmarks = Landmarks(Similarity3::FromRigid(T.inverse()), 3.0, 95 + static_cast<std::uint64_t>(i));
+    scans.push_back(std::move(s));
+  }
+  return scans;
+}
+
+// To reference: T_frame_scan_i = T_ref^-1 T_i to 0.05 degrees and 0.1 mm.
+TEST(AlignCohort, ToReference) {
+  std::vector<Rigid3> poses;
+  const std::vector<CohortScan> scans = Cohort(&poses);
+  CohortOptions o;
+  o.reference = 1;
+  const CohortResult r = AlignCohort(scans, o);
+  ASSERT_TRUE(r.all_succeeded());
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    const Similarity3 expected = Similarity3::FromRigid(poses[1].inverse() * poses[i]);
+    const PoseError e = ComparePoses(r.T_frame_scan[i], expected, scans[i].cloud.positions.row(0).transpose());
+    EXPECT_LT(e.rotation_deg, 0.05) << scans[i].name;
+    EXPECT_LT(e.translation_mm, 0.1) << scans[i].name;
+  }
+}
+
+// Groupwise: all scans land in one frame, the reference's. Relative poses between any two scans to 0.05
+// degrees and 0.1 mm; the reference itself gets the identity.
+TEST(AlignCohort, GroupwiseWithAndWithoutLandmarks) {
+  for (const bool with_landmarks : {true, false}) {
+    std::vector<Rigid3> poses;
+    std::vector<CohortScan> scans = Cohort(&poses);
+    if (!with_landmarks) {
+      // Without landmarks the scans start from small disturbances of the truth, placed in the world.
+      std::mt19937_64 rng(5);
+      for (std::size_t i = 0; i < scans.size(); ++i) {
+        scans[i].landmarks.reset();
+        const Rigid3 near = testing::RandomPose(&rng, 3.0, 5.0, Eigen::Vector3d(0, 100, 160));
+        scans[i].cloud = testing::Transformed(scans[i].cloud, near * poses[i]);
+        poses[i] = near.inverse();  // the new scan frame -> world
+      }
+    }
+    CohortOptions o;
+    o.mode = CohortMode::kGroupwise;
+    const CohortResult r = AlignCohort(scans, o);
+    ASSERT_TRUE(r.all_succeeded()) << r.messages[0];
+    EXPECT_TRUE(r.converged);
+    EXPECT_EQ(with_landmarks, r.procrustes.has_value());
+    for (std::size_t i = 1; i < scans.size(); ++i) {
+      // T_frame_i^-1 T_frame_0 should equal T_i^-1 T_0 (scan 0 -> scan i).
+      const Similarity3 est = Then(r.T_frame_scan[i].Inverse(), r.T_frame_scan[0]);
+      const Similarity3 truth = Similarity3::FromRigid(poses[i].inverse() * poses[0]);
+      const PoseError e = ComparePoses(est, truth, scans[0].cloud.positions.row(0).transpose());
+      EXPECT_LT(e.rotation_deg, 0.05) << i;
+      EXPECT_LT(e.translation_mm, 0.1) << i;
+    }
+    const PoseError frame = ComparePoses(r.T_frame_scan[0], Similarity3::FromRigid(poses[0].inverse() * poses[0]),
+                                         Eigen::Vector3d(0, 100, 160));
+    EXPECT_LT(frame.translation_mm, 1e-9);
+    EXPECT_LT(frame.rotation_deg, 1e-9);
+  }
+}
+
+TEST(AlignCohort, MixedLandmarksAreAUsageError) {
+  std::vector<Rigid3> poses;
+  std::vector<CohortScan> scans = Cohort(&poses);
+  scans[2].landmarks.reset();
+  try {
+    AlignCohort(scans);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kUsage);
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("3 of 4"));
+  }
+}
+
+}  // namespace
+}  // namespace pectus

@@ -1,0 +1,228 @@
+#include "registration/icp.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <random>
+
+#include "registration/pose_error.h"
+#include "shape/core/error.h"
+#include "synthetic_chest.h"
+
+namespace pectus {
+namespace {
+
+using ::testing::HasSubstr;
+
+// Two independent samplings of the chest surface (different points, 0.2 mm noise each), the second
+// moved by a known pose: ICP must recover that pose.
+struct Pair {
+  PointCloud target;
+  PointCloud source;  // = T_true^-1 (second sampling)
+  Rigid3 T_true;      // T_target_source
+};
+
+Pair MakePair(std::uint64_t seed, int points = 30000) {
+  Pair p;
+  p.target = testing::SampleChest(points, seed, 0.2, -1.3, 0.9);
+  std::mt19937_64 rng(seed + 1000);
+  p.T_true = testing::RandomPose(&rng, 25.0, 150.0, Eigen::Vector3d(0, 100, 160));
+  p.source = testing::Transformed(testing::SampleChest(points, seed + 1, 0.2, -0.9, 1.3), p.T_true.inverse());
+  return p;
+}
+
+// The starting pose: the truth disturbed by `deg` about the source centroid and `mm` of shift.
+Rigid3 Disturbed(const Pair& p, double deg, double mm, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  const Eigen::Vector3d c = p.T_true * Eigen::Vector3d(p.source.positions.colwise().mean().transpose());
+  return testing::RandomPose(&rng, deg, mm, c) * p.T_true;
+}
+
+PoseError ErrorOf(const Pair& p, const Rigid3& T) {
+  return ComparePoses(Similarity3::FromRigid(T), Similarity3::FromRigid(p.T_true),
+                      p.source.positions.colwise().mean().transpose());
+}
+
+// Tolerances of issue 4: 0.05 degrees and 0.1 mm.
+constexpr double kMaxRotationDeg = 0.05;
+constexpr double kMaxTranslationMm = 0.1;
+
+TEST(AlignIcp, PointToPlaneRecoversKnownPoseBothDirections) {
+  const Pair p = MakePair(1);
+  const IcpTarget target(p.target.positions, p.target.normals);
+  const IcpResult forward = AlignIcp(target, p.source.positions, Points3(), Disturbed(p, 8.0, 25.0, 2));
+  ASSERT_TRUE(forward.success) << forward.message;
+  EXPECT_TRUE(forward.converged);
+  const PoseError e = ErrorOf(p, forward.T_target_source);
+  EXPECT_LT(e.rotation_deg, kMaxRotationDeg);
+  EXPECT_LT(e.translation_mm, kMaxTranslationMm);
+  EXPECT_LT(forward.rms_mm, 0.4);  // two 0.2 mm noises: sqrt(2) * 0.2 = 0.28 mm
+  EXPECT_GT(forward.inlier_fraction, 0.6);
+
+  // Backward: the source as target, the truth inverted.
+  Pair q;
+  q.target = p.source;
+  q.source = p.target;
+  q.T_true = p.T_true.inverse();
+  const IcpTarget target2(q.target.positions, q.target.normals);
+  const IcpResult backward = AlignIcp(target2, q.source.positions, Points3(), Disturbed(q, 8.0, 25.0, 3));
+  ASSERT_TRUE(backward.success) << backward.message;
+  const PoseError e2 = ErrorOf(q, backward.T_target_source);
+  EXPECT_LT(e2.rotation_deg, kMaxRotationDeg);
+  EXPECT_LT(e2.translation_mm, kMaxTranslationMm);
+}
+
+TEST(AlignIcp, SymmetricRecoversKnownPose) {
+  const Pair p = MakePair(4);
+  const IcpTarget target(p.target.positions, p.target.normals);
+  IcpOptions o;
+  o.method = IcpMethod::kSymmetric;
+  const IcpResult r = AlignIcp(target, p.source.positions, p.source.normals, Disturbed(p, 8.0, 25.0, 5), o);
+  ASSERT_TRUE(r.success) << r.message;
+  const PoseError e = ErrorOf(p, r.T_target_source);
+  EXPECT_LT(e.rotation_deg, kMaxRotationDeg);
+  EXPECT_LT(e.translation_mm, kMaxTranslationMm);
+}
+
+TEST(AlignIcp, SymmetricNeedsSourceNormals) {
+  const Pair p = MakePair(4, 2000);
+  const IcpTarget target(p.target.positions, p.target.normals);
+  IcpOptions o;
+  o.method = IcpMethod::kSymmetric;
+  EXPECT_THROW(AlignIcp(target, p.source.positions, Points3(), p.T_true, o), Error);
+}
+
+// Both scans 10 km from the origin (a scanner's frame): same accuracy.
+TEST(AlignIcp, FarFromOrigin) {
+  Pair p = MakePair(6);
+  Rigid3 far = Rigid3::Identity();
+  far.translation() << 1e7, -1e7, 2e6;
+  p.target = testing::Transformed(p.target, far);
+  p.source = testing::Transformed(p.source, far);
+  p.T_true = far * p.T_true * far.inverse();
+  const IcpTarget target(p.target.positions, p.target.normals);
+  const IcpResult r = AlignIcp(target, p.source.positions, Points3(), Disturbed(p, 8.0, 25.0, 7));
+  ASSERT_TRUE(r.success) << r.message;
+  const PoseError e = ErrorOf(p, r.T_target_source);
+  EXPECT_LT(e.rotation_deg, kMaxRotationDeg);
+  EXPECT_LT(e.translation_mm, kMaxTranslationMm);
+}
+
+// 20 % of the source replaced by clutter 5 to 50 mm off the surface: the robust loss ignores it.
+TEST(AlignIcp, RobustToClutter) {
+  Pair p = MakePair(8);
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> off(5.0, 50.0);
+  for (Eigen::Index i = 0; i < p.source.size(); i += 5) {
+    p.source.positions.row(i) += off(rng) * p.source.normals.row(i);
+  }
+  const IcpTarget target(p.target.positions, p.target.normals);
+  for (const RobustLoss loss : {RobustLoss::kCauchy, RobustLoss::kTukey, RobustLoss::kHuber}) {
+    IcpOptions o;
+    o.loss = loss;
+    o.trim_fraction = loss == RobustLoss::kHuber ? 0.25 : 0.0;  // Huber alone is not redescending
+    const IcpResult r = AlignIcp(target, p.source.positions, Points3(), Disturbed(p, 5.0, 15.0, 10), o);
+    ASSERT_TRUE(r.success) << ToString(loss) << ": " << r.message;
+    const PoseError e = ErrorOf(p, r.T_target_source);
+    EXPECT_LT(e.rotation_deg, kMaxRotationDeg) << ToString(loss);
+    EXPECT_LT(e.translation_mm, kMaxTranslationMm) << ToString(loss);
+  }
+}
+
+// Restricted to three 60 mm patches of the source, ICP uses only their points and still recovers the
+// pose (looser, 0.1 degrees and 0.2 mm, since a third of the surface is used).
+TEST(AlignIcp, SurfacePatches) {
+  const Pair p = MakePair(12);
+  const IcpTarget target(p.target.positions, p.target.normals);
+  testing::ChestSurface s;
+  IcpOptions o;
+  o.patch_radius_mm = 60.0;
+  for (const auto& [phi, h] : {std::pair{0.0, 150.0}, {0.6, 220.0}, {-0.5, 60.0}}) {
+    o.patch_centres.push_back(p.T_true.inverse() * s.Point(phi, h));
+  }
+  const IcpResult r = AlignIcp(target, p.source.positions, Points3(), Disturbed(p, 5.0, 10.0, 13), o);
+  ASSERT_TRUE(r.success) << r.message;
+  EXPECT_LT(r.levels.back().source_points, p.source.size() / 2);
+  const PoseError e = ErrorOf(p, r.T_target_source);
+  EXPECT_LT(e.rotation_deg, 0.1);
+  EXPECT_LT(e.translation_mm, 0.2);
+}
+
+// A bad fit is reported as a failure, never as a success: surfaces that do not overlap, a start 90
+// degrees off, and a source that is another shape.
+TEST(AlignIcp, PoorFitIsAFailure) {
+  const Pair p = MakePair(14, 10000);
+  const IcpTarget target(p.target.positions, p.target.normals);
+
+  Rigid3 away = p.T_true;
+  away.translation() += Eigen::Vector3d(800, 0, 0);
+  const IcpResult apart = AlignIcp(target, p.source.positions, Points3(), away);
+  EXPECT_FALSE(apart.success);
+  EXPECT_THAT(apart.message, HasSubstr("overlap"));
+
+  std::mt19937_64 rng(15);
+  const Rigid3 flipped = Disturbed(p, 120.0, 0.0, 16);
+  const IcpResult wrong = AlignIcp(target, p.source.positions, Points3(), flipped);
+  EXPECT_FALSE(wrong.success) << wrong.BriefReport();
+  EXPECT_FALSE(wrong.message.empty());
+
+  // A sphere of radius 150 mm is not the chest: residuals stay large.
+  Points3 sphere(10000, 3);
+  std::normal_distribution<double> g(0.0, 1.0);
+  for (Eigen::Index i = 0; i < sphere.rows(); ++i) {
+    sphere.row(i) = 150.0 * Eigen::RowVector3d(g(rng), std::abs(g(rng)), g(rng)).normalized() +
+                    Eigen::RowVector3d(0, -40, 160);
+  }
+  const IcpResult other = AlignIcp(target, sphere, Points3(), Rigid3::Identity());
+  EXPECT_FALSE(other.success) << other.BriefReport();
+}
+
+// Same input, same output (bit for bit) with 1 and 2 threads: the reduction has a fixed order.
+TEST(AlignIcp, DeterministicAcrossThreads) {
+  const Pair p = MakePair(17, 10000);
+  const IcpTarget target(p.target.positions, p.target.normals);
+  const Rigid3 start = Disturbed(p, 5.0, 10.0, 18);
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const IcpResult one = AlignIcp(target, p.source.positions, Points3(), start);
+  omp_set_num_threads(2);
+  const IcpResult two = AlignIcp(target, p.source.positions, Points3(), start);
+  omp_set_num_threads(threads);
+  EXPECT_TRUE(one.T_target_source.matrix() == two.T_target_source.matrix());
+  EXPECT_EQ(one.iterations, two.iterations);
+}
+
+// Explicit levels are used as given; a level with no iterations left reports not converged.
+TEST(AlignIcp, ExplicitLevelsAndIterationLimit) {
+  const Pair p = MakePair(19, 10000);
+  const IcpTarget target(p.target.positions, p.target.normals);
+  IcpOptions o;
+  o.levels = {{4.0, 20.0, 1}};
+  const IcpResult r = AlignIcp(target, p.source.positions, Points3(), Disturbed(p, 5.0, 10.0, 20), o);
+  ASSERT_EQ(r.levels.size(), 1u);
+  EXPECT_EQ(r.iterations, 1);
+  EXPECT_FALSE(r.converged);
+  EXPECT_FALSE(r.success);
+  EXPECT_THAT(r.message, HasSubstr("did not converge"));
+}
+
+TEST(AlignIcp, InvalidOptionsAreAUsageError) {
+  IcpOptions o;
+  o.trim_fraction = 0.95;
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_THAT(why, HasSubstr("trim_fraction"));
+  const Pair p = MakePair(21, 1000);
+  const IcpTarget target(p.target.positions, p.target.normals);
+  try {
+    AlignIcp(target, p.source.positions, Points3(), p.T_true, o);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kUsage);
+  }
+  EXPECT_THROW(IcpTarget(p.target.positions, Points3(5, 3)), Error);
+}
+
+}  // namespace
+}  // namespace pectus

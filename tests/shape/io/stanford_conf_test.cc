@@ -1,0 +1,120 @@
+#include "shape/io/stanford_conf.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "shape/core/error.h"
+#include "tests/shape/io/io_test_util.h"
+
+namespace pectus {
+namespace {
+
+using testing::ThrowsBadInput;
+
+const std::filesystem::path kBunnyConf =
+    std::filesystem::path(PECTUS_SHARED_DIR) / "datasets" / "stanford_bunny" / "bun.conf";
+
+// The rotation matrix of the unit quaternion (x, y, z, w), written out (not through Eigen) so that the
+// test checks the convention independently of the implementation.
+Eigen::Matrix3d RotationOf(double x, double y, double z, double w) {
+  const double n = std::sqrt(x * x + y * y + z * z + w * w);
+  x /= n, y /= n, z /= n, w /= n;
+  Eigen::Matrix3d R;
+  R << 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),  //
+      2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),   //
+      2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y);
+  return R;
+}
+
+TEST(StanfordConf, ReadsTheRealBunnyAlignment) {
+  const std::vector<ScanPose> poses = ReadStanfordConf(kBunnyConf);
+  ASSERT_EQ(poses.size(), 10u);
+  const std::vector<std::string> files = {"bun000.ply", "bun045.ply",  "bun090.ply", "bun180.ply",
+                                          "bun270.ply", "top2.ply",    "top3.ply",   "bun315.ply",
+                                          "chin.ply",   "ear_back.ply"};
+  for (std::size_t i = 0; i < files.size(); ++i) EXPECT_EQ(poses[i].file, files[i]);
+  EXPECT_TRUE(poses[0].T_common_scan.matrix().isIdentity(0.0));
+
+  // bmesh bun045.ply -0.0520211 -0.000383981 -0.0109223 0.00548449 -0.294635 -0.0038555 0.955586
+  // p_common = R(q)^T p_scan + t.
+  const Eigen::Matrix3d R = RotationOf(0.00548449, -0.294635, -0.0038555, 0.955586);
+  const Eigen::Vector3d t(-0.0520211, -0.000383981, -0.0109223);
+  for (const Eigen::Vector3d& p : {Eigen::Vector3d(0.01, 0.02, 0.03), Eigen::Vector3d(-0.07, 0.15, -0.02)}) {
+    const Eigen::Vector3d expected = R.transpose() * p + t;
+    EXPECT_LT((poses[1].T_common_scan * p - expected).norm(), 1e-12);
+  }
+  // About 34 degrees about (nearly) the y axis.
+  EXPECT_NEAR(Eigen::AngleAxisd(poses[1].T_common_scan.linear()).angle(), 2 * std::acos(0.955586), 1e-5);
+}
+
+TEST(StanfordConf, WriteThenReadRecoversThePoses) {
+  std::vector<ScanPose> poses;
+  for (int i = 0; i < 5; ++i) {
+    ScanPose pose{"scan_" + std::to_string(i) + ".ply", Rigid3::Identity()};
+    pose.T_common_scan.linear() =
+        Eigen::AngleAxisd(0.3 + 0.7 * i, Eigen::Vector3d(1.0, -0.5 * i, 0.25).normalized())
+            .toRotationMatrix();
+    pose.T_common_scan.translation() = Eigen::Vector3d(1.0 / 3 + i, -123.456789 * i, 1e-7 * (i + 1));
+    poses.push_back(pose);
+  }
+  const testing::TempDir dir;
+  WriteStanfordConf(dir / "out.conf", poses);
+  const std::vector<ScanPose> back = ReadStanfordConf(dir / "out.conf");
+  ASSERT_EQ(back.size(), poses.size());
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    EXPECT_EQ(back[i].file, poses[i].file);
+    EXPECT_LT((back[i].T_common_scan.matrix() - poses[i].T_common_scan.matrix()).cwiseAbs().maxCoeff(),
+              1e-12);
+  }
+  // The real file survives a write and read too.
+  const std::vector<ScanPose> bunny = ReadStanfordConf(kBunnyConf);
+  WriteStanfordConf(dir / "bun.conf", bunny);
+  const std::vector<ScanPose> bunny_back = ReadStanfordConf(dir / "bun.conf");
+  for (std::size_t i = 0; i < bunny.size(); ++i) {
+    EXPECT_LT((bunny_back[i].T_common_scan.matrix() - bunny[i].T_common_scan.matrix()).cwiseAbs().maxCoeff(),
+              1e-12);
+  }
+}
+
+TEST(StanfordConf, CommentsCamerasAndUnnormalisedQuaternions) {
+  const std::vector<ScanPose> poses = ParseStanfordConf(
+      "# aligned by hand\n\ncamera 0 0 1  0 0 0 1\nbmesh a.ply 1 2 3 0 0 0 2\n\tbmesh b.ply 0 0 0 0 0 3 0\n",
+      "x.conf");
+  ASSERT_EQ(poses.size(), 2u);
+  EXPECT_TRUE(poses[0].T_common_scan.linear().isIdentity(1e-15));
+  EXPECT_EQ(poses[0].T_common_scan.translation(), Eigen::Vector3d(1, 2, 3));
+  // q = z axis, 180 degrees: R = diag(-1, -1, 1).
+  EXPECT_TRUE(
+      poses[1].T_common_scan.linear().isApprox(Eigen::Vector3d(-1, -1, 1).asDiagonal().toDenseMatrix()));
+
+  std::vector<ScanPose> scaled = poses;
+  ScaleTranslations(1000.0, &scaled);
+  EXPECT_EQ(scaled[0].T_common_scan.translation(), Eigen::Vector3d(1000, 2000, 3000));
+  EXPECT_EQ(scaled[0].T_common_scan.linear(), poses[0].T_common_scan.linear());
+}
+
+TEST(StanfordConf, MalformedInputIsAnErrorNamingFileAndLine) {
+  EXPECT_TRUE(ThrowsBadInput([] { ParseStanfordConf("", "e.conf"); }, "file is empty", "e.conf"));
+  EXPECT_TRUE(ThrowsBadInput([] { ParseStanfordConf("camera 0 0 0 0 0 0 1\n", "c.conf"); },
+                             "no 'bmesh' lines", "c.conf"));
+  EXPECT_TRUE(ThrowsBadInput(
+      [] { ParseStanfordConf("bmesh a.ply 0 0 0 0 0 0 1\nbmesh b.ply 0 0 0 0 0 1\n", "f.conf"); }, "found 7",
+      "f.conf", 2));
+  EXPECT_TRUE(ThrowsBadInput([] { ParseStanfordConf("bmesh a.ply 0 0 0 0 0 0 1 9\n", "m.conf"); },
+                             "8 fields after 'bmesh' (FILE tx ty tz qx qy qz qw), found 9", "m.conf", 1));
+  EXPECT_TRUE(ThrowsBadInput([] { ParseStanfordConf("bmesh a.ply 0 0 0 0 0 0 0\n", "q.conf"); },
+                             "quaternion (qx qy qz qw) is zero", "q.conf", 1));
+  EXPECT_TRUE(ThrowsBadInput([] { ParseStanfordConf("bmesh a.ply 0 x 0 0 0 0 1\n", "n.conf"); },
+                             "'x' is not a number", "n.conf", 1));
+  EXPECT_TRUE(ThrowsBadInput([] { ParseStanfordConf("bmesh a.ply 0 0 0 nan 0 0 1\n", "nan.conf"); },
+                             "non-finite", "nan.conf", 1));
+  EXPECT_TRUE(ThrowsBadInput(
+      [] { ParseStanfordConf("bmesh a.ply 0 0 0 0 0 0 1\n\nbmesh a.ply 1 0 0 0 0 0 1\n", "d.conf"); },
+      "'a.ply' is listed twice (lines 1 and 3)", "d.conf", 3));
+  EXPECT_TRUE(ThrowsBadInput([] { ParseStanfordConf("bmesh a.ply 0 0 0 0 0 0 1\nmesh b.ply\n", "k.conf"); },
+                             "unexpected 'mesh'", "k.conf", 2));
+}
+
+}  // namespace
+}  // namespace pectus

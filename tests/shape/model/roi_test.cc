@@ -1,0 +1,128 @@
+// ROI frame and grid: axes from the landmarks, extents, margins, the anterior hint, errors; grid layout.
+#include "shape/model/roi.h"
+
+#include <gtest/gtest.h>
+
+#include "shape/core/error.h"
+#include "shape/model/shape_grid.h"
+
+namespace pectus {
+namespace {
+
+// LPS: x toward the left, y posterior, z superior. A subject lying in the scanner frame as in Slicer.
+LandmarkSet LpsLandmarks() {
+  LandmarkSet s;
+  s.items.push_back({"sternal_notch", {10.0, -100.0, 50.0}, ""});
+  s.items.push_back({"xiphoid", {10.0, -90.0, -130.0}, ""});       // 180 mm down, 10 mm back
+  s.items.push_back({"costal_cartilage_1_left", {55.0, -95.0, 35.0}, ""});
+  return s;
+}
+
+TEST(ChestRoi, AxesFollowTheLandmarksAndTheNormalIsAnterior) {
+  const LandmarkSet l = LpsLandmarks();
+  const ChestRoi roi = ComputeChestRoi(l);
+  EXPECT_TRUE(roi.origin.isApprox(Eigen::Vector3d(10, -100, 50)));
+  EXPECT_TRUE(roi.sternal.isApprox(Eigen::Vector3d(0, 10, -180).normalized(), 1e-12));
+  EXPECT_NEAR(roi.lateral.dot(roi.sternal), 0.0, 1e-12);
+  EXPECT_NEAR(roi.normal.dot(roi.sternal), 0.0, 1e-12);
+  EXPECT_NEAR(roi.normal.dot(roi.lateral), 0.0, 1e-12);
+  EXPECT_GT(roi.lateral.x(), 0.9);    // toward the subject's left (+x in LPS)
+  EXPECT_LT(roi.normal.y(), -0.9);    // anterior is -y in LPS
+  EXPECT_NEAR(roi.v_min, 0.0, 1e-12);
+  EXPECT_NEAR(roi.v_max, std::hypot(10.0, 180.0), 1e-9);
+  // The cartilage lies in the ROI plane at u = its distance from the sternal line.
+  const Points3 c = roi.ToRoi(l.Position("costal_cartilage_1_left", "").transpose());
+  EXPECT_NEAR(c(0, 2), 0.0, 1e-9);
+  EXPECT_NEAR(roi.u_max, c(0, 0), 1e-9);
+  EXPECT_NEAR(roi.u_min, -c(0, 0), 1e-9);
+}
+
+TEST(ChestRoi, RoundTripOfRoiCoordinates) {
+  const ChestRoi roi = ComputeChestRoi(LpsLandmarks());
+  Points3 p(3, 3);
+  p << 1, 2, 3, -40, 800, 12, 0.5, -0.25, 1e3;
+  EXPECT_TRUE(roi.FromRoi(roi.ToRoi(p)).isApprox(p, 1e-12));
+  EXPECT_TRUE(roi.FromRoi(1.0, 2.0, 3.0).isApprox(roi.FromRoi(Points3(Eigen::RowVector3d(1, 2, 3))).row(0).transpose()));
+}
+
+TEST(ChestRoi, MarginsWidenTheRectangle) {
+  ChestRoiOptions o;
+  o.superior_margin_mm = 10;
+  o.inferior_margin_mm = 20;
+  o.lateral_margin_mm = 5;
+  const ChestRoi plain = ComputeChestRoi(LpsLandmarks());
+  const ChestRoi wide = ComputeChestRoi(LpsLandmarks(), o);
+  EXPECT_NEAR(wide.v_min, -10.0, 1e-12);
+  EXPECT_NEAR(wide.v_max, plain.v_max + 20.0, 1e-9);
+  EXPECT_NEAR(wide.u_max, plain.u_max + 5.0, 1e-9);
+  EXPECT_NEAR(wide.u_min, plain.u_min - 5.0, 1e-9);
+}
+
+TEST(ChestRoi, AnteriorHintLevelsTheLateralAxis) {
+  ChestRoiOptions o;
+  o.anterior_hint = Eigen::Vector3d(0, -1, 0);  // LPS anterior
+  const ChestRoi roi = ComputeChestRoi(LpsLandmarks(), o);
+  // Lateral is perpendicular to the sternal line and to the hint: here exactly +x.
+  EXPECT_TRUE(roi.lateral.isApprox(Eigen::Vector3d::UnitX(), 1e-12));
+  EXPECT_NEAR(roi.u_max, 45.0, 1e-9);  // the cartilage's x offset from the notch
+  EXPECT_LT(roi.normal.y(), -0.99);
+}
+
+TEST(ChestRoi, MissingOrDegenerateLandmarksAreBadInput) {
+  LandmarkSet l = LpsLandmarks();
+  l.items.pop_back();
+  EXPECT_THROW(ComputeChestRoi(l, {}, "a.mrk.json"), Error);
+  LandmarkSet on_line = LpsLandmarks();
+  on_line.items[2].position = Eigen::Vector3d(10.0, -95.0, -40.0);  // on the sternal line
+  try {
+    ComputeChestRoi(on_line, {}, "b.mrk.json");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kBadInput);
+    EXPECT_NE(std::string(e.what()).find("b.mrk.json"), std::string::npos);
+  }
+  ChestRoiOptions bad;
+  bad.lateral_margin_mm = -1;
+  EXPECT_FALSE(bad.IsValid(nullptr));
+}
+
+TEST(ShapeGrid, DefaultIsTheDissertationsGrid) {
+  const GridSize g;
+  EXPECT_EQ(g.num_vertices(), 5151);
+  EXPECT_EQ(3 * g.num_vertices(), 15453);
+  EXPECT_EQ(g.Index(1, 0), 51);
+  const GridSize p = ParseGridSize("11x21");
+  EXPECT_EQ(p.lateral, 11);
+  EXPECT_EQ(p.sternal, 21);
+  EXPECT_THROW(ParseGridSize("11by21"), Error);
+  EXPECT_THROW(ParseGridSize("1x21"), Error);
+}
+
+TEST(ShapeGrid, FacesPointAlongTheRoiNormal) {
+  const ChestRoi roi = ComputeChestRoi(LpsLandmarks());
+  const GridSize g{5, 7};
+  const Eigen::VectorXd u = GridLateralPositions(roi, g), v = GridSternalPositions(roi, g);
+  EXPECT_NEAR(u[0], roi.u_min, 1e-12);
+  EXPECT_NEAR(u[4], roi.u_max, 1e-12);
+  EXPECT_NEAR(v[6], roi.v_max, 1e-12);
+  Points3 uvw(g.num_vertices(), 3);
+  for (int i = 0; i < g.sternal; ++i) {
+    for (int j = 0; j < g.lateral; ++j) uvw.row(g.Index(i, j)) << u[j], v[i], 0.0;
+  }
+  const Points3 x = roi.FromRoi(uvw);
+  const Faces3 f = GridFaces(g);
+  ASSERT_EQ(f.rows(), 2 * 4 * 6);
+  for (Eigen::Index k = 0; k < f.rows(); ++k) {
+    const Eigen::Vector3d n = (x.row(f(k, 1)) - x.row(f(k, 0))).cross(x.row(f(k, 2)) - x.row(f(k, 0))).transpose();
+    EXPECT_GT(n.normalized().dot(roi.normal), 0.999) << "face " << k;
+  }
+  // Shape vectors are (x1, y1, z1, ...).
+  const Eigen::VectorXd s = ToShapeVector(x);
+  EXPECT_EQ(s.size(), 3 * g.num_vertices());
+  EXPECT_DOUBLE_EQ(s[3], x(1, 0));
+  EXPECT_DOUBLE_EQ(s[5], x(1, 2));
+  EXPECT_TRUE(FromShapeVector(s).isApprox(x));
+}
+
+}  // namespace
+}  // namespace pectus
