@@ -8,7 +8,13 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
+#include "registration/kdtree.h"
+#include "shape/io/mesh_io.h"
+#include "shape/render/image.h"
+
+namespace pectus {
 namespace {
 namespace fs = std::filesystem;
 
@@ -148,9 +154,39 @@ TEST_F(CliTest, PlaceWritesOneCloudOfAllSweeps) {
   const auto j = nlohmann::json::parse(in);
   EXPECT_EQ(j["points"], 362272);
   EXPECT_EQ(j["sweeps"].size(), 10u);
-  // The bunny is about 156 x 153 x 118 mm.
-  const double width = j["bounds_mm"]["max"][0].get<double>() - j["bounds_mm"]["min"][0].get<double>();
-  EXPECT_NEAR(width, 155.7, 1.0);
+  // Placed right, the merged cloud lies on Stanford's reference surface (bun_zipper.ply, in metres): the
+  // median distance of its points to the reference vertices is about 0.55 mm (the vertex spacing).
+  ReadOptions metres;
+  metres.input_units = LengthUnit::kMetre;
+  const PointCloud placed = ReadPointCloud(P("bunny.ply"));
+  ASSERT_EQ(placed.size(), 362272);
+  const PointCloud zipper = ReadPointCloud(kBunny + "reconstruction/bun_zipper.ply", metres);
+  const KdTree3 tree(zipper.positions);
+  std::vector<double> d;
+  for (Eigen::Index i = 0; i < placed.size(); i += 7) {
+    std::uint32_t j;
+    double d2;
+    tree.Nearest(placed.positions.row(i).transpose(), &j, &d2);
+    d.push_back(std::sqrt(d2));
+  }
+  std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+  EXPECT_LE(d[d.size() / 2], 0.7);
+}
+
+TEST_F(CliTest, RenderDrawsTheSquareAndRefusesAnUnknownScalar) {
+  Write("square.ply", kSquare);
+  const CliRun r = Pectus("render " + P("square.ply") + " -o " + P("square.png") + " --size 200 --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const render::Image im = render::ReadImage(P("square.png"));
+  EXPECT_EQ(im.width, 200);
+  EXPECT_EQ(im.height, 200);
+  EXPECT_NE(im.at(100, 100).r, 255);  // the square fills the middle of the picture
+  EXPECT_EQ(im.at(2, 2).r, 255);      // the margin is background
+  const CliRun bad = Pectus("render " + P("square.ply") + " -o " + P("bad.png") + " --scalar curvature");
+  EXPECT_EQ(bad.code, 3) << bad.output;
+  EXPECT_NE(bad.output.find("curvature"), std::string::npos) << bad.output;
+  EXPECT_FALSE(fs::exists(P("bad.png")));
 }
 
 }  // namespace
+}  // namespace pectus

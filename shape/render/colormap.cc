@@ -1,0 +1,118 @@
+// pectus: colour maps (OpenCV's viridis and turbo tables; a blue-white-red diverging map) and a colour bar.
+#include "shape/render/colormap.h"
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <opencv2/imgproc.hpp>
+
+namespace pectus::render {
+namespace {
+
+using Table = std::array<Rgb, 256>;
+
+Table OpenCvTable(int cv_map) {
+  cv::Mat ramp(256, 1, CV_8UC1);
+  for (int i = 0; i < 256; ++i) ramp.at<std::uint8_t>(i) = static_cast<std::uint8_t>(i);
+  cv::Mat bgr;
+  cv::applyColorMap(ramp, bgr, cv_map);
+  Table t;
+  for (int i = 0; i < 256; ++i) {
+    const cv::Vec3b c = bgr.at<cv::Vec3b>(i);
+    t[i] = {c[2], c[1], c[0]};
+  }
+  return t;
+}
+
+// Blue (59, 76, 192) - white - red (180, 4, 38), the end colours of Moreland's cool-warm map.
+Table DivergingTable() {
+  Table t;
+  const double blue[3] = {59, 76, 192}, white[3] = {245, 245, 245}, red[3] = {180, 4, 38};
+  for (int i = 0; i < 256; ++i) {
+    const double s = i / 255.0;
+    const double* a = s < 0.5 ? blue : white;
+    const double* b = s < 0.5 ? white : red;
+    const double u = s < 0.5 ? s * 2 : (s - 0.5) * 2;
+    t[i] = {static_cast<std::uint8_t>(std::lround(a[0] + u * (b[0] - a[0]))),
+            static_cast<std::uint8_t>(std::lround(a[1] + u * (b[1] - a[1]))),
+            static_cast<std::uint8_t>(std::lround(a[2] + u * (b[2] - a[2])))};
+  }
+  return t;
+}
+
+const Table& TableOf(Colormap map) {
+  static const Table viridis = OpenCvTable(cv::COLORMAP_VIRIDIS);
+  static const Table turbo = OpenCvTable(cv::COLORMAP_TURBO);
+  static const Table diverging = DivergingTable();
+  switch (map) {
+    case Colormap::kViridis:
+      return viridis;
+    case Colormap::kTurbo:
+      return turbo;
+    case Colormap::kDiverging:
+      return diverging;
+  }
+  return viridis;
+}
+
+std::string FormatTick(double v, double step) {
+  char buf[32];
+  const int decimals = step >= 10 ? 0 : step >= 1 ? 1 : step >= 0.1 ? 2 : 3;
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+}  // namespace
+
+Rgb MapColor(double value, double lo, double hi, Colormap map) {
+  if (!std::isfinite(value)) return kGrey;
+  double s = hi > lo ? (value - lo) / (hi - lo) : 0.5;
+  s = std::clamp(s, 0.0, 1.0);
+  return TableOf(map)[static_cast<std::size_t>(std::lround(s * 255.0))];
+}
+
+Colors3 MapColors(const Eigen::VectorXd& values, double lo, double hi, Colormap map) {
+  Colors3 c(values.size(), 3);
+  for (Eigen::Index i = 0; i < values.size(); ++i) {
+    const Rgb k = MapColor(values[i], lo, hi, map);
+    c(i, 0) = k.r;
+    c(i, 1) = k.g;
+    c(i, 2) = k.b;
+  }
+  return c;
+}
+
+Rgb CategoryColor(int index) {
+  // The twelve colours of ColorBrewer's "Paired" scheme, reordered so neighbours differ in hue.
+  static const Rgb kPalette[12] = {{31, 120, 180},  {227, 26, 28},   {51, 160, 44},  {255, 127, 0},
+                                   {106, 61, 154},  {177, 89, 40},   {166, 206, 227}, {251, 154, 153},
+                                   {178, 223, 138}, {253, 191, 111}, {202, 178, 214}, {255, 230, 100}};
+  const int i = ((index % 12) + 12) % 12;
+  return kPalette[i];
+}
+
+Image ColorBar(double lo, double hi, Colormap map, const std::string& label, int height, int ticks) {
+  const int bar_w = 28, top = 30, bottom = 20, width = 120;
+  Image im(width, height, kWhite);
+  const int bar_h = height - top - bottom;
+  for (int y = 0; y < bar_h; ++y) {
+    const double v = hi - (hi - lo) * y / std::max(1, bar_h - 1);
+    FillRect(&im, 10, top + y, 10 + bar_w, top + y, MapColor(v, lo, hi, map));
+  }
+  DrawLine(&im, 10, top, 10 + bar_w, top, kBlack);
+  DrawLine(&im, 10, top + bar_h - 1, 10 + bar_w, top + bar_h - 1, kBlack);
+  DrawLine(&im, 10, top, 10, top + bar_h - 1, kBlack);
+  DrawLine(&im, 10 + bar_w, top, 10 + bar_w, top + bar_h - 1, kBlack);
+  ticks = std::max(2, ticks);
+  const double step = (hi - lo) / (ticks - 1);
+  for (int k = 0; k < ticks; ++k) {
+    const double v = lo + step * k;
+    const int y = top + bar_h - 1 - static_cast<int>(std::lround((bar_h - 1) * (ticks == 1 ? 0.0 : double(k) / (ticks - 1))));
+    DrawLine(&im, 10 + bar_w, y, 10 + bar_w + 5, y, kBlack);
+    DrawText(&im, 10 + bar_w + 8, y + 5, FormatTick(v, std::abs(step)), 0.45);
+  }
+  DrawText(&im, 4, 20, label, 0.45);
+  return im;
+}
+
+}  // namespace pectus::render
