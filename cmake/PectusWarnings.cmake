@@ -1,11 +1,11 @@
 # pectus_target_defaults(target): warnings, sanitizers and the include root, set once for every target.
 function(pectus_target_defaults target)
-  if(CMAKE_CXX_COMPILER_ID MATCHES "GNU|Clang")
+  if(CMAKE_CXX_COMPILER_ID MATCHES "Clang")
+    target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow-uncaptured-local
+                           -Wnon-virtual-dtor -Wno-deprecated-copy)
+  elseif(CMAKE_CXX_COMPILER_ID MATCHES "GNU")
     target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow=local
                            -Wnon-virtual-dtor -Wno-deprecated-copy)
-    if(CMAKE_CXX_COMPILER_ID MATCHES "Clang")
-      target_compile_options(${target} PRIVATE -Wno-shadow-field-in-constructor)
-    endif()
   endif()
   if(PECTUS_SANITIZE)
     target_compile_options(${target} PRIVATE -fsanitize=${PECTUS_SANITIZE} -fno-omit-frame-pointer
