@@ -19,8 +19,9 @@ inline constexpr double kSpan = kVNotch - kVXiphoid;
 inline constexpr double kVReference = kVXiphoid + 0.3 * kSpan;
 inline constexpr double kSNotch = 0.7;
 inline constexpr double kSXiphoid = -0.3;
-// Cross-section: flattened front c(theta) = cos(theta) (1 + kappa sin^2(theta)); the reference normal n0(theta)
-// is the normal of the curve (kRhoX sin(theta), -kRhoY c(theta)).
+// Cross-section: flattened front c(theta) = cos(theta) (1 + kappa sin^2(theta)); the reference normal
+// n0(theta) is the normal of the curve (kRhoX sin(theta), -kRhoY c(theta)) in (lateral, posterior)
+// coordinates (nx, ny below); ChestPoint turns that into the subject frame (x left, y up, z anterior).
 inline constexpr double kKappa = 0.3;
 inline constexpr double kRhoX = 135.0;
 inline constexpr double kRhoY = 95.0;
@@ -29,11 +30,11 @@ inline constexpr double kRhoY = 95.0;
 struct PectusShape {
   bool active = false;
   bool cup = false;
-  double amplitude = 0.0;     // mm
+  double amplitude = 0.0;  // mm
   double tan_torsion = 0.0;
   double half_width = 135.0;  // W / 2, mm
   double xi_centre = 0.0;     // centre_x / (W / 2)
-  double s_centre = 0.0;      // centre_z / L
+  double s_centre = 0.0;      // centre_y / L
   double length = 170.0;      // L, mm
   double cos_axis = 1.0, sin_axis = 0.0;
   double sigma_a = 50.0, sigma_b = 45.0;  // mm
@@ -76,45 +77,65 @@ inline T Step(T a, double w) {
   return x * x * x * (x * (6.0 * x - 15.0) + 10.0);
 }
 
-// Centred uniform cubic B-spline kernel, support (-2, 2).
-template <typename T>
-inline T CubicKernel(T t) {
-  using std::abs;
-  const T a = abs(t);
-  if (ValueOf(a) < 1.0) return (4.0 - 6.0 * a * a + 3.0 * a * a * a) / 6.0;
-  const T b = 2.0 - a;
-  return b * b * b / 6.0;
+/// The centred cubic B-spline kernel and its slope at t in (-2, 2).
+inline void CubicKernelWithSlope(double t, double* w, double* slope) {
+  const double a = std::abs(t), sign = t < 0.0 ? -1.0 : 1.0;
+  if (a < 1.0) {
+    *w = (4.0 - 6.0 * a * a + 3.0 * a * a * a) / 6.0;
+    *slope = sign * (-2.0 * a + 1.5 * a * a);
+  } else {
+    const double b = 2.0 - a;
+    *w = b * b * b / 6.0;
+    *slope = -sign * 0.5 * b * b;
+  }
 }
 
-/// The detail field at (u, v): a bicubic B-spline whose control points lie one knot beyond the domain on
-/// every side (kDetailU - 3 intervals across u in [-1, 1], kDetailV - 3 up v in [0, 1]).
-template <typename T>
-T Detail(const double* c, T u, T v) {
-  using std::floor;
+/// The detail field at (u, v) and its partial derivatives: a bicubic B-spline whose control points lie one
+/// knot beyond the domain on every side (kDetailU - 3 intervals across u in [-1, 1], kDetailV - 3 up v in [0,
+/// 1]).
+inline void DetailWithSlopes(const double* c, double u, double v, double* value, double* d_du, double* d_dv) {
   const double hu = 2.0 / (kDetailU - 3), hv = 1.0 / (kDetailV - 3);
-  const T fu = (u + 1.0) / hu, fv = v / hv;
-  const int ku = static_cast<int>(std::floor(ValueOf(fu))), kv = static_cast<int>(std::floor(ValueOf(fv)));
-  T bu[4], bv[4];
+  const double fu = (u + 1.0) / hu, fv = v / hv;
+  const int ku = static_cast<int>(std::floor(fu)), kv = static_cast<int>(std::floor(fv));
+  double bu[4], su[4], bv[4], sv[4];
   for (int a = 0; a < 4; ++a) {
-    bu[a] = CubicKernel(fu - static_cast<double>(ku + a - 1));
-    bv[a] = CubicKernel(fv - static_cast<double>(kv + a - 1));
+    CubicKernelWithSlope(fu - static_cast<double>(ku + a - 1), &bu[a], &su[a]);
+    CubicKernelWithSlope(fv - static_cast<double>(kv + a - 1), &bv[a], &sv[a]);
   }
-  T sum(0.0);
+  double f = 0.0, fu_sum = 0.0, fv_sum = 0.0;
   for (int b = 0; b < 4; ++b) {
     const int j = kv + b;
     if (j < 0 || j >= kDetailV) continue;
-    T row(0.0);
+    double row = 0.0, row_slope = 0.0;
     for (int a = 0; a < 4; ++a) {
       const int i = ku + a;
       if (i < 0 || i >= kDetailU) continue;
       row += c[j * kDetailU + i] * bu[a];
+      row_slope += c[j * kDetailU + i] * su[a];
     }
-    sum += row * bv[b];
+    f += row * bv[b];
+    fu_sum += row_slope * bv[b];
+    fv_sum += row * sv[b];
   }
-  return sum;
+  *value = f;
+  *d_du = fu_sum / hu;
+  *d_dv = fv_sum / hv;
 }
 
-/// Inward displacement of the chest wall by the depression at lateral coordinate xi = sin(theta) and height s.
+/// The detail field at (u, v) (double), or with its derivatives carried along (Dual2), by the chain rule.
+inline double Detail(const double* c, double u, double v) {
+  double f, fu, fv;
+  DetailWithSlopes(c, u, v, &f, &fu, &fv);
+  return f;
+}
+inline Dual2 Detail(const double* c, const Dual2& u, const Dual2& v) {
+  double f, fu, fv;
+  DetailWithSlopes(c, u.v, v.v, &f, &fu, &fv);
+  return {f, fu * u.du + fv * v.du, fu * u.dv + fv * v.dv};
+}
+
+/// Inward displacement of the chest wall by the depression at lateral coordinate xi = sin(theta) and height
+/// s.
 template <typename T>
 T PectusDisplacement(const PectusShape& e, T xi, T s) {
   using std::exp;
@@ -170,7 +191,9 @@ Vec3T<T> ChestPoint(const Model& m, T u, T v) {
               m.concavity * concavity - m.notch * notch + m.clavicle * clavicle;
     if (m.detail) offset += Detail(m.detail, u, v);
   }
-  return {0.5 * m.W * alpha * st + offset * nx, -0.5 * m.D * beta * c + offset * ny, (s - kSNotch) * m.L};
+  // Subject frame: x to the subject's left, y up (superior), z out of the chest (anterior). The front of
+  // the cross-section is at z = +D beta c / 2; the reference normal's anterior component is -ny.
+  return {0.5 * m.W * alpha * st + offset * nx, (s - kSNotch) * m.L, 0.5 * m.D * beta * c - offset * ny};
 }
 
 }  // namespace pectus::datasets::formula

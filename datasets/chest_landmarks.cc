@@ -11,7 +11,8 @@ namespace {
 // (u, v) of a point at lateral coordinate xi = sin(theta) = x / (W / 2) and height s (sternal lengths above
 // the reference level).
 LandmarkDefinition At(const char* label, const char* description, double xi, double s) {
-  return {label, description, std::asin(xi) / (std::numbers::pi / 2.0), formula::kVReference + s * formula::kSpan};
+  return {label, description, std::asin(xi) / (std::numbers::pi / 2.0),
+          formula::kVReference + s * formula::kSpan};
 }
 
 // Height of the costal margin at lateral coordinate xi (as in chest_formula.h).
@@ -26,8 +27,10 @@ const std::vector<LandmarkDefinition>& ChestLandmarkDefinitions() {
       At("sternal_angle", "sternal angle (manubriosternal joint)", 0.0, 0.41),
       At("mid_sternum", "middle of the sternal body", 0.0, 0.055),
       At("xiphoid", "xiphoid process (xiphisternal joint)", 0.0, formula::kSXiphoid),
-      At("costal_cartilage_1_left", "first left costal cartilage at the sternum", 0.22, 0.59),
-      At("costal_cartilage_1_right", "first right costal cartilage at the sternum", -0.22, 0.59),
+      At("costal_cartilage_1_left",
+         "first left costal cartilage at its rib (costochondral junction), below the clavicle", 0.40, 0.60),
+      At("costal_cartilage_1_right",
+         "first right costal cartilage at its rib (costochondral junction), below the clavicle", -0.40, 0.60),
       At("costal_cartilage_4_left", "fourth left costal cartilage at the sternum", 0.19, 0.12),
       At("costal_cartilage_4_right", "fourth right costal cartilage at the sternum", -0.19, 0.12),
       At("costal_margin_left", "left costal margin, mid-clavicular line", 0.42, CostalMarginS(0.42)),

@@ -37,11 +37,12 @@ double Cross(const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Ve
   return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
 }
 
-Slice MeasureSlice(const ChestSurface& surface, double v, int n) {
+Slice MeasureSlice(const ChestSurface& surface, double v, int n, double central_fraction) {
   const Eigen::Vector3d g = surface.parameters().growth;
   auto at = [&](double u) -> Eigen::Vector2d {
+    // (lateral, posterior) coordinates of the axial slice: y below grows toward the back.
     const Eigen::Vector3d p = surface.SubjectPosition(std::clamp(u, kUMin, kUMax), v).cwiseProduct(g);
-    return {p.x(), p.y()};
+    return {p.x(), -p.z()};
   };
   const double du = (kUMax - kUMin) / (n - 1);
   std::vector<Eigen::Vector2d> pts(n);
@@ -65,7 +66,8 @@ Slice MeasureSlice(const ChestSurface& surface, double v, int n) {
   std::sort(order.begin(), order.end(), [&](int a, int b) { return pts[a].x() < pts[b].x(); });
   std::vector<int> hull;
   for (int i : order) {
-    while (hull.size() >= 2 && Cross(pts[hull[hull.size() - 2]], pts[hull.back()], pts[i]) <= 0.0) hull.pop_back();
+    while (hull.size() >= 2 && Cross(pts[hull[hull.size() - 2]], pts[hull.back()], pts[i]) <= 0.0)
+      hull.pop_back();
     hull.push_back(i);
   }
   // Distance behind the hull of a point at lateral position x and depth y (hull linear between vertices).
@@ -78,10 +80,13 @@ Slice MeasureSlice(const ChestSurface& surface, double v, int n) {
     return q.y() - (a.y() + t * (b.y() - a.y()));
   };
   // The deepest point of the concavity: the farthest behind the hull (where a ruler laid across the chest
-  // is farthest from it).
+  // is farthest from it), searched over the front of the chest only (|x| <= central_fraction W / 2), so that
+  // a dip beside a pectoral or breast bulge toward the flank does not count.
+  const double x_limit = central_fraction * 0.5 * s.width;
   int deepest = 0;
   double deepest_gap = -1.0;
   for (int i = 0; i < n; ++i) {
+    if (std::abs(pts[i].x()) > x_limit) continue;
     const double d = gap(pts[i]);
     if (d > deepest_gap) deepest = i, deepest_gap = d;
   }
@@ -96,7 +101,8 @@ Slice MeasureSlice(const ChestSurface& surface, double v, int n) {
 }  // namespace
 
 ChestMeasurement MeasureChest(const ChestSurface& surface, const MeasureOptions& options) {
-  if (options.samples_across < 11 || options.slices < 3) ThrowUsage("measurement needs >= 11 samples and >= 3 slices");
+  if (options.samples_across < 11 || options.slices < 3)
+    ThrowUsage("measurement needs >= 11 samples and >= 3 slices");
   const double v_lo = formula::kVReference + (formula::kSXiphoid + options.margin_below) * formula::kSpan;
   const double v_hi = formula::kVReference + (formula::kSNotch - options.margin_above) * formula::kSpan;
   if (!(v_lo < v_hi)) ThrowUsage("measurement margins leave no slice to search");
@@ -104,27 +110,32 @@ ChestMeasurement MeasureChest(const ChestSurface& surface, const MeasureOptions&
   int best = -1;
   double best_depression = 0.0;
   for (int k = 0; k < options.slices; ++k) {
-    const double d = MeasureSlice(surface, v_lo + k * dv, options.samples_across).depression;
+    const double d =
+        MeasureSlice(surface, v_lo + k * dv, options.samples_across, options.central_fraction).depression;
     if (d > best_depression + 1e-9) best = k, best_depression = d;
   }
   double v = kVReference;
-  if (best >= 0 && best_depression > 1e-3) {
-    v = ArgMax([&](double t) { return MeasureSlice(surface, t, options.samples_across).depression; },
-               std::max(v_lo, v_lo + (best - 1) * dv), std::min(v_hi, v_lo + (best + 1) * dv), 30);
+  if (best >= 0 && best_depression >= options.min_depression_mm) {
+    v = ArgMax(
+        [&](double t) {
+          return MeasureSlice(surface, t, options.samples_across, options.central_fraction).depression;
+        },
+        std::max(v_lo, v_lo + (best - 1) * dv), std::min(v_hi, v_lo + (best + 1) * dv), 30);
   }
-  const Slice s = MeasureSlice(surface, v, options.samples_across);
+  const Slice s = MeasureSlice(surface, v, options.samples_across, options.central_fraction);
   const ChestParameters& p = surface.parameters();
   ChestMeasurement m;
   m.width_mm = s.width;
-  m.depth_mm = 0.5 * p.depth_mm * p.growth.y() - s.front_y;
+  m.depth_mm = 0.5 * p.depth_mm * p.growth.z() - s.front_y;
   m.depression_mm = s.depression;
-  m.deepest_xy = s.deepest;
+  m.deepest_xz = {s.deepest.x(), -s.deepest.y()};
   m.slice_v = v;
-  m.slice_z_mm = surface.SubjectPosition(0.0, v).z() * p.growth.z();
+  m.slice_y_mm = surface.SubjectPosition(0.0, v).y() * p.growth.y();
   const LandmarkDefinition& notch = FindLandmarkDefinition("sternal_notch");
   const LandmarkDefinition& xiphoid = FindLandmarkDefinition("xiphoid");
-  m.sternal_length_mm = (surface.SubjectPosition(notch.u, notch.v).z() - surface.SubjectPosition(xiphoid.u, xiphoid.v).z()) *
-                        p.growth.z();
+  m.sternal_length_mm =
+      (surface.SubjectPosition(notch.u, notch.v).y() - surface.SubjectPosition(xiphoid.u, xiphoid.v).y()) *
+      p.growth.y();
   return m;
 }
 

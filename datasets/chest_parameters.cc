@@ -38,7 +38,8 @@ constexpr int kNamedCount = static_cast<int>(std::size(kNamedFields));
 static_assert(kNamedCount + kDetailCoefficients == kLinearParameterCount);
 
 double Number(const nlohmann::json& j, const char* key, const std::string& what) {
-  if (!j.contains(key) || !j[key].is_number()) ThrowBadInput(what, std::string("missing number \"") + key + "\"");
+  if (!j.contains(key) || !j[key].is_number())
+    ThrowBadInput(what, std::string("missing number \"") + key + "\"");
   return j[key].get<double>();
 }
 
@@ -61,7 +62,7 @@ std::string ToString(PectusType type) { return type == PectusType::kCup ? "cup" 
 bool PectusParameters::IsValid(std::string* why) const {
   if (!InRange(depth_mm, 0.0, 60.0)) return Fail(why, "pectus depth must be within [0, 60] mm");
   if (!InRange(centre_x_mm, -80.0, 80.0)) return Fail(why, "pectus centre_x must be within [-80, 80] mm");
-  if (!InRange(centre_z_mm, -60.0, 80.0)) return Fail(why, "pectus centre_z must be within [-60, 80] mm");
+  if (!InRange(centre_y_mm, -60.0, 80.0)) return Fail(why, "pectus centre_y must be within [-60, 80] mm");
   if (!InRange(width_mm, 0.0, 150.0) || (width_mm > 0.0 && width_mm < 5.0)) {
     return Fail(why, "pectus width must be 0 (default) or within [5, 150] mm");
   }
@@ -69,7 +70,8 @@ bool PectusParameters::IsValid(std::string* why) const {
     return Fail(why, "pectus height must be 0 (default) or within [5, 150] mm");
   }
   if (!InRange(asymmetry, -0.6, 0.6)) return Fail(why, "pectus asymmetry must be within [-0.6, 0.6]");
-  if (!InRange(torsion_deg, -45.0, 45.0)) return Fail(why, "sternal torsion must be within [-45, 45] degrees");
+  if (!InRange(torsion_deg, -45.0, 45.0))
+    return Fail(why, "sternal torsion must be within [-45, 45] degrees");
   if (!InRange(axis_deg, -60.0, 60.0)) return Fail(why, "pectus axis must be within [-60, 60] degrees");
   return true;
 }
@@ -77,9 +79,11 @@ bool PectusParameters::IsValid(std::string* why) const {
 bool ChestParameters::IsValid(std::string* why) const {
   if (!InRange(width_mm, 120.0, 500.0)) return Fail(why, "chest width must be within [120, 500] mm");
   if (!InRange(depth_mm, 60.0, 400.0)) return Fail(why, "chest depth must be within [60, 400] mm");
-  if (!InRange(sternal_length_mm, 60.0, 300.0)) return Fail(why, "sternal length must be within [60, 300] mm");
+  if (!InRange(sternal_length_mm, 60.0, 300.0))
+    return Fail(why, "sternal length must be within [60, 300] mm");
   for (const NamedField& f : kNamedFields) {
-    if (!InRange(this->*f.field, -100.0, 500.0)) return Fail(why, std::string(f.name) + " is not a sane number");
+    if (!InRange(this->*f.field, -100.0, 500.0))
+      return Fail(why, std::string(f.name) + " is not a sane number");
   }
   if (detail_mm.size() != 0 && detail_mm.size() != kDetailCoefficients) {
     return Fail(why, "detail must be empty or hold " + std::to_string(kDetailCoefficients) + " coefficients");
@@ -115,8 +119,8 @@ std::string LinearParameterName(int index) {
 ChestParameters Grow(const ChestParameters& p, const GrowthOptions& options) {
   ChestParameters q = p;
   q.growth.x() *= std::pow(1.0 + options.width_per_year, options.years);
-  q.growth.y() *= std::pow(1.0 + options.depth_per_year, options.years);
-  q.growth.z() *= std::pow(1.0 + options.height_per_year, options.years);
+  q.growth.y() *= std::pow(1.0 + options.height_per_year, options.years);
+  q.growth.z() *= std::pow(1.0 + options.depth_per_year, options.years);
   q.pectus.depth_mm = std::min(60.0, p.pectus.depth_mm * options.pectus_depth_factor);
   return q;
 }
@@ -127,11 +131,10 @@ nlohmann::json ToJson(const ChestParameters& p) {
   j["detail_mm"] = std::vector<double>(p.detail_mm.data(), p.detail_mm.data() + p.detail_mm.size());
   j["detail_grid"] = {kDetailU, kDetailV};
   const PectusParameters& e = p.pectus;
-  j["pectus"] = {{"depth_mm", e.depth_mm},       {"type", ToString(e.type)},
-                 {"centre_x_mm", e.centre_x_mm}, {"centre_z_mm", e.centre_z_mm},
-                 {"width_mm", e.width_mm},       {"height_mm", e.height_mm},
-                 {"asymmetry", e.asymmetry},     {"torsion_deg", e.torsion_deg},
-                 {"axis_deg", e.axis_deg}};
+  j["pectus"] = {
+      {"depth_mm", e.depth_mm},       {"type", ToString(e.type)},     {"centre_x_mm", e.centre_x_mm},
+      {"centre_y_mm", e.centre_y_mm}, {"width_mm", e.width_mm},       {"height_mm", e.height_mm},
+      {"asymmetry", e.asymmetry},     {"torsion_deg", e.torsion_deg}, {"axis_deg", e.axis_deg}};
   j["growth"] = {p.growth.x(), p.growth.y(), p.growth.z()};
   j["T_scan_subject"] = MatrixJson(p.T_scan_subject.matrix());
   return j;
@@ -150,7 +153,7 @@ ChestParameters ChestParametersFromJson(const nlohmann::json& j, const std::stri
     p.pectus.depth_mm = Number(e, "depth_mm", what);
     p.pectus.type = ParsePectusType(e.value("type", std::string("saucer")));
     p.pectus.centre_x_mm = Number(e, "centre_x_mm", what);
-    p.pectus.centre_z_mm = Number(e, "centre_z_mm", what);
+    p.pectus.centre_y_mm = Number(e, "centre_y_mm", what);
     p.pectus.width_mm = Number(e, "width_mm", what);
     p.pectus.height_mm = Number(e, "height_mm", what);
     p.pectus.asymmetry = Number(e, "asymmetry", what);
@@ -165,7 +168,8 @@ ChestParameters ChestParametersFromJson(const nlohmann::json& j, const std::stri
   if (j.contains("T_scan_subject")) {
     Eigen::Matrix4d M;
     const nlohmann::json& rows = j["T_scan_subject"];
-    if (!rows.is_array() || rows.size() != 4) ThrowBadInput(what, "\"T_scan_subject\" must be a 4 by 4 array");
+    if (!rows.is_array() || rows.size() != 4)
+      ThrowBadInput(what, "\"T_scan_subject\" must be a 4 by 4 array");
     for (int r = 0; r < 4; ++r) {
       for (int c = 0; c < 4; ++c) M(r, c) = rows[r].at(c).get<double>();
     }

@@ -1,8 +1,9 @@
 // pectus datasets: the parameters of one synthetic chest (docs/datasets.md, "The chest model").
 //
-// Frame (mm): x to the subject's left, y posterior, z superior (LPS, as 3D Slicer's model files); origin on
-// the midline, at the height of the sternal notch, in the coronal plane of the mid-axillary lines. The
-// anterior surface therefore faces -y.
+// Frame (mm), the "chest frame" of every generated file: x to the subject's left, y up (superior, toward the
+// head), z anterior (out of the chest); right-handed. Origin on the midline, at the height of the sternal
+// notch, in the coronal plane of the mid-axillary lines. The scanned (anterior) surface therefore faces +z,
+// and render::View::Front() shows it face on with the subject's left on the picture's right.
 #pragma once
 
 #include <Eigen/Core>
@@ -25,18 +26,19 @@ std::string ToString(PectusType type);
 
 /// A pectus excavatum depression of the chest wall (the skin follows it). Zero depth means none.
 struct PectusParameters {
-  double depth_mm = 0.0;     ///< deepest inward displacement of the chest wall, mm, [0, 60]
+  double depth_mm = 0.0;  ///< deepest inward displacement of the chest wall, mm, [0, 60]
   PectusType type = PectusType::kSaucer;
   double centre_x_mm = 0.0;  ///< lateral offset of the centre from the midline, mm (+: subject's left)
-  double centre_z_mm = 0.0;  ///< height of the centre above the reference level (30 % of the sternum above the
-                             ///< xiphoid), mm
+  double centre_y_mm = 0.0;  ///< height of the centre above the reference level (30 % of the sternum above
+                             ///< the xiphoid), mm
   double width_mm = 0.0;     ///< lateral radius (standard deviation of the profile), mm; 0: 0.12 W (saucer),
                              ///< 0.075 W (cup)
   double height_mm = 0.0;    ///< vertical radius, mm; 0: 0.22 L (saucer), 0.10 L (cup)
   double asymmetry = 0.0;    ///< [-0.6, 0.6]: the left half is (1 + a) times as wide, the right half (1 - a)
-  double torsion_deg = 0.0;  ///< sternal torsion, [-45, 45] degrees: the floor of the depression turns about
-                             ///< the sternal axis, + sinks the subject's right side (deepest point moves right)
-  double axis_deg = 0.0;     ///< rotation of the depression's lateral axis in the coronal plane, degrees
+  /// Sternal torsion, [-45, 45] degrees: the floor of the depression turns about the sternal axis; + sinks
+  /// the subject's right side (the deepest point moves right).
+  double torsion_deg = 0.0;
+  double axis_deg = 0.0;  ///< rotation of the depression's lateral axis in the coronal plane, degrees
 
   bool IsValid(std::string* why) const;
 };
@@ -46,10 +48,10 @@ struct PectusParameters {
 /// covariance.
 struct ChestParameters {
   // Chest wall (outer surface of the ribcage and sternum).
-  double width_mm = 270.0;           ///< W: chest-wall width at the reference level, mid-axillary to mid-axillary
-  double depth_mm = 190.0;           ///< D: antero-posterior chest-wall depth at the reference level; the back
-                                     ///< (not modelled, not scanned) lies in the plane y = D / 2
-  double sternal_length_mm = 170.0;  ///< L: height from the sternal notch down to the xiphoid
+  double width_mm = 270.0;  ///< W: chest-wall width at the reference level, mid-axillary to mid-axillary
+  double depth_mm = 190.0;  ///< D: antero-posterior chest-wall depth at the reference level; the back
+                            ///< (not modelled, not scanned) lies in the plane z = -D / 2
+  double sternal_length_mm = 170.0;   ///< L: height from the sternal notch down to the xiphoid
   double costal_recession_mm = 10.0;  ///< how far the abdomen below the costal margins lies behind the chest
   double costal_ridge_mm = 3.0;       ///< prominence of the costal margins
   // Soft tissue laid over the wall along the reference normal.
@@ -64,9 +66,11 @@ struct ChestParameters {
   /// tissue thickness; empty means zero.
   Eigen::VectorXd detail_mm;
 
-  PectusParameters pectus;                             ///< none by default
-  Eigen::Vector3d growth = Eigen::Vector3d::Ones();    ///< per-axis scale about the origin (growth, 1 = none)
-  Rigid3 T_scan_subject = Rigid3::Identity();          ///< pose of the subject in the scan (world) frame
+  PectusParameters pectus;  ///< none by default
+  /// Per-axis scale about the origin (the sternal notch): (lateral x, vertical y, antero-posterior z); 1 =
+  /// none.
+  Eigen::Vector3d growth = Eigen::Vector3d::Ones();
+  Rigid3 T_scan_subject = Rigid3::Identity();  ///< pose of the subject in the scan (world) frame
 
   bool IsValid(std::string* why) const;
 };
@@ -91,9 +95,9 @@ std::string LinearParameterName(int index);
 /// by these factors per axis.
 struct GrowthOptions {
   double years = 2.0;
-  double width_per_year = 0.03;   ///< relative lateral growth per year
-  double depth_per_year = 0.025;  ///< relative antero-posterior growth per year
-  double height_per_year = 0.05;  ///< relative vertical growth per year
+  double width_per_year = 0.03;      ///< relative lateral growth per year
+  double depth_per_year = 0.025;     ///< relative antero-posterior growth per year
+  double height_per_year = 0.05;     ///< relative vertical growth per year
   double pectus_depth_factor = 1.0;  ///< the depression's depth is multiplied by this (1: unchanged)
 };
 

@@ -26,7 +26,8 @@ enum Field : int {
   kNamedCount
 };
 
-LatentFactor Factor(const char* name, const char* description, std::initializer_list<std::pair<Field, double>> l) {
+LatentFactor Factor(const char* name, const char* description,
+                    std::initializer_list<std::pair<Field, double>> l) {
   LatentFactor f{name, description, Eigen::VectorXd::Zero(kLinearParameterCount)};
   for (const auto& [field, value] : l) f.loading(field) = value;
   return f;
@@ -89,7 +90,8 @@ SubjectSample SampleSubject(const PopulationModel& population, std::uint64_t see
     s.latent(static_cast<Eigen::Index>(k)) = normal(rng);
     x += s.latent(static_cast<Eigen::Index>(k)) * population.factors[k].loading;
   }
-  for (int i = 0; i < kDetailCoefficients; ++i) x(kLinearParameterCount - kDetailCoefficients + i) += population.detail_sd_mm * normal(rng);
+  for (int i = 0; i < kDetailCoefficients; ++i)
+    x(kLinearParameterCount - kDetailCoefficients + i) += population.detail_sd_mm * normal(rng);
   s.parameters = population.mean;
   SetLinearPart(x, &s.parameters);
   return s;
@@ -97,7 +99,8 @@ SubjectSample SampleSubject(const PopulationModel& population, std::uint64_t see
 
 Eigen::Vector2d ShapeGrid::At(Eigen::Index k) const {
   const Eigen::Index i = k % nu, j = k / nu;
-  return {u0 + (u1 - u0) * static_cast<double>(i) / (nu - 1), v0 + (v1 - v0) * static_cast<double>(j) / (nv - 1)};
+  return {u0 + (u1 - u0) * static_cast<double>(i) / (nu - 1),
+          v0 + (v1 - v0) * static_cast<double>(j) / (nv - 1)};
 }
 
 Points3 SampleGrid(const ChestSurface& surface, const ShapeGrid& grid) {
@@ -131,7 +134,14 @@ TrueShapeStatistics ComputeTrueShapeStatistics(const PopulationModel& population
     B.col(k) = Eigen::Map<const Eigen::VectorXd>(D.data(), m);  // row-major: x1 y1 z1 x2 ...
   }
   // Covariance B B^T: its eigenvectors are B V S^-1 with B^T B = V S^2 V^T.
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(B.transpose() * B);
+  // The Gram matrix by explicit dot products: Eigen's matrix product would split the sums over OpenMP
+  // threads, and the written statistics must not depend on the thread count.
+  Eigen::MatrixXd G(B.cols(), B.cols());
+#pragma omp parallel for schedule(dynamic)
+  for (Eigen::Index i = 0; i < B.cols(); ++i) {
+    for (Eigen::Index j = 0; j <= i; ++j) G(i, j) = G(j, i) = B.col(i).dot(B.col(j));
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(G);
   const Eigen::Index n = eig.eigenvalues().size();
   count = static_cast<int>(std::min<Eigen::Index>(count, n));
   st.total_variance = eig.eigenvalues().sum();
@@ -182,13 +192,16 @@ nlohmann::json PopulationJson(const PopulationModel& population, const TrueShape
   }
   j["latent_factors"] = factors;
   const ShapeGrid& g = statistics.grid;
-  j["grid"] = {{"nu", g.nu}, {"nv", g.nv}, {"u_range", {g.u0, g.u1}}, {"v_range", {g.v0, g.v1}},
+  j["grid"] = {{"nu", g.nu},
+               {"nv", g.nv},
+               {"u_range", {g.u0, g.u1}},
+               {"v_range", {g.v0, g.v1}},
                {"vertex_order", "k = j * nu + i (u index i, v index j)"}};
   j["total_variance_mm2"] = statistics.total_variance;
   j["eigenvalues_mm2"] = std::vector<double>(statistics.eigenvalues.data(),
                                              statistics.eigenvalues.data() + statistics.eigenvalues.size());
-  j["explained_fraction"] =
-      std::vector<double>(statistics.explained.data(), statistics.explained.data() + statistics.explained.size());
+  j["explained_fraction"] = std::vector<double>(statistics.explained.data(),
+                                                statistics.explained.data() + statistics.explained.size());
   nlohmann::json modes = nlohmann::json::array();
   for (Eigen::Index c = 0; c < statistics.mode_parameters.cols(); ++c) {
     const Eigen::VectorXd col = statistics.mode_parameters.col(c);

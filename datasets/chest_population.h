@@ -16,18 +16,18 @@ namespace pectus::datasets {
 
 /// One latent factor: a standard normal variable b that moves the linear parameters by b * loading.
 struct LatentFactor {
-  std::string name;          ///< "size", "breadth", ...
-  std::string description;   ///< what it changes, in words
-  Eigen::VectorXd loading;   ///< kLinearParameterCount entries, mm per standard deviation
+  std::string name;         ///< "size", "breadth", ...
+  std::string description;  ///< what it changes, in words
+  Eigen::VectorXd loading;  ///< kLinearParameterCount entries, mm per standard deviation
 };
 
 /// Linear parameters p = mean + sum_k b_k loading_k + detail, with b_k ~ N(0, 1) independent and each
 /// detail coefficient ~ N(0, detail_sd_mm^2). Since the surface is affine in p, the population's mean
 /// surface is exactly the surface of `mean`, and its covariance is exactly known.
 struct PopulationModel {
-  ChestParameters mean;              ///< no pectus, no growth, identity pose; detail empty (zero)
+  ChestParameters mean;  ///< no pectus, no growth, identity pose; detail empty (zero)
   std::vector<LatentFactor> factors;
-  double detail_sd_mm = 1.4;         ///< standard deviation of each detail coefficient, mm
+  double detail_sd_mm = 1.4;  ///< standard deviation of each detail coefficient, mm
 
   /// The default adult population: six factors (size, breadth, height, adiposity, muscularity, costal).
   static PopulationModel Default();
@@ -49,8 +49,8 @@ SubjectSample SampleSubject(const PopulationModel& population, std::uint64_t see
 
 /// A regular grid of surface parameters on which shapes are compared (the dissertation uses 51 by 101).
 struct ShapeGrid {
-  int nu = 51;        ///< vertices across
-  int nv = 101;       ///< vertices up
+  int nu = 51;   ///< vertices across
+  int nv = 101;  ///< vertices up
   double u0 = kUMin, u1 = kUMax, v0 = kVMin, v1 = kVMax;
   /// (u, v) of grid vertex k = j * nu + i.
   Eigen::Vector2d At(Eigen::Index k) const;
@@ -64,11 +64,11 @@ Points3 SampleGrid(const ChestSurface& surface, const ShapeGrid& grid);
 /// skin at the grid vertices have mean `mean` and covariance sum_j eigenvalues_j modes_j modes_j^T.
 struct TrueShapeStatistics {
   ShapeGrid grid;
-  Points3 mean;                     ///< #grid by 3, mm
-  Eigen::VectorXd eigenvalues;      ///< the first `count`, descending, mm^2
-  Eigen::VectorXd explained;        ///< eigenvalue / total variance
-  double total_variance = 0.0;      ///< trace of the covariance, mm^2
-  std::vector<Points3> modes;       ///< #grid by 3 each; unit norm as 3m-vectors; largest entry positive
+  Points3 mean;                 ///< #grid by 3, mm
+  Eigen::VectorXd eigenvalues;  ///< the first `count`, descending, mm^2
+  Eigen::VectorXd explained;    ///< eigenvalue / total variance
+  double total_variance = 0.0;  ///< trace of the covariance, mm^2
+  std::vector<Points3> modes;   ///< #grid by 3 each; unit norm as 3m-vectors; largest entry positive
   /// kLinearParameterCount by count: the parameters of mode j, so that the surface of mean + t C(:, j)
   /// minus the mean surface is t * modes[j] at the grid (and a smooth function of (u, v) elsewhere).
   Eigen::MatrixXd mode_parameters;

@@ -53,7 +53,7 @@ formula::PectusShape MakePectusShape(const ChestParameters& p) {
   e.half_width = 0.5 * p.width_mm;
   e.xi_centre = q.centre_x_mm / e.half_width;
   e.length = p.sternal_length_mm;
-  e.s_centre = q.centre_z_mm / p.sternal_length_mm;
+  e.s_centre = q.centre_y_mm / p.sternal_length_mm;
   e.cos_axis = std::cos(q.axis_deg * kDegree);
   e.sin_axis = std::sin(q.axis_deg * kDegree);
   e.sigma_a = q.width_mm > 0.0 ? q.width_mm : (e.cup ? 0.075 : 0.12) * p.width_mm;
@@ -111,7 +111,8 @@ ChestSurface& ChestSurface::operator=(const ChestSurface& other) {
 }
 
 void ChestSurface::Bind() {
-  model_.detail = parameters_.detail_mm.size() == kDetailCoefficients ? parameters_.detail_mm.data() : nullptr;
+  model_.detail =
+      parameters_.detail_mm.size() == kDetailCoefficients ? parameters_.detail_mm.data() : nullptr;
 }
 
 Eigen::Vector3d ChestSurface::SubjectPosition(double u, double v) const {
@@ -137,11 +138,11 @@ SurfacePoint ChestSurface::Evaluate(double u, double v) const {
 
 Eigen::Vector2d ChestSurface::GuessParameters(const Eigen::Vector3d& x) const {
   const Eigen::Vector3d q = (parameters_.T_scan_subject.inverse() * x).cwiseQuotient(parameters_.growth);
-  const double s = std::clamp(q.z() / model_.L + formula::kSNotch, (kVMin - kVReference) / formula::kSpan,
+  const double s = std::clamp(q.y() / model_.L + formula::kSNotch, (kVMin - kVReference) / formula::kSpan,
                               (kVMax - kVReference) / formula::kSpan);
   const double alpha = 1.0 + 0.02 * s - 0.10 * s * s;
   const double beta = 1.0 - 0.05 * s - 0.30 * s * s;
-  const double theta = std::atan2(q.x() / (0.5 * model_.W * alpha), -q.y() / (0.5 * model_.D * beta));
+  const double theta = std::atan2(q.x() / (0.5 * model_.W * alpha), q.z() / (0.5 * model_.D * beta));
   return {std::clamp(theta / (std::numbers::pi / 2.0), kUMin, kUMax), kVReference + s * formula::kSpan};
 }
 

@@ -45,7 +45,8 @@ class ChestSurface {
   /// @param[in] parameters    must be valid (throws Error(kUsage) with the reason otherwise)
   /// @param[in] layer         skin (default) or chest wall
   /// @param[in] breathing_mm  displacement of the breathing field (0: the reference state), mm
-  explicit ChestSurface(const ChestParameters& parameters, Layer layer = Layer::kSkin, double breathing_mm = 0.0);
+  explicit ChestSurface(const ChestParameters& parameters, Layer layer = Layer::kSkin,
+                        double breathing_mm = 0.0);
   ChestSurface(const ChestSurface& other);
   ChestSurface& operator=(const ChestSurface& other);
 
@@ -68,7 +69,9 @@ class ChestSurface {
 
   /// The same subject's other layer, or another breathing state.
   ChestSurface WithLayer(Layer layer) const { return ChestSurface(parameters_, layer, model_.breathing); }
-  ChestSurface WithBreathing(double breathing_mm) const { return ChestSurface(parameters_, layer_, breathing_mm); }
+  ChestSurface WithBreathing(double breathing_mm) const {
+    return ChestSurface(parameters_, layer_, breathing_mm);
+  }
 
  private:
   void Bind();

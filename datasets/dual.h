@@ -21,7 +21,9 @@ struct Dual2 {
 inline Dual2 operator+(Dual2 a, Dual2 b) { return {a.v + b.v, a.du + b.du, a.dv + b.dv}; }
 inline Dual2 operator-(Dual2 a, Dual2 b) { return {a.v - b.v, a.du - b.du, a.dv - b.dv}; }
 inline Dual2 operator-(Dual2 a) { return {-a.v, -a.du, -a.dv}; }
-inline Dual2 operator*(Dual2 a, Dual2 b) { return {a.v * b.v, a.du * b.v + a.v * b.du, a.dv * b.v + a.v * b.dv}; }
+inline Dual2 operator*(Dual2 a, Dual2 b) {
+  return {a.v * b.v, a.du * b.v + a.v * b.du, a.dv * b.v + a.v * b.dv};
+}
 inline Dual2 operator*(double s, Dual2 a) { return {s * a.v, s * a.du, s * a.dv}; }
 inline Dual2 operator*(Dual2 a, double s) { return {s * a.v, s * a.du, s * a.dv}; }
 inline Dual2 operator/(Dual2 a, double s) { return {a.v / s, a.du / s, a.dv / s}; }

@@ -43,7 +43,8 @@ std::vector<PatientRow> ReadPatientTable(const std::filesystem::path& path) {
   std::string line;
   int number = 0;
   std::map<std::string, std::size_t> column;
-  const char* needed[] = {"patient", "haller_index", "width_mm", "sternal_length_mm", "depth_mm", "depression_mm"};
+  const char* needed[] = {"patient",           "haller_index", "width_mm",
+                          "sternal_length_mm", "depth_mm",     "depression_mm"};
   std::vector<PatientRow> rows;
   while (std::getline(in, line)) {
     ++number;
@@ -52,7 +53,8 @@ std::vector<PatientRow> ReadPatientTable(const std::filesystem::path& path) {
     if (column.empty()) {
       for (std::size_t c = 0; c < cells.size(); ++c) column[cells[c]] = c;
       for (const char* name : needed) {
-        if (!column.count(name)) ThrowBadInput(file, std::string("the header has no column '") + name + "'", number);
+        if (!column.count(name))
+          ThrowBadInput(file, std::string("the header has no column '") + name + "'", number);
       }
       continue;
     }
@@ -74,13 +76,17 @@ std::vector<PatientRow> ReadPatientTable(const std::filesystem::path& path) {
     row.depth_mm = cell("depth_mm");
     row.depression_mm = cell("depression_mm");
     if (row.width_mm < 120 || row.width_mm > 500 || row.depth_mm < 60 || row.depth_mm > 400 ||
-        row.sternal_length_mm < 60 || row.sternal_length_mm > 300 || row.depression_mm < 0 || row.depression_mm > 60) {
-      ThrowBadInput(file, "measurements out of range (width 120-500, depth 60-400, length 60-300, depression 0-60 mm)",
-                    number);
+        row.sternal_length_mm < 60 || row.sternal_length_mm > 300 || row.depression_mm < 0 ||
+        row.depression_mm > 60) {
+      ThrowBadInput(
+          file, "measurements out of range (width 120-500, depth 60-400, length 60-300, depression 0-60 mm)",
+          number);
     }
     for (const PatientRow& r : rows) {
       if (r.patient == row.patient) {
-        ThrowBadInput(file, "patient " + std::to_string(row.patient) + " already on line " + std::to_string(r.line), number);
+        ThrowBadInput(file,
+                      "patient " + std::to_string(row.patient) + " already on line " + std::to_string(r.line),
+                      number);
       }
     }
     rows.push_back(row);
@@ -123,7 +129,8 @@ PatientChest MakePatientChest(const PatientRow& row, std::uint64_t seed, const P
   p.pectus.type = PectusType::kSaucer;
   p.pectus.depth_mm = row.depression_mm;
   // Each measured quantity depends mostly on its own parameter: secant steps per quantity, starting from
-  // a unit slope (a depression's measured depth is less than its deformation depth, by the chest's curvature).
+  // a unit slope (a depression's measured depth is less than its deformation depth, by the chest's
+  // curvature).
   double* parameter[3] = {&p.width_mm, &p.depth_mm, &p.pectus.depth_mm};
   const double target[3] = {row.width_mm, row.depth_mm, row.depression_mm};
   double slope[3] = {1.0, 1.0, 1.0}, last_value[3] = {0, 0, 0}, last_measured[3] = {0, 0, 0};
@@ -131,7 +138,8 @@ PatientChest MakePatientChest(const PatientRow& row, std::uint64_t seed, const P
     out.wall = MeasureChest(ChestSurface(p, Layer::kChestWall));
     const double measured[3] = {out.wall.width_mm, out.wall.depth_mm, out.wall.depression_mm};
     out.residual_mm = 0.0;
-    for (int k = 0; k < 3; ++k) out.residual_mm = std::max(out.residual_mm, std::abs(target[k] - measured[k]));
+    for (int k = 0; k < 3; ++k)
+      out.residual_mm = std::max(out.residual_mm, std::abs(target[k] - measured[k]));
     if (out.residual_mm < options.tolerance_mm) break;
     bool moved = false;
     for (int k = 0; k < 3; ++k) {

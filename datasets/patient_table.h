@@ -46,7 +46,7 @@ struct PatientChest {
   ChestMeasurement wall;       ///< MeasureChest of the chest wall (what the row describes)
   ChestMeasurement skin;       ///< MeasureChest of the skin (for information)
   int iterations = 0;
-  double residual_mm = 0.0;    ///< largest |measured - row| of width, depth, depression on the wall
+  double residual_mm = 0.0;  ///< largest |measured - row| of width, depth, depression on the wall
 };
 
 /// Builds a chest whose chest wall, measured as CT is (MeasureChest), has the row's width, depth and

@@ -45,8 +45,8 @@ Eigen::Vector3d RandomUnit(std::mt19937_64* rng) {
   return a.normalized();
 }
 
-ScanHole MakeHole(const ChestSurface& surface, std::mt19937_64* rng, const ScanOptions& o, double u0, double u1,
-                  double v0, double v1, int sweep, const char* cause) {
+ScanHole MakeHole(const ChestSurface& surface, std::mt19937_64* rng, const ScanOptions& o, double u0,
+                  double u1, double v0, double v1, int sweep, const char* cause) {
   std::uniform_real_distribution<double> u(u0, u1), v(v0, v1), d(o.hole_min_mm, o.hole_max_mm);
   ScanHole h;
   h.uv = Eigen::Vector2d(u(*rng), v(*rng));
@@ -93,8 +93,7 @@ Sweep SimulateSweep(const ChestSurface& reference, const ScanOptions& o, int ind
     Eigen::Vector3d f = -centre.normal;
     Eigen::Vector3d l = (centre.d_du - centre.d_du.dot(f) * f).normalized();
     const Eigen::Vector3d w = f.cross(l);
-    const Eigen::Vector3d origin = centre.position + (v - v_line) * centre.d_dv -
-                                   o.standoff_mm * f +
+    const Eigen::Vector3d origin = centre.position + (v - v_line) * centre.d_dv - o.standoff_mm * f +
                                    o.tremor_mm * (shake_x(k) * l + shake_y(k) * w + 0.5 * shake_z(k) * f);
     const Eigen::Matrix3d tremor = (Eigen::AngleAxisd(o.tremor_deg * kDegree * tilt_a(k), l) *
                                     Eigen::AngleAxisd(o.tremor_deg * kDegree * tilt_b(k), w))
@@ -129,7 +128,8 @@ Sweep SimulateSweep(const ChestSurface& reference, const ScanOptions& o, int ind
       if (uniform(rng) >= keep) continue;
       bool in_hole = false;
       for (const ScanHole& h : holes) {
-        if ((h.sweep < 0 || h.sweep == index) && (hit->point - h.centre).norm() < 0.5 * h.diameter_mm) in_hole = true;
+        if ((h.sweep < 0 || h.sweep == index) && (hit->point - h.centre).norm() < 0.5 * h.diameter_mm)
+          in_hole = true;
       }
       if (in_hole) continue;
       // Range noise along the ray; an outlier is thrown 5-50 mm along it, either way.
@@ -148,11 +148,11 @@ Sweep SimulateSweep(const ChestSurface& reference, const ScanOptions& o, int ind
   truth.lines = line;
   truth.pivot = line > 0 ? Eigen::Vector3d(pivot / line) : Eigen::Vector3d::Zero();
   // The tracker's error: a rotation about the wand's mean position and a shift; the sweep's points are
-  // reported through it, and T_world_sweep undoes it.
+  // reported through it, and T_scan_sweep undoes it.
   Rigid3 error = Rigid3::Identity();
   error.linear() = Eigen::AngleAxisd(o.tracker_deg * kDegree, RandomUnit(&rng)).toRotationMatrix();
   error.translation() = truth.pivot - error.linear() * truth.pivot + o.tracker_mm * RandomUnit(&rng);
-  truth.T_world_sweep = error.inverse();
+  truth.T_scan_sweep = error.inverse();
   truth.rotation_error_deg = o.tracker_deg;
   truth.translation_error_mm = o.tracker_mm;
 
@@ -222,7 +222,8 @@ Scan SimulateScan(const ChestSurface& surface, const ScanOptions& options, std::
   // Holes: the subject's own (in every sweep), then each sweep's.
   std::mt19937_64 rng(DeriveSeed(seed, SeedStream::kScan, 0));
   for (int h = 0; h < options.subject_holes; ++h) {
-    scan.holes.push_back(MakeHole(surface, &rng, options, -0.75, 0.75, 0.1, 0.95, -1, h % 2 ? "dark skin" : "hair"));
+    scan.holes.push_back(
+        MakeHole(surface, &rng, options, -0.75, 0.75, 0.1, 0.95, -1, h % 2 ? "dark skin" : "hair"));
   }
   for (int j = 0; j < n; ++j) {
     for (int h = 0; h < options.sweep_holes; ++h) {

@@ -16,10 +16,10 @@ inline std::uint64_t Mix64(std::uint64_t x) {
 
 /// What a derived seed is for, so that two uses of the same index never share a stream.
 enum class SeedStream : std::uint64_t {
-  kSubject = 1,   ///< a subject's shape (latent factors, detail)
-  kScan = 2,      ///< a subject's scan (holes, landmark noise, pose)
-  kSweep = 3,     ///< one sweep of a scan
-  kPair = 4,      ///< the second scan of a pair
+  kSubject = 1,  ///< a subject's shape (latent factors, detail)
+  kScan = 2,     ///< a subject's scan (holes, landmark noise, pose)
+  kSweep = 3,    ///< one sweep of a scan
+  kPair = 4,     ///< the second scan of a pair
 };
 
 /// The seed of item `index` of `stream` under `seed`.

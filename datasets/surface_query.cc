@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "shape/core/error.h"
 
@@ -21,7 +22,8 @@ Eigen::Vector2d Clamp(const Eigen::Vector2d& uv) {
 ClosestPointResult ClosestPoint(const ChestSurface& surface, const Eigen::Vector3d& query,
                                 const ClosestPointOptions& options) {
   ClosestPointResult result;
-  Eigen::Vector2d uv = options.initial_uv.allFinite() ? Clamp(options.initial_uv) : surface.GuessParameters(query);
+  Eigen::Vector2d uv =
+      options.initial_uv.allFinite() ? Clamp(options.initial_uv) : surface.GuessParameters(query);
   SurfacePoint sp = surface.Evaluate(uv.x(), uv.y());
   double cost = (sp.position - query).squaredNorm();
   bool fixed[2] = {false, false};
@@ -93,7 +95,8 @@ std::optional<RayHit> IntersectRay(const ChestSurface& surface, const Eigen::Vec
     const SurfacePoint sp = surface.Evaluate(x.x(), x.y());
     const Eigen::Vector3d F = sp.position - origin - x.z() * direction;
     if (F.norm() < 1e-9) {
-      if (x.z() <= 0.0 || x.x() < kUMin || x.x() > kUMax || x.y() < kVMin || x.y() > kVMax) return std::nullopt;
+      if (x.z() <= 0.0 || x.x() < kUMin || x.x() > kUMax || x.y() < kVMin || x.y() > kVMax)
+        return std::nullopt;
       return RayHit{x.head<2>(), x.z(), sp.position, sp.normal};
     }
     Eigen::Matrix3d J;
@@ -111,26 +114,34 @@ std::optional<RayHit> IntersectRay(const ChestSurface& surface, const Eigen::Vec
 TriangleMesh TessellateGrid(const ChestSurface& surface, int nu, int nv, double u0, double u1, double v0,
                             double v1) {
   if (nu < 2 || nv < 2) ThrowUsage("a surface grid needs at least 2 by 2 vertices");
+  std::vector<double> us(nu), vs(nv);
+  for (int i = 0; i < nu; ++i) us[i] = u0 + (u1 - u0) * i / (nu - 1);
+  for (int j = 0; j < nv; ++j) vs[j] = v0 + (v1 - v0) * j / (nv - 1);
+  return TessellateLines(surface, us, vs);
+}
+
+TriangleMesh TessellateLines(const ChestSurface& surface, const std::vector<double>& us,
+                             const std::vector<double>& vs) {
+  const int nu = static_cast<int>(us.size()), nv = static_cast<int>(vs.size());
+  if (nu < 2 || nv < 2) ThrowUsage("a surface grid needs at least 2 by 2 vertices");
   TriangleMesh mesh;
   const Eigen::Index n = static_cast<Eigen::Index>(nu) * nv;
   mesh.vertices.positions.resize(n, 3);
   mesh.vertices.normals.resize(n, 3);
-  Eigen::VectorXd us(n), vs(n);
+  Eigen::VectorXd u_values(n), v_values(n);
 #pragma omp parallel for schedule(static)
   for (int j = 0; j < nv; ++j) {
-    const double v = v0 + (v1 - v0) * j / (nv - 1);
     for (int i = 0; i < nu; ++i) {
-      const double u = u0 + (u1 - u0) * i / (nu - 1);
-      const SurfacePoint sp = surface.Evaluate(u, v);
+      const SurfacePoint sp = surface.Evaluate(us[i], vs[j]);
       const Eigen::Index k = static_cast<Eigen::Index>(j) * nu + i;
       mesh.vertices.positions.row(k) = sp.position.transpose();
       mesh.vertices.normals.row(k) = sp.normal.transpose();
-      us(k) = u;
-      vs(k) = v;
+      u_values(k) = us[i];
+      v_values(k) = vs[j];
     }
   }
-  mesh.vertices.scalars["u"] = us;
-  mesh.vertices.scalars["v"] = vs;
+  mesh.vertices.scalars["u"] = u_values;
+  mesh.vertices.scalars["v"] = v_values;
   mesh.faces.resize(2 * static_cast<Eigen::Index>(nu - 1) * (nv - 1), 3);
   Eigen::Index f = 0;
   for (int j = 0; j + 1 < nv; ++j) {
@@ -143,29 +154,48 @@ TriangleMesh TessellateGrid(const ChestSurface& surface, int nu, int nv, double 
   return mesh;
 }
 
+namespace {
+
+// Parameter values from lo to hi whose steps each cover about `spacing` of the integral of `speed` (sampled
+// at equal steps over [lo, hi]): where the surface moves fast, the lines crowd.
+std::vector<double> EqualArcLines(const std::vector<double>& speed, double lo, double hi, double spacing) {
+  const int m = static_cast<int>(speed.size());
+  const double h = (hi - lo) / (m - 1);
+  std::vector<double> cumulative(m, 0.0);
+  for (int k = 1; k < m; ++k) cumulative[k] = cumulative[k - 1] + 0.5 * (speed[k - 1] + speed[k]) * h;
+  const int intervals = std::max(1, static_cast<int>(std::ceil(cumulative.back() / spacing)));
+  std::vector<double> lines(intervals + 1);
+  int k = 0;
+  for (int i = 0; i <= intervals; ++i) {
+    const double target = cumulative.back() * i / intervals;
+    while (k + 2 < m && cumulative[k + 1] < target) ++k;
+    const double span = cumulative[k + 1] - cumulative[k];
+    const double t = span > 0.0 ? std::clamp((target - cumulative[k]) / span, 0.0, 1.0) : 0.0;
+    lines[i] = lo + (k + t) * h;
+  }
+  lines.front() = lo;
+  lines.back() = hi;
+  return lines;
+}
+
+}  // namespace
+
 TriangleMesh Tessellate(const ChestSurface& surface, double spacing_mm) {
   if (!(spacing_mm > 0.05)) ThrowUsage("tessellation spacing must be over 0.05 mm");
-  // Longest parameter lines: across at the widest level, up along the steepest meridian.
-  double across = 0.0, up = 0.0;
-  const int samples = 400;
-  for (double v : {0.0, 0.3, kVReference, 0.7, 1.0}) {
-    double length = 0.0;
+  // The fastest the surface moves per unit u at each u (over all v), and per unit v at each v, sampled on a
+  // 201 by 201 grid (2 % margin for what falls between samples).
+  const int samples = 201;
+  std::vector<double> speed_u(samples, 0.0), speed_v(samples, 0.0);
+  for (int j = 0; j < samples; ++j) {
     for (int i = 0; i < samples; ++i) {
-      length += (surface.Position(-1.0 + 2.0 * (i + 1) / samples, v) - surface.Position(-1.0 + 2.0 * i / samples, v))
-                    .norm();
+      const SurfacePoint sp = surface.Evaluate(kUMin + (kUMax - kUMin) * i / (samples - 1),
+                                               kVMin + (kVMax - kVMin) * j / (samples - 1));
+      speed_u[i] = std::max(speed_u[i], 1.02 * sp.d_du.norm());
+      speed_v[j] = std::max(speed_v[j], 1.02 * sp.d_dv.norm());
     }
-    across = std::max(across, length);
   }
-  for (double u : {-1.0, -0.5, 0.0, 0.5, 1.0}) {
-    double length = 0.0;
-    for (int j = 0; j < samples; ++j) {
-      length += (surface.Position(u, (j + 1.0) / samples) - surface.Position(u, 1.0 * j / samples)).norm();
-    }
-    up = std::max(up, length);
-  }
-  const int nu = std::max(2, static_cast<int>(std::ceil(across / spacing_mm)) + 1);
-  const int nv = std::max(2, static_cast<int>(std::ceil(up / spacing_mm)) + 1);
-  return TessellateGrid(surface, nu, nv);
+  return TessellateLines(surface, EqualArcLines(speed_u, kUMin, kUMax, spacing_mm),
+                         EqualArcLines(speed_v, kVMin, kVMax, spacing_mm));
 }
 
 }  // namespace pectus::datasets

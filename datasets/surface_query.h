@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <optional>
+#include <vector>
 
 #include "datasets/chest_surface.h"
 #include "shape/core/geometry.h"
@@ -20,10 +21,10 @@ struct ClosestPointOptions {
 
 /// The nearest point of the bounded surface patch to a query point.
 struct ClosestPointResult {
-  Eigen::Vector2d uv = Eigen::Vector2d::Zero();  ///< parameters of the foot point
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();      ///< parameters of the foot point
   Eigen::Vector3d point = Eigen::Vector3d::Zero();   ///< foot point, mm
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();  ///< unit outward normal at the foot point
-  double distance = 0.0;         ///< |query - point|, mm
+  double distance = 0.0;                             ///< |query - point|, mm
   double signed_distance = 0.0;  ///< distance, negative below the surface (against the normal), mm
   bool on_boundary = false;      ///< the foot point lies on the border of the domain
   bool converged = false;
@@ -62,7 +63,13 @@ std::optional<RayHit> IntersectRay(const ChestSurface& surface, const Eigen::Vec
 TriangleMesh TessellateGrid(const ChestSurface& surface, int nu, int nv, double u0 = kUMin, double u1 = kUMax,
                             double v0 = kVMin, double v1 = kVMax);
 
-/// A grid mesh of the whole domain whose edges are at most about `spacing_mm` long.
+/// The same with the grid lines at the given parameter values (each list ascending, at least 2).
+TriangleMesh TessellateLines(const ChestSurface& surface, const std::vector<double>& us,
+                             const std::vector<double>& vs);
+
+/// A grid mesh of the whole domain whose grid edges are at most about `spacing_mm` long: the u lines are
+/// spaced by the largest speed |dx/du| over v at each u, the v lines likewise, so lines crowd only where the
+/// surface moves fast (a depression's walls). Sampled on a 201 by 201 grid.
 TriangleMesh Tessellate(const ChestSurface& surface, double spacing_mm);
 
 }  // namespace pectus::datasets

@@ -16,7 +16,8 @@ namespace {
 Points3 Apply(const Similarity3& T, const Points3& x) {
   Points3 y(x.rows(), 3);
   const Eigen::Matrix3d A = T.scale * T.rotation;
-  for (Eigen::Index i = 0; i < x.rows(); ++i) y.row(i) = (A * x.row(i).transpose() + T.translation).transpose();
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    y.row(i) = (A * x.row(i).transpose() + T.translation).transpose();
   return y;
 }
 
@@ -45,7 +46,8 @@ bool ProcrustesOptions::IsValid(std::string* why) const {
   return true;
 }
 
-ProcrustesResult GeneralisedProcrustes(const std::vector<LandmarkSet>& shapes, const ProcrustesOptions& options,
+ProcrustesResult GeneralisedProcrustes(const std::vector<LandmarkSet>& shapes,
+                                       const ProcrustesOptions& options,
                                        const std::vector<std::string>& names) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage("Procrustes: " + why);
@@ -98,8 +100,8 @@ ProcrustesResult GeneralisedProcrustes(const std::vector<LandmarkSet>& shapes, c
     }
     next /= static_cast<double>(shapes.size());
     // Fix the gauge: the mean in the reference's frame and, with scale, of the reference's size.
-    const Similarity3 G =
-        UmeyamaAlignment(next, X[ref], no_weights, options.estimate_scale, options.min_spread_ratio, "mean shape");
+    const Similarity3 G = UmeyamaAlignment(next, X[ref], no_weights, options.estimate_scale,
+                                           options.min_spread_ratio, "mean shape");
     next = Apply(G, next);
     const double moved = (next - mean).rowwise().norm().maxCoeff();
     mean = next;
@@ -174,8 +176,9 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
   // Every scan to the reference: the whole of kToReference, and the start of kGroupwise without landmarks.
   if (options.mode == CohortMode::kToReference || !landmarks) {
     const CohortScan& r = scans[ref];
-    const IcpTarget target = r.cloud.has_normals() ? IcpTarget(r.cloud.positions, r.cloud.normals, r.name)
-                                                   : IcpTarget(r.cloud.positions, options.pair.normals, r.name);
+    const IcpTarget target = r.cloud.has_normals()
+                                 ? IcpTarget(r.cloud.positions, r.cloud.normals, r.name)
+                                 : IcpTarget(r.cloud.positions, options.pair.normals, r.name);
     Progress progress("registering to " + r.name, static_cast<std::int64_t>(n));
     for (std::size_t i = 0; i < n; ++i) {
       if (i != ref) {
@@ -245,7 +248,8 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
         std::uint32_t j = 0;
         double d2 = 0.0;
         if (!t.tree().NearestWithin(q, options.mean_max_distance_mm, &j, &d2)) continue;
-        sum.row(k) += (rigid[i] * (Eigen::Vector3d(t.centred_positions().row(j).transpose()) + t.origin())).transpose();
+        sum.row(k) +=
+            (rigid[i] * (Eigen::Vector3d(t.centred_positions().row(j).transpose()) + t.origin())).transpose();
         ++count(k);
       }
     }

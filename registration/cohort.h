@@ -14,10 +14,10 @@ namespace pectus {
 
 /// Options of GeneralisedProcrustes (landmarks only).
 struct ProcrustesOptions {
-  bool estimate_scale = false;   ///< similarity transforms (the mean keeps the reference's size)
-  int reference = 0;             ///< the shape whose frame the mean is expressed in
+  bool estimate_scale = false;  ///< similarity transforms (the mean keeps the reference's size)
+  int reference = 0;            ///< the shape whose frame the mean is expressed in
   int max_iterations = 100;
-  double tolerance_mm = 1e-6;    ///< stop when no mean landmark moves by more than this (mm)
+  double tolerance_mm = 1e-6;      ///< stop when no mean landmark moves by more than this (mm)
   double min_spread_ratio = 0.02;  ///< see LandmarkAlignmentOptions
 
   /// False, with the reason in `why`, if a value is out of range.
@@ -28,10 +28,10 @@ struct ProcrustesOptions {
 struct ProcrustesResult {
   std::vector<Similarity3> T_mean_shape;  ///< per shape: its frame to the mean's frame
   LandmarkSet mean;  ///< mean landmarks (mm), placed on the reference shape by a least-squares fit
-  std::vector<std::string> skipped;       ///< labels not present in every shape (not used)
+  std::vector<std::string> skipped;  ///< labels not present in every shape (not used)
   int iterations = 0;
   bool converged = false;
-  double rms_mm = 0.0;                    ///< RMS distance of the aligned landmarks to the mean (mm)
+  double rms_mm = 0.0;  ///< RMS distance of the aligned landmarks to the mean (mm)
 };
 
 /// Generalised Procrustes analysis of labelled landmark sets (Gower 1975; Dryden and Mardia 2016,
@@ -41,7 +41,8 @@ struct ProcrustesResult {
 /// fault (via `names`) for fewer than two sets or too few common labels.
 /// @param[in] shapes  two or more landmark sets (mm)
 /// @param[in] names   a name per set for messages (file names), or empty
-ProcrustesResult GeneralisedProcrustes(const std::vector<LandmarkSet>& shapes, const ProcrustesOptions& options = {},
+ProcrustesResult GeneralisedProcrustes(const std::vector<LandmarkSet>& shapes,
+                                       const ProcrustesOptions& options = {},
                                        const std::vector<std::string>& names = {});
 
 /// How a cohort is aligned.
@@ -52,20 +53,31 @@ enum class CohortMode {
 
 /// One scan of a cohort.
 struct CohortScan {
-  std::string name;                        ///< for messages and outputs (the file's stem)
-  PointCloud cloud;                        ///< mm; normals estimated if absent
-  std::optional<LandmarkSet> landmarks;    ///< all scans or none must have them
+  std::string name;                      ///< for messages and outputs (the file's stem)
+  PointCloud cloud;                      ///< mm; normals estimated if absent
+  std::optional<LandmarkSet> landmarks;  ///< all scans or none must have them
 };
 
 /// Options of AlignCohort.
 struct CohortOptions {
   CohortMode mode = CohortMode::kToReference;
-  int reference = 0;                  ///< index of the reference scan (its frame is the cohort's frame)
-  PairRegistrationOptions pair;       ///< landmark and ICP options of every registration
-  int max_groupwise_iterations = 10;  ///< kGroupwise: rounds of mean update and realignment
-  double groupwise_tolerance_mm = 0.01;  ///< kGroupwise: stop when no scan moves more than this (mm, RMS)
-  int mean_points = 4000;             ///< kGroupwise: points of the mean surface
-  double mean_max_distance_mm = 5.0;  ///< kGroupwise: a scan contributes to a mean point within this (mm)
+  int reference = 0;  ///< index of the reference scan (its frame is the cohort's frame)
+  /// Landmark and ICP options of every registration. The defaults expect scans of different people,
+  /// whose surfaces differ by millimetres and whose landmarks never coincide: a last ICP gate of 10 mm, a
+  /// fit accepted up to 5 mm RMS, and instead of a limit on the landmarks' distance one on how far ICP
+  /// moves them from the landmark fit (15 mm RMS).
+  PairRegistrationOptions pair = [] {
+    PairRegistrationOptions o;
+    o.icp.final_max_distance_mm = 10.0;
+    o.icp.max_rms_mm = 5.0;
+    o.max_landmark_rms_mm = 1e9;
+    o.max_landmark_shift_mm = 15.0;
+    return o;
+  }();
+  int max_groupwise_iterations = 20;     ///< kGroupwise: rounds of mean update and realignment
+  double groupwise_tolerance_mm = 0.05;  ///< kGroupwise: stop when no scan moves more than this (mm, RMS)
+  int mean_points = 20000;               ///< kGroupwise: points of the mean surface
+  double mean_max_distance_mm = 5.0;     ///< kGroupwise: a scan contributes to a mean point within this (mm)
 
   /// False, with the reason in `why`, if a value is out of range.
   bool IsValid(std::string* why) const;
@@ -76,14 +88,14 @@ struct CohortResult {
   /// Per scan: its frame to the cohort frame (mm). The cohort frame is the reference scan's frame in both
   /// modes: the reference gets the identity.
   std::vector<Similarity3> T_frame_scan;
-  std::vector<bool> success;              ///< per scan: the registration is good
-  std::vector<std::string> messages;      ///< per scan: what was found or why it failed
-  std::vector<double> rms_mm;             ///< per scan: RMS surface distance (to reference or mean)
-  std::vector<double> inlier_fraction;    ///< per scan
-  Points3 mean_points;                    ///< kGroupwise: the mean surface samples (cohort frame)
+  std::vector<bool> success;                   ///< per scan: the registration is good
+  std::vector<std::string> messages;           ///< per scan: what was found or why it failed
+  std::vector<double> rms_mm;                  ///< per scan: RMS surface distance (to reference or mean)
+  std::vector<double> inlier_fraction;         ///< per scan
+  Points3 mean_points;                         ///< kGroupwise: the mean surface samples (cohort frame)
   std::optional<ProcrustesResult> procrustes;  ///< kGroupwise with landmarks: the landmark GPA
-  int iterations = 0;                     ///< kGroupwise: rounds run
-  bool converged = true;                  ///< kGroupwise: stopped on the tolerance
+  int iterations = 0;                          ///< kGroupwise: rounds run
+  bool converged = true;                       ///< kGroupwise: stopped on the tolerance
   bool all_succeeded() const;
 };
 

@@ -24,11 +24,13 @@ enum class IcpMethod {
 IcpMethod ParseIcpMethod(const std::string& name);
 std::string ToString(IcpMethod method);
 
-/// One stage of coarse-to-fine ICP.
+/// One stage of coarse-to-fine ICP. The source sample of a level is `points` random source points when
+/// points > 0, else one point per voxel of `voxel_size_mm` when that is > 0, else every source point.
 struct IcpLevel {
-  double voxel_size_mm = 0.0;    ///< source subsampling cube (mm); 0 = every source point
+  double voxel_size_mm = 0.0;    ///< source subsampling cube (mm); 0 = no voxel subsampling
   double max_distance_mm = 0.0;  ///< correspondences farther apart are dropped (mm), > 0
   int max_iterations = 30;       ///< iterations at this level, >= 1
+  int points = 0;                ///< random sample of this many source points (RandomSample); 0 = off
 };
 
 /// Options of AlignIcp. The defaults suit hand-held body scans and laser sweeps in mm.
@@ -42,20 +44,34 @@ struct IcpOptions {
   /// Drop a correspondence whose normals differ by more than this (degrees), when the source has
   /// normals; 0 = off. Ignores the normals' sign.
   double max_normal_angle_deg = 0.0;
+  /// Drop a pair whose source point lies farther from its target point along the target's tangent plane
+  /// than this many target point spacings: the source point is then over a hole in the target or beyond
+  /// its edge, and the rim's plane would pull it (docs/registration.md). 0 = off.
+  double max_tangential_spacings = 2.0;
 
-  /// Coarse to fine. Empty = automatic: one level per entry of `auto_level_points`, the source
-  /// subsampled by voxels to about that many points, the gate starting at `initial_max_distance_mm`
-  /// and shrinking fourfold per level, down to 3 times the target's point spacing.
+  /// Coarse to fine. Empty = automatic: one level per entry of `auto_level_points`, a random sample of
+  /// that many source points (nested: every level's sample contains the coarser ones; 0 or more than the
+  /// source has = every point), the gate starting at `initial_max_distance_mm` and shrinking fourfold per
+  /// level, down to `final_max_distance_mm`. The last level uses every point by default: the
+  /// precision of the pose grows with the number of points (docs/registration.md), and correspondences
+  /// are searched again only where they may have changed, so the full level costs little more than one
+  /// pass over the source.
   std::vector<IcpLevel> levels;
-  std::vector<int> auto_level_points = {1000, 3000, 10000};  ///< source points per automatic level
-  double initial_max_distance_mm = 20.0;                    ///< gate of the first automatic level (mm)
-  int auto_max_iterations = 30;                             ///< iterations per automatic level
+  std::vector<int> auto_level_points = {1000, 3000, 10000, 0};  ///< source points per automatic level
+  double initial_max_distance_mm = 20.0;                        ///< gate of the first automatic level (mm)
+  /// Smallest gate of the automatic levels (mm); 0 = 3 times the target's point spacing, right for two
+  /// scans of one surface. Scans of different people differ by millimetres: use about 10 mm.
+  double final_max_distance_mm = 0.0;
+  int auto_max_iterations = 30;  ///< iterations per automatic level
 
   /// A level stops when an update rotates by less than this (degrees) and moves by less than
   /// `translation_tolerance_mm`, or when the pose is back where it was two iterations before (a cycle
   /// between correspondence sets); each level above the last uses ten times its finer neighbour's values.
   double rotation_tolerance_deg = 1e-3;
   double translation_tolerance_mm = 2e-3;
+  /// When two successive updates point the same way, take the rest of their geometric series at once
+  /// (Aitken extrapolation, docs/registration.md): the same fixed point in fewer iterations.
+  bool extrapolate = true;
 
   /// Restrict the source to surface patches: points within `patch_radius_mm` of any of these centres
   /// (source frame, mm), as around landmarks. Empty = the whole source.
@@ -63,11 +79,11 @@ struct IcpOptions {
   double patch_radius_mm = 0.0;
 
   /// Acceptance. A result that misses any of these is returned with success = false and the reason.
-  double max_rms_mm = 1.0;             ///< RMS point-to-plane distance of the inliers (mm)
-  double min_inlier_fraction = 0.3;    ///< source points (finest level) with a target point within reach
-  double inlier_distance_mm = 0.0;     ///< that reach (mm); 0 = the last level's gate
-  double min_conditioning = 1e-5;      ///< smallest / largest eigenvalue of the scaled 6x6 normal matrix
-  int min_correspondences = 30;        ///< fewer at any iteration is a failure
+  double max_rms_mm = 1.0;           ///< RMS point-to-plane distance of the inliers (mm)
+  double min_inlier_fraction = 0.3;  ///< source points (finest level) with a target point within reach
+  double inlier_distance_mm = 0.0;   ///< that reach (mm); 0 = the last level's gate
+  double min_conditioning = 1e-5;    ///< smallest / largest eigenvalue of the scaled 6x6 normal matrix
+  int min_correspondences = 30;      ///< fewer at any iteration is a failure
 
   /// False, with the reason in `why`, if a value is out of range.
   bool IsValid(std::string* why) const;
@@ -77,25 +93,32 @@ struct IcpOptions {
 struct IcpLevelReport {
   double voxel_size_mm = 0.0;
   double max_distance_mm = 0.0;
-  std::int64_t source_points = 0;   ///< source points used at this level
+  std::int64_t source_points = 0;  ///< source points used at this level
   int iterations = 0;
-  bool converged = false;           ///< the update fell below the tolerances
-  double rms_mm = 0.0;              ///< weighted RMS residual at the last iteration (mm)
+  bool converged = false;  ///< the update fell below the tolerances
+  double rms_mm = 0.0;     ///< weighted RMS residual at the last iteration (mm)
+  /// k-d tree searches at this level. A correspondence is searched again only when its source point has
+  /// moved far enough that another target point could have become the nearest (exact, not approximate).
+  std::int64_t searches = 0;
 };
 
 /// What AlignIcp found.
 struct IcpResult {
   Rigid3 T_target_source = Rigid3::Identity();  ///< x_target = T x_source (mm)
-  double rms_mm = 0.0;            ///< RMS point-to-plane distance of the inliers at the final pose (mm)
-  double inlier_fraction = 0.0;   ///< fraction of the finest level's source points that are inliers
-  std::int64_t inliers = 0;       ///< their number
-  int iterations = 0;             ///< over all levels
-  bool converged = false;         ///< the last level stopped on the tolerances, not on max_iterations
-  bool success = false;           ///< converged and every acceptance test passed
-  double conditioning = 0.0;      ///< smallest / largest eigenvalue of the scaled 6x6 normal matrix
-  double seconds = 0.0;           ///< wall time of AlignIcp (target preparation not included)
+  double rms_mm = 0.0;           ///< RMS point-to-plane distance of the inliers at the final pose (mm)
+  double inlier_fraction = 0.0;  ///< fraction of the finest level's source points that are inliers
+  std::int64_t inliers = 0;      ///< their number
+  int iterations = 0;            ///< over all levels
+  bool converged = false;        ///< the last level stopped on the tolerances, not on max_iterations
+  bool success = false;          ///< converged and every acceptance test passed
+  double conditioning = 0.0;     ///< smallest / largest eigenvalue of the scaled 6x6 normal matrix
+  /// The pose's spread implied by the residuals, Cov = s^2 H^-1 at the last iteration (docs/registration.md):
+  /// largest standard deviation of the rotation (degrees) and of the source centroid's position (mm).
+  double rotation_sd_deg = 0.0;
+  double translation_sd_mm = 0.0;
+  double seconds = 0.0;  ///< wall time of AlignIcp (target preparation not included)
   std::vector<IcpLevelReport> levels;
-  std::string message;            ///< one line: what was found, or why it failed
+  std::string message;  ///< one line: what was found, or why it failed
 
   /// One line for a log: "converged, 14 iterations, RMS 0.21 mm, 97.1 % inliers".
   std::string BriefReport() const;
@@ -113,7 +136,8 @@ class IcpTarget {
   IcpTarget(const Points3& positions, const Points3& normals, const std::string& name = "target");
   /// The same, estimating the normals with EstimateNormals on the target's own k-d tree (their sign is
   /// irrelevant to ICP). normal_seconds() says what that cost.
-  IcpTarget(const Points3& positions, const NormalOptions& normal_options, const std::string& name = "target");
+  IcpTarget(const Points3& positions, const NormalOptions& normal_options,
+            const std::string& name = "target");
   ~IcpTarget();
   IcpTarget(const IcpTarget&) = delete;
   IcpTarget& operator=(const IcpTarget&) = delete;
@@ -145,7 +169,8 @@ class IcpTarget {
 
 /// The levels AlignIcp runs for these options, source and target (options.levels if given).
 /// @param[in] source_points  number of source points considered (after patch restriction)
-std::vector<IcpLevel> IcpLevelsFor(const IcpOptions& options, Eigen::Index source_points, double target_spacing_mm);
+std::vector<IcpLevel> IcpLevelsFor(const IcpOptions& options, Eigen::Index source_points,
+                                   double target_spacing_mm);
 
 /// Aligns the source surface to the target: iteratively pairs subsampled source points with their
 /// nearest target points and solves the linearised, robustly weighted normal equations (6 by 6, in

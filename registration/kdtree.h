@@ -49,6 +49,22 @@ class KdTree3 {
     return true;
   }
 
+  /// The two nearest points within `max_distance` (mm) of `query`, closest first: rows into `indices`,
+  /// squared distances (mm^2) into `squared_distances`. Returns how many were found (0, 1 or 2). The gap
+  /// between the two distances certifies the nearest point: it stays the nearest while the query moves by
+  /// less than half the gap (ICP reuses correspondences that way, registration/icp.cc).
+  int NearestTwoWithin(const Eigen::Vector3d& query, double max_distance, std::uint32_t indices[2],
+                       double squared_distances[2]) const {
+    if (size() == 0) return 0;
+    BoundedTwoNearest result(max_distance * max_distance);
+    index_->findNeighbors(result, query.data(), nanoflann::SearchParams(32, 0.0f, false));
+    for (int k = 0; k < result.count; ++k) {
+      indices[k] = result.index[k];
+      squared_distances[k] = result.dist[k];
+    }
+    return result.count;
+  }
+
   /// The k nearest points into caller-owned arrays of at least k entries, closest first; returns how
   /// many were found (< k only when the tree holds fewer than k points). No allocation.
   int Knn(const Eigen::Vector3d& query, int k, std::uint32_t* indices, double* squared_distances) const {
@@ -114,6 +130,32 @@ class KdTree3 {
     double best;
     std::uint32_t index = 0;
     bool found = false;
+  };
+  // A nanoflann result set keeping the two nearest points under a squared-distance bound.
+  struct BoundedTwoNearest {
+    using DistanceType = double;
+    using IndexType = std::uint32_t;
+    explicit BoundedTwoNearest(double bound) : bound(bound) {}
+    bool full() const { return true; }
+    bool addPoint(double d, std::uint32_t i) {
+      if (d >= worstDist()) return true;
+      if (count == 0 || d < dist[0]) {
+        dist[1] = dist[0];
+        index[1] = index[0];
+        dist[0] = d;
+        index[0] = i;
+      } else {
+        dist[1] = d;
+        index[1] = i;
+      }
+      count = count < 2 ? count + 1 : 2;
+      return true;
+    }
+    double worstDist() const { return count < 2 ? bound : dist[1]; }
+    double bound;
+    double dist[2] = {0.0, 0.0};
+    std::uint32_t index[2] = {0, 0};
+    int count = 0;
   };
   using Index = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Adaptor>, Adaptor, 3,
                                                     std::uint32_t>;

@@ -69,8 +69,8 @@ Similarity3 UmeyamaAlignment(const Points3& source, const Points3& target, const
   if (!w.allFinite() || (w.array() < 0.0).any()) ThrowBadInput(what, "weights must be finite and >= 0");
   const Eigen::Index used = (w.array() > 0.0).count();
   if (used < 3) {
-    ThrowBadInput(what, "need at least 3 corresponding landmarks (with positive weight), got " +
-                            std::to_string(used));
+    ThrowBadInput(
+        what, "need at least 3 corresponding landmarks (with positive weight), got " + std::to_string(used));
   }
   const double total = w.sum();
 
@@ -97,7 +97,7 @@ Similarity3 UmeyamaAlignment(const Points3& source, const Points3& target, const
 
   Similarity3 T;
   T.rotation = svd.matrixU() * s_diag.asDiagonal() * svd.matrixV().transpose();  // Eq. (40)
-  T.scale = estimate_scale ? svd.singularValues().dot(s_diag) / sigma2_x : 1.0;   // Eq. (42)
+  T.scale = estimate_scale ? svd.singularValues().dot(s_diag) / sigma2_x : 1.0;  // Eq. (42)
   if (!(T.scale > 0.0) || !std::isfinite(T.scale)) {
     ThrowBadInput(what, "the landmarks give a non-positive scale; are the labels swapped?");
   }
@@ -106,8 +106,8 @@ Similarity3 UmeyamaAlignment(const Points3& source, const Points3& target, const
 }
 
 LandmarkAlignmentResult AlignLandmarks(const LandmarkSet& source, const LandmarkSet& target,
-                                       const LandmarkAlignmentOptions& options, const std::string& source_name,
-                                       const std::string& target_name) {
+                                       const LandmarkAlignmentOptions& options,
+                                       const std::string& source_name, const std::string& target_name) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage("landmark alignment: " + why);
   source.Validate(source_name);
@@ -139,7 +139,8 @@ LandmarkAlignmentResult AlignLandmarks(const LandmarkSet& source, const Landmark
     return s.empty() ? std::string("none") : s;
   };
   if (options.require_all_labels && !result.unmatched.empty()) {
-    ThrowBadInput(pair_name, "landmark labels do not match; found in only one set: " + list(result.unmatched));
+    ThrowBadInput(pair_name,
+                  "landmark labels do not match; found in only one set: " + list(result.unmatched));
   }
   if (result.labels.size() < 3) {
     ThrowBadInput(pair_name, "need at least 3 landmarks with the same label in both sets, found " +
@@ -155,7 +156,8 @@ LandmarkAlignmentResult AlignLandmarks(const LandmarkSet& source, const Landmark
     y.row(i) = ys[static_cast<std::size_t>(i)].transpose();
     w(i) = ws[static_cast<std::size_t>(i)];
   }
-  result.T_target_source = UmeyamaAlignment(x, y, w, options.estimate_scale, options.min_spread_ratio, pair_name);
+  result.T_target_source =
+      UmeyamaAlignment(x, y, w, options.estimate_scale, options.min_spread_ratio, pair_name);
 
   result.residuals_mm.resize(n);
   double sum = 0.0;

@@ -31,12 +31,12 @@ struct LandmarkAlignmentOptions {
 
 /// What a landmark alignment found.
 struct LandmarkAlignmentResult {
-  Similarity3 T_target_source;          ///< x_target = s R x_source + t (s = 1 unless estimate_scale)
-  std::vector<std::string> labels;      ///< the labels used, in the source set's order
-  Eigen::VectorXd residuals_mm;         ///< |T x_source - x_target| per used label, mm
-  double rms_mm = 0.0;                  ///< weighted RMS of the residuals, mm
-  std::vector<std::string> unmatched;   ///< labels present in only one set (skipped)
-  std::string message;                  ///< one line: labels used, RMS, largest residual
+  Similarity3 T_target_source;         ///< x_target = s R x_source + t (s = 1 unless estimate_scale)
+  std::vector<std::string> labels;     ///< the labels used, in the source set's order
+  Eigen::VectorXd residuals_mm;        ///< |T x_source - x_target| per used label, mm
+  double rms_mm = 0.0;                 ///< weighted RMS of the residuals, mm
+  std::vector<std::string> unmatched;  ///< labels present in only one set (skipped)
+  std::string message;                 ///< one line: labels used, RMS, largest residual
 };
 
 /// Weighted least-squares similarity (or rigid) transform taking `source` rows onto `target` rows,

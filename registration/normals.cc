@@ -59,7 +59,8 @@ std::int64_t OrientByPropagation(const Points3& points, const Graph& graph, Poin
   for (std::size_t i = 0; i < n; ++i) {
     radius[i] = (points.row(static_cast<Eigen::Index>(i)).transpose() - centroid).squaredNorm();
   }
-  std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return radius[a] > radius[b]; });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::uint32_t a, std::uint32_t b) { return radius[a] > radius[b]; });
 
   std::vector<char> done(n, 0);
   using Item = std::pair<double, std::pair<std::uint32_t, std::uint32_t>>;  // cost, (node, parent)
@@ -155,7 +156,8 @@ NormalResult EstimateNormals(const Points3& points, const NormalOptions& options
       }
       // Covariance about the neighbourhood mean (two passes: no cancellation far from the origin).
       Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-      for (int j = 0; j < found; ++j) mean += points.row(static_cast<Eigen::Index>(idx[static_cast<std::size_t>(j)])).transpose();
+      for (int j = 0; j < found; ++j)
+        mean += points.row(static_cast<Eigen::Index>(idx[static_cast<std::size_t>(j)])).transpose();
       mean /= found;
       Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
       for (int j = 0; j < found; ++j) {
@@ -172,7 +174,8 @@ NormalResult EstimateNormals(const Points3& points, const NormalOptions& options
         continue;
       }
       normal /= norm;
-      if (options.orientation == NormalOrientation::kTowardViewpoint && normal.dot(options.viewpoint - p) < 0.0) {
+      if (options.orientation == NormalOrientation::kTowardViewpoint &&
+          normal.dot(options.viewpoint - p) < 0.0) {
         normal = -normal;
       }
       result.normals.row(i) = normal.transpose();

@@ -11,15 +11,15 @@ namespace pectus {
 
 /// How normals are given a consistent sign.
 enum class NormalOrientation {
-  kNone,           ///< the sign PCA gives (arbitrary)
+  kNone,             ///< the sign PCA gives (arbitrary)
   kTowardViewpoint,  ///< n . (viewpoint - p) >= 0, as for one scanner position
-  kPropagate,      ///< along a minimum spanning tree of the kNN graph (Hoppe et al. 1992, Sec. 3.3)
+  kPropagate,        ///< along a minimum spanning tree of the kNN graph (Hoppe et al. 1992, Sec. 3.3)
 };
 
 /// Options of EstimateNormals.
 struct NormalOptions {
-  int k = 16;                   ///< neighbours per point, the point itself included (>= 3)
-  double max_radius_mm = 0.0;   ///< neighbours farther than this are dropped; 0 = no limit
+  int k = 16;                  ///< neighbours per point, the point itself included (>= 3)
+  double max_radius_mm = 0.0;  ///< neighbours farther than this are dropped; 0 = no limit
   NormalOrientation orientation = NormalOrientation::kTowardViewpoint;
   Eigen::Vector3d viewpoint = Eigen::Vector3d::Zero();  ///< mm, for kTowardViewpoint
   /// kPropagate: neighbours per point in the orientation graph (<= k). Each connected component of the
@@ -33,11 +33,11 @@ struct NormalOptions {
 
 /// Normals and what they cost.
 struct NormalResult {
-  Points3 normals;              ///< #points by 3 unit normals; (0,0,0) where fewer than 3 neighbours
-  Eigen::VectorXd curvature;    ///< #points surface variation lambda_min / (sum of lambdas), in [0, 1/3]
-  std::int64_t num_degenerate = 0;   ///< points with fewer than 3 neighbours (zero normal)
+  Points3 normals;                  ///< #points by 3 unit normals; (0,0,0) where fewer than 3 neighbours
+  Eigen::VectorXd curvature;        ///< #points surface variation lambda_min / (sum of lambdas), in [0, 1/3]
+  std::int64_t num_degenerate = 0;  ///< points with fewer than 3 neighbours (zero normal)
   std::int64_t num_components = 0;  ///< kPropagate: connected components of the orientation graph
-  double seconds = 0.0;              ///< wall time
+  double seconds = 0.0;             ///< wall time
 };
 
 /// Normals by principal component analysis of the k nearest neighbours (the eigenvector of the smallest

@@ -34,6 +34,10 @@ bool PairRegistrationOptions::IsValid(std::string* why) const {
     if (why) *why = "max_landmark_rms_mm must be > 0";
     return false;
   }
+  if (!(max_landmark_shift_mm >= 0.0) || !std::isfinite(max_landmark_shift_mm)) {
+    if (why) *why = "max_landmark_shift_mm must be >= 0";
+    return false;
+  }
   return true;
 }
 
@@ -61,8 +65,9 @@ PairRegistrationResult RegisterPair(const IcpTarget& fixed, const PointCloud& mo
     T = result.landmarks->T_target_source;
   }
   auto finish = [&]() {
-    if (with_landmarks) result.landmark_rms_mm = LandmarkRms(*result.landmarks, *moving_landmarks, *fixed_landmarks,
-                                                             result.T_target_source);
+    if (with_landmarks)
+      result.landmark_rms_mm =
+          LandmarkRms(*result.landmarks, *moving_landmarks, *fixed_landmarks, result.T_target_source);
     result.seconds = Seconds(start);
     return result;
   };
@@ -77,7 +82,8 @@ PairRegistrationResult RegisterPair(const IcpTarget& fixed, const PointCloud& mo
   Points3 source = moving.positions;
   if (T.scale != 1.0) source *= T.scale;
   Points3 source_normals;
-  const bool need_normals = options.icp.method == IcpMethod::kSymmetric || options.icp.max_normal_angle_deg > 0.0;
+  const bool need_normals =
+      options.icp.method == IcpMethod::kSymmetric || options.icp.max_normal_angle_deg > 0.0;
   if (need_normals) {
     if (moving.has_normals()) {
       source_normals = moving.normals;
@@ -105,12 +111,31 @@ PairRegistrationResult RegisterPair(const IcpTarget& fixed, const PointCloud& mo
   result.success = result.icp->success;
   result.message = result.icp->message;
   finish();
+  if (with_landmarks) {
+    double shift2 = 0.0;
+    for (const std::string& label : result.landmarks->labels) {
+      const Eigen::Vector3d x = moving_landmarks->Find(label)->position;
+      shift2 += (result.T_target_source * x - T * x).squaredNorm();
+    }
+    result.landmark_shift_mm = std::sqrt(shift2 / static_cast<double>(result.landmarks->labels.size()));
+  }
+  if (result.success && with_landmarks && options.max_landmark_shift_mm > 0.0 &&
+      result.landmark_shift_mm > options.max_landmark_shift_mm) {
+    std::ostringstream msg;
+    msg.precision(3);
+    msg << "the surfaces slid along each other: the fine step moved the landmarks by "
+        << result.landmark_shift_mm << " mm RMS from the landmark fit (limit "
+        << options.max_landmark_shift_mm
+        << " mm); estimate the scale from the landmarks (--scale) if the scans differ in size";
+    result.success = false;
+    result.message = msg.str();
+  }
   if (result.success && with_landmarks && result.landmark_rms_mm > options.max_landmark_rms_mm) {
     std::ostringstream msg;
     msg.precision(3);
     msg << "the surfaces slid away from the landmarks: landmark RMS " << result.landmark_rms_mm
-        << " mm after the fine step (limit " << options.max_landmark_rms_mm << " mm, " << result.landmarks->rms_mm
-        << " mm after the landmark step)";
+        << " mm after the fine step (limit " << options.max_landmark_rms_mm << " mm, "
+        << result.landmarks->rms_mm << " mm after the landmark step)";
     result.success = false;
     result.message = msg.str();
   }
@@ -125,7 +150,8 @@ PairRegistrationResult RegisterPair(const PointCloud& fixed, const PointCloud& m
   if (!options.IsValid(&why)) ThrowUsage("registration: " + why);
   const IcpTarget target = fixed.has_normals() ? IcpTarget(fixed.positions, fixed.normals, "fixed scan")
                                                : IcpTarget(fixed.positions, options.normals, "fixed scan");
-  PairRegistrationResult result = RegisterPair(target, moving, fixed_landmarks, moving_landmarks, initial, options);
+  PairRegistrationResult result =
+      RegisterPair(target, moving, fixed_landmarks, moving_landmarks, initial, options);
   result.seconds = Seconds(start);
   return result;
 }

@@ -25,6 +25,10 @@ struct PairRegistrationOptions {
   /// After the fine step, the RMS distance (mm) between the moved landmarks and the fixed ones may not
   /// exceed this: a larger value means the surfaces slid away from what the landmarks say.
   double max_landmark_rms_mm = 20.0;
+  /// > 0: the fine step may move the moving scan's landmarks by at most this RMS distance (mm) from where
+  /// the landmark step put them; more means ICP slid the surfaces along each other (scans of different
+  /// people, whose landmarks never coincide, are checked this way). 0 = off.
+  double max_landmark_shift_mm = 0.0;
   /// Normals for scans that have none (the sign does not matter to ICP).
   NormalOptions normals = [] {
     NormalOptions o;
@@ -42,8 +46,9 @@ struct PairRegistrationResult {
   Similarity3 T_target_source;                       ///< moving (source) to fixed (target), mm
   std::optional<LandmarkAlignmentResult> landmarks;  ///< the coarse step, when landmarks were given
   std::optional<IcpResult> icp;                      ///< the fine step, when it ran
-  double landmark_rms_mm = 0.0;  ///< RMS |T x_moving - x_fixed| over the matched landmarks at the end
-  bool success = false;                              ///< false: the fit is poor, see message
+  double landmark_rms_mm = 0.0;    ///< RMS |T x_moving - x_fixed| over the matched landmarks at the end
+  double landmark_shift_mm = 0.0;  ///< RMS distance the fine step moved the moving landmarks (mm)
+  bool success = false;            ///< false: the fit is poor, see message
   std::string message;
   double normal_seconds = 0.0;   ///< estimating missing normals
   double prepare_seconds = 0.0;  ///< centring the fixed scan and building its k-d tree
@@ -62,11 +67,13 @@ struct PairRegistrationResult {
 /// @param[in] initial           T_target_source to start from when there are no landmarks
 PairRegistrationResult RegisterPair(const PointCloud& fixed, const PointCloud& moving,
                                     const LandmarkSet* fixed_landmarks, const LandmarkSet* moving_landmarks,
-                                    const Similarity3& initial = {}, const PairRegistrationOptions& options = {});
+                                    const Similarity3& initial = {},
+                                    const PairRegistrationOptions& options = {});
 
 /// The same against a prepared fixed scan (reused across many moving scans, as in a cohort).
 PairRegistrationResult RegisterPair(const IcpTarget& fixed, const PointCloud& moving,
                                     const LandmarkSet* fixed_landmarks, const LandmarkSet* moving_landmarks,
-                                    const Similarity3& initial = {}, const PairRegistrationOptions& options = {});
+                                    const Similarity3& initial = {},
+                                    const PairRegistrationOptions& options = {});
 
 }  // namespace pectus

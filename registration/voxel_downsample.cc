@@ -39,8 +39,8 @@ std::vector<std::uint32_t> VoxelDownsample(const Points3& points, double voxel_s
   for (std::int64_t k = 0; k < static_cast<std::int64_t>(count); ++k) {
     const std::uint32_t r = row(static_cast<std::size_t>(k));
     const Eigen::Vector3d c = ((points.row(r).transpose() - lo) * inv).array().floor();
-    const std::uint64_t key = (static_cast<std::uint64_t>(c.x()) << 42) | (static_cast<std::uint64_t>(c.y()) << 21) |
-                              static_cast<std::uint64_t>(c.z());
+    const std::uint64_t key = (static_cast<std::uint64_t>(c.x()) << 42) |
+                              (static_cast<std::uint64_t>(c.y()) << 21) | static_cast<std::uint64_t>(c.z());
     keyed[static_cast<std::size_t>(k)] = {key, r};
   }
   std::sort(keyed.begin(), keyed.end());

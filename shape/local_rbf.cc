@@ -88,13 +88,16 @@ bool LocalRbf::Fit(const LocalRbfProblem& problem, double smoothing) {
   }
 
   // Design D = [Phi(x, y) Z, P_x]; normal equations (D^T W D + smoothing * blockdiag(Z^T Phi Z, 0)) u =
-  // D^T W f.
+  // D^T W f, built on the lower triangle only.
   Eigen::MatrixXd d(n, g + terms);
   d.leftCols(g).noalias() = kxy * z;
   d.rightCols(terms) = px;
-  Eigen::MatrixXd normal = d.transpose() * w.asDiagonal() * d;
+  const Eigen::MatrixXd dw = w.cwiseSqrt().asDiagonal() * d;
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(g + terms, g + terms);
+  normal.selfadjointView<Eigen::Lower>().rankUpdate(dw.transpose());
   if (g > 0 && smoothing > 0.0) {
-    normal.topLeftCorner(g, g).noalias() += smoothing * (z.transpose() * kyy * z);
+    const Eigen::MatrixXd kz = kyy * z;
+    normal.topLeftCorner(g, g).triangularView<Eigen::Lower>() += smoothing * (z.transpose() * kz);
   }
   const double ridge = 1e-12 * (normal.trace() / double(g + terms) + 1e-300);
   normal.diagonal().array() += ridge;

@@ -159,8 +159,12 @@ struct RbfImplicit::Impl {
     std::uint32_t nearest;
     double d2;
     if (!levels[0].tree->NearestWithin(c, options.max_fill_distance, &nearest, &d2)) return std::nullopt;
-    const double radius =
-        options.fit_radius_factor * options.cell_size + options.hole_context * std::sqrt(d2);
+    // How far the cell is from data along the surface: the offset from the nearest point within its
+    // tangent plane (a cell just above or below the data has none; one over a hole, the hole's radius).
+    const Eigen::Vector3d offset = c - levels[0].positions.row(nearest).transpose();
+    const Eigen::Vector3d normal = levels[0].normals.row(nearest).transpose();
+    const double along = (offset - normal.dot(offset) * normal).norm();
+    const double radius = options.fit_radius_factor * options.cell_size + options.hole_context * along;
     // Centres: the finest level with at most 4 max_centres in the ball, thinned evenly (the k-d tree
     // returns them in leaf order, so every n-th is spread over the ball) to at most max_centres.
     // Constraints: the finest level with at most 8 max_centres in the ball, and never coarser than the
@@ -222,14 +226,9 @@ struct RbfImplicit::Impl {
     problem.values.conservativeResize(row);
     problem.weights.conservativeResize(row);
     LocalRbf fit;
-    if (!fit.Fit(problem, options.smoothing)) return std::nullopt;
-    if (getenv("DBG") && std::hypot(c.x(), c.y()) < 8 && c.z() > -3 && c.z() < 3) {
-      double zt = std::sqrt(1e4 - c.x()*c.x() - c.y()*c.y()) - 100;
-      // zero crossing along z
-      double best = NAN; double prev = fit.Evaluate({c.x(), c.y(), zt - 5});
-      for (double dz = -5; dz <= 5; dz += 0.01) { double v = fit.Evaluate({c.x(), c.y(), zt + dz}); if ((v < 0) != (prev < 0)) { best = dz; break; } prev = v; }
-      fprintf(stderr, "cell %.1f %.1f %.1f d %.1f R %.1f level %zu centres %ld rows %ld zero-offset %.3f\n", c.x(), c.y(), c.z(), std::sqrt(d2), radius, k, long(m), long(nr), best);
-    }
+    static const double hole_smoothing = getenv("HSM") ? atof(getenv("HSM")) : -1.0;
+    const double smoothing = (hole_smoothing > 0 && along > options.cell_size) ? hole_smoothing : options.smoothing;
+    if (!fit.Fit(problem, smoothing)) return std::nullopt;
     return fit;
   }
 

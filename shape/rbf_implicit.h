@@ -17,10 +17,12 @@ struct RbfImplicitOptions {
   /// W the Wendland function (1 - r)^4 (4 r + 1), so every point has at least one cell covering it.
   double cell_size = 4.0;
   /// A cell next to data fits the data within fit_radius_factor * cell_size of its centre.
-  double fit_radius_factor = 1.5;
-  /// A cell at distance d from the data (over a hole, or beyond the edge of an open scan) fits the data
-  /// within fit_radius_factor * cell_size + hole_context * d, so that it sees the rim all around a hole.
-  double hole_context = 2.0;
+  double fit_radius_factor = 1.25;
+  /// A cell whose centre lies a distance d from the data along the surface (over a hole, or beyond the
+  /// edge of an open scan; d is measured in the tangent plane of the nearest point, so a cell just above
+  /// or below the data has d = 0) fits the data within fit_radius_factor * cell_size + hole_context * d,
+  /// so that it sees the rim all around a hole.
+  double hole_context = 3.0;
   /// Spacing of the RBF centres next to data (mm): the points averaged per cube of this side. Cells
   /// over holes use coarser centres (doubled spacing per level) so a fit never has more than
   /// max_centres kernels. The on-surface constraints are the points averaged at half this spacing.

@@ -7,9 +7,9 @@
 #include <sstream>
 
 #include "registration/kdtree.h"
-#include "registration/normals.h"
 #include "shape/core/error.h"
 #include "shape/marching_cubes.h"
+#include "shape/surface_normals.h"
 
 namespace pectus {
 namespace {
@@ -121,45 +121,21 @@ ReconstructResult ReconstructSurface(const PointCloud& cloud, const ReconstructO
   }
 
   // 2. Oriented normals: given, toward the scanner, or by propagation (Hoppe et al. 1992).
-  Points3 normals;
-  if (cloud.has_normals() && !options.recompute_normals) {
-    normals = cloud.normals;
-    Eigen::Index bad = 0;
-    for (Eigen::Index i = 0; i < normals.rows(); ++i) {
-      const double len = normals.row(i).norm();
-      if (len > 0.5 && std::isfinite(len)) {
-        normals.row(i) /= len;
-      } else {
-        normals.row(i).setZero();
-        ++bad;
-      }
-    }
-    result.normals_source = "input";
-    if (bad > normals.rows() / 10) normals.resize(0, 3);  // mostly unusable: estimate instead
-  }
-  if (normals.rows() == 0) {
-    NormalOptions no;
-    no.k = options.normal_neighbours;
-    no.propagation_k = std::min(8, no.k);
-    no.orientation = options.viewpoint ? NormalOrientation::kTowardViewpoint : NormalOrientation::kPropagate;
-    if (options.viewpoint) no.viewpoint = *options.viewpoint;
-    normals = EstimateNormals(cloud.positions, no, &tree).normals;
-    result.normals_source = options.viewpoint ? "viewpoint" : "propagated";
-  }
+  SurfaceNormalOptions no;
+  no.neighbours = options.normal_neighbours;
+  no.recompute = options.recompute_normals;
+  no.viewpoint = options.viewpoint;
+  const SurfaceNormalResult normals = SurfaceNormals(cloud, tree, no, what);
+  result.normals_source = normals.source;
   std::vector<Eigen::Index> usable;
-  usable.reserve(std::size_t(normals.rows()));
-  for (Eigen::Index i = 0; i < normals.rows(); ++i)
-    if (normals.row(i).squaredNorm() > 0.25) usable.push_back(i);
-  if (Eigen::Index(usable.size()) < std::max(kMinPoints, cloud.size() / 2)) {
-    ThrowBadInput(what, "no normals obtainable: only " + std::to_string(usable.size()) + " of " +
-                            std::to_string(cloud.size()) +
-                            " points have neighbourhoods spread in two directions (scan lines too far "
-                            "apart, or points on a line?)");
+  usable.reserve(std::size_t(normals.usable));
+  for (Eigen::Index i = 0; i < normals.normals.rows(); ++i) {
+    if (normals.normals.row(i).squaredNorm() > 0.25) usable.push_back(i);
   }
   Points3 positions(Eigen::Index(usable.size()), 3), oriented(Eigen::Index(usable.size()), 3);
   for (std::size_t k = 0; k < usable.size(); ++k) {
     positions.row(Eigen::Index(k)) = cloud.positions.row(usable[k]);
-    oriented.row(Eigen::Index(k)) = normals.row(usable[k]);
+    oriented.row(Eigen::Index(k)) = normals.normals.row(usable[k]);
   }
   result.used_points = positions.rows();
   clock.Lap("normals");
@@ -172,7 +148,7 @@ ReconstructResult ReconstructSurface(const PointCloud& cloud, const ReconstructO
     h = std::sqrt(2.2 * double(positions.rows()) * s * s / double(options.target_faces));
   }
   if (h == 0.0) h = 1.5 * s;
-  const double detail = options.detail > 0.0 ? options.detail : std::max(2.0 * h, 3.0 * s);
+  const double detail = options.detail > 0.0 ? options.detail : std::max(2.0 * h, 4.0 * s);
   result.spacing_mm = h;
   result.centre_spacing_mm = detail;
   RbfImplicitOptions ro;

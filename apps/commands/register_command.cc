@@ -31,16 +31,22 @@ nlohmann::json IcpJson(const IcpResult& r) {
                       {"converged", l.converged},
                       {"rms_mm", l.rms_mm}});
   }
-  return {{"rms_mm", r.rms_mm},         {"inlier_fraction", r.inlier_fraction},
-          {"inliers", r.inliers},       {"iterations", r.iterations},
-          {"converged", r.converged},   {"success", r.success},
-          {"conditioning", r.conditioning}, {"seconds", r.seconds},
-          {"levels", levels},           {"message", r.message}};
+  return {{"rms_mm", r.rms_mm},
+          {"inlier_fraction", r.inlier_fraction},
+          {"inliers", r.inliers},
+          {"iterations", r.iterations},
+          {"converged", r.converged},
+          {"success", r.success},
+          {"conditioning", r.conditioning},
+          {"seconds", r.seconds},
+          {"levels", levels},
+          {"message", r.message}};
 }
 
 nlohmann::json LandmarkJson(const LandmarkAlignmentResult& r) {
   nlohmann::json residuals = nlohmann::json::object();
-  for (std::size_t i = 0; i < r.labels.size(); ++i) residuals[r.labels[i]] = r.residuals_mm(static_cast<Eigen::Index>(i));
+  for (std::size_t i = 0; i < r.labels.size(); ++i)
+    residuals[r.labels[i]] = r.residuals_mm(static_cast<Eigen::Index>(i));
   return {{"labels", r.labels},
           {"rms_mm", r.rms_mm},
           {"residuals_mm", residuals},
@@ -66,47 +72,58 @@ class RegisterCommand : public Command {
     return "Align scans: landmarks then ICP, for a pair or a whole cohort (to a reference or groupwise)";
   }
   std::string Example() const override {
-    return "  pectus register moving.ply --to fixed.ply --moving-landmarks a.mrk.json --fixed-landmarks b.mrk.json \\\n"
+    return "  pectus register moving.ply --to fixed.ply --moving-landmarks a.mrk.json --fixed-landmarks "
+           "b.mrk.json \\\n"
            "      -o moved.ply --transform T.json --report r.json\n"
-           "  pectus register ../shared/datasets/stanford_bunny/bun045.ply --to ../shared/datasets/stanford_bunny/bun000.ply \\\n"
+           "  pectus register ../shared/datasets/stanford_bunny/bun045.ply --to "
+           "../shared/datasets/stanford_bunny/bun000.ply \\\n"
            "      --input-units m --initial start.json --transform T.json\n"
            "  pectus register --cohort scans/ --groupwise -o aligned/ --write-moved\n"
-           "  (cohort: every .ply/.obj/.stl/.pcd/.xyz in the folder; landmarks beside each scan as STEM.mrk.json,\n"
+           "  (cohort: every .ply/.obj/.stl/.pcd/.xyz in the folder; landmarks beside each scan as "
+           "STEM.mrk.json,\n"
            "   STEM.fcsv or STEM.csv; writes STEM.T.json per scan and summary.json)\n"
            "  A poor fit is an error (exit 1) with the reason; nothing is written.";
   }
   void Configure(CLI::App* app) override {
     app->add_option("moving", moving_, "Scan to move (pair mode)");
     app->add_option("--to", fixed_, "Scan to align to (pair mode)");
-    app->add_option("--moving-landmarks", moving_landmarks_, "Landmarks on the moving scan (.mrk.json, .fcsv, .csv)");
+    app->add_option("--moving-landmarks", moving_landmarks_,
+                    "Landmarks on the moving scan (.mrk.json, .fcsv, .csv)");
     app->add_option("--fixed-landmarks", fixed_landmarks_, "The same labels on the fixed scan");
-    app->add_option("--initial", initial_, "JSON with \"T_target_source\": the start pose when there are no landmarks");
-    app->add_option("-o,--output", output_, "Pair: the moved scan. Cohort: the folder for transforms and summary");
+    app->add_option("--initial", initial_,
+                    "JSON with \"T_target_source\": the start pose when there are no landmarks");
+    app->add_option("-o,--output", output_,
+                    "Pair: the moved scan. Cohort: the folder for transforms and summary");
     app->add_option("--transform", transform_, "Pair: write T_target_source (4x4, row-major, mm) as JSON");
     app->add_option("--cohort", cohort_, "Folder of scans to bring into one frame (cohort mode)");
     app->add_option("--reference", reference_, "Cohort: the reference scan's file name (default: the first)");
     app->add_flag("--groupwise", groupwise_, "Cohort: generalised Procrustes to the evolving mean");
     app->add_flag("--write-moved", write_moved_, "Cohort: also write every scan moved into the cohort frame");
-    app->add_flag("--keep-going", keep_going_,
-                  "Cohort: a scan that fails is left out (listed in summary.json) instead of failing the run");
+    app->add_flag(
+        "--keep-going", keep_going_,
+        "Cohort: a scan that fails is left out (listed in summary.json) instead of failing the run");
     app->add_flag("--scale", scale_, "Estimate a similarity (scale) from the landmarks");
     app->add_option("--input-units", units_, "Unit of the scans' and landmarks' coordinates: mm, cm, m, in")
         ->default_val("mm");
-    app->add_option("--method", method_, "ICP error: point-to-plane or symmetric")->default_val("point-to-plane");
+    app->add_option("--method", method_, "ICP error: point-to-plane or symmetric")
+        ->default_val("point-to-plane");
     app->add_option("--loss", loss_, "Robust loss: none, huber, cauchy, tukey")->default_val("cauchy");
-    app->add_option("--trim", options_.icp.trim_fraction, "Drop this fraction of the worst pairs each iteration")
-        ->default_val(0.0);
-    app->add_option("--max-distance", options_.icp.initial_max_distance_mm,
-                    "Correspondence gate of the first (coarsest) level, mm")
-        ->default_val(20.0);
-    app->add_option("--patch-radius", options_.patch_radius_mm,
-                    "ICP only on surface patches of this radius (mm) around the moving landmarks")
-        ->default_val(0.0);
-    app->add_option("--max-rms", options_.icp.max_rms_mm, "A fit with a larger RMS distance (mm) is a failure")
-        ->default_val(1.0);
-    app->add_option("--min-inliers", options_.icp.min_inlier_fraction,
-                    "A fit with a smaller fraction of the moving scan near the fixed one is a failure")
-        ->default_val(0.3);
+    app->add_option("--trim", trim_, "Drop this fraction of the worst pairs each iteration (default 0)");
+    app->add_option("--max-distance", max_distance_,
+                    "Correspondence gate of the first (coarsest) level, mm (default 20)");
+    app->add_option("--final-distance", final_distance_,
+                    "Gate of the last level, mm (default: 3 point spacings for a pair, 10 mm for a cohort of "
+                    "different people)");
+    app->add_option(
+        "--patch-radius", patch_radius_,
+        "ICP only on surface patches of this radius (mm) around the moving landmarks (default: all)");
+    app->add_option(
+        "--max-rms", max_rms_,
+        "A fit with a larger RMS distance (mm) is a failure (default 1 for a pair, 5 for a cohort)");
+    app->add_option(
+        "--min-inliers", min_inliers_,
+        "A fit with a smaller fraction of the moving scan within the last gate of the fixed one is a "
+        "failure (default 0.3)");
     app->add_flag("--no-refine", no_refine_, "Landmarks (or --initial) only, no ICP");
   }
   std::vector<fs::path> Inputs() const override {
@@ -119,6 +136,14 @@ class RegisterCommand : public Command {
   }
 
   void Run(Context* context) override {
+    // Defaults: a pair is two scans of one surface; a cohort holds different people (CohortOptions).
+    options_ = cohort_.empty() ? PairRegistrationOptions() : CohortOptions().pair;
+    if (trim_) options_.icp.trim_fraction = *trim_;
+    if (max_distance_) options_.icp.initial_max_distance_mm = *max_distance_;
+    if (final_distance_) options_.icp.final_max_distance_mm = *final_distance_;
+    if (patch_radius_) options_.patch_radius_mm = *patch_radius_;
+    if (max_rms_) options_.icp.max_rms_mm = *max_rms_;
+    if (min_inliers_) options_.icp.min_inlier_fraction = *min_inliers_;
     options_.landmarks.estimate_scale = scale_;
     options_.refine = !no_refine_;
     options_.icp.method = ParseIcpMethod(method_);
@@ -128,7 +153,8 @@ class RegisterCommand : public Command {
     std::string why;
     if (!options_.IsValid(&why)) ThrowUsage(why);
     if (!cohort_.empty()) {
-      if (!moving_.empty() || !fixed_.empty()) ThrowUsage("give either a pair (MOVING --to FIXED) or --cohort DIR");
+      if (!moving_.empty() || !fixed_.empty())
+        ThrowUsage("give either a pair (MOVING --to FIXED) or --cohort DIR");
       RunCohort(context);
     } else {
       if (moving_.empty() || fixed_.empty()) ThrowUsage("give MOVING --to FIXED, or --cohort DIR");
@@ -144,7 +170,8 @@ class RegisterCommand : public Command {
     if (moving_landmarks_.empty() != fixed_landmarks_.empty()) {
       ThrowUsage("give landmarks for both scans (--moving-landmarks and --fixed-landmarks) or for neither");
     }
-    if (!initial_.empty() && !moving_landmarks_.empty()) ThrowUsage("--initial is for registration without landmarks");
+    if (!initial_.empty() && !moving_landmarks_.empty())
+      ThrowUsage("--initial is for registration without landmarks");
     fs::path staged_output, staged_transform;
     if (!output_.empty()) {
       FormatFromPath(output_);  // an unknown output type is a usage error before any work
@@ -170,8 +197,8 @@ class RegisterCommand : public Command {
     PairRegistrationResult r;
     {
       auto t = report.Stage("register");
-      r = RegisterPair(fixed, moving, fixed_lm ? &*fixed_lm : nullptr, moving_lm ? &*moving_lm : nullptr, initial,
-                       options_);
+      r = RegisterPair(fixed, moving, fixed_lm ? &*fixed_lm : nullptr, moving_lm ? &*moving_lm : nullptr,
+                       initial, options_);
     }
     report["moving"] = moving_;
     report["fixed"] = fixed_;
@@ -191,13 +218,14 @@ class RegisterCommand : public Command {
     report["message"] = r.message;
     if (!r.success) {
       ThrowFailure("registration of " + moving_ + " to " + fixed_ + " failed: " + r.message +
-                   " (nothing written; see --max-rms, --min-inliers, --max-distance)");
+                   " (nothing written; see --max-rms, --min-inliers, --max-distance, --final-distance)");
     }
     Info("registered " + moving_ + " to " + fixed_ + ": " + r.message);
 
     auto t = report.Stage("write");
     if (!transform_.empty()) {
-      nlohmann::json extra = {{"source", moving_}, {"target", fixed_}, {"success", true}, {"message", r.message}};
+      nlohmann::json extra = {
+          {"source", moving_}, {"target", fixed_}, {"success", true}, {"message", r.message}};
       if (r.icp) {
         extra["rms_mm"] = r.icp->rms_mm;
         extra["inlier_fraction"] = r.icp->inlier_fraction;
@@ -217,7 +245,9 @@ class RegisterCommand : public Command {
   void RunCohort(Context* context) {
     if (output_.empty()) ThrowUsage("--cohort needs -o OUTDIR for the transforms and summary.json");
     if (!transform_.empty() || !initial_.empty() || !moving_landmarks_.empty() || !fixed_landmarks_.empty()) {
-      ThrowUsage("--transform, --initial and --*-landmarks are for pair mode; a cohort's landmarks lie beside its scans");
+      ThrowUsage(
+          "--transform, --initial and --*-landmarks are for pair mode; a cohort's landmarks lie beside its "
+          "scans");
     }
     if (!fs::is_directory(cohort_)) ThrowBadInput(cohort_, "is not a folder");
     std::vector<fs::path> files;
@@ -225,10 +255,12 @@ class RegisterCommand : public Command {
       if (!entry.is_regular_file()) continue;
       std::string ext = entry.path().extension().string();
       std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-      if (ext == ".ply" || ext == ".obj" || ext == ".stl" || ext == ".pcd" || ext == ".xyz") files.push_back(entry.path());
+      if (ext == ".ply" || ext == ".obj" || ext == ".stl" || ext == ".pcd" || ext == ".xyz")
+        files.push_back(entry.path());
     }
     std::sort(files.begin(), files.end());
-    if (files.size() < 2) ThrowBadInput(cohort_, "holds " + std::to_string(files.size()) + " scans; a cohort needs two or more");
+    if (files.size() < 2)
+      ThrowBadInput(cohort_, "holds " + std::to_string(files.size()) + " scans; a cohort needs two or more");
     cohort_files_ = files;
 
     CohortOptions co;
@@ -247,7 +279,8 @@ class RegisterCommand : public Command {
     std::vector<fs::path> staged_T(files.size()), staged_moved(files.size());
     for (std::size_t i = 0; i < files.size(); ++i) {
       staged_T[i] = StageOutput(context, *this, out / (files[i].stem().string() + ".T.json"));
-      if (write_moved_) staged_moved[i] = StageOutput(context, *this, out / (files[i].stem().string() + ".ply"));
+      if (write_moved_)
+        staged_moved[i] = StageOutput(context, *this, out / (files[i].stem().string() + ".ply"));
     }
     const fs::path staged_summary = StageOutput(context, *this, out / "summary.json");
 
@@ -261,7 +294,8 @@ class RegisterCommand : public Command {
         try {
           scans[i].name = files[i].stem().string();
           scans[i].cloud = ReadPointCloud(files[i], read_options_);
-          if (const auto lm = LandmarksBeside(files[i])) scans[i].landmarks = ReadLandmarks(*lm, landmark_options_);
+          if (const auto lm = LandmarksBeside(files[i]))
+            scans[i].landmarks = ReadLandmarks(*lm, landmark_options_);
         } catch (...) {
 #pragma omp critical
           failure = std::current_exception();
@@ -309,8 +343,9 @@ class RegisterCommand : public Command {
       std::string text;
       for (const auto& f : failed) text += "\n  " + f;
       if (!keep_going_) {
-        ThrowFailure(std::to_string(failed.size()) + " of " + std::to_string(files.size()) +
-                     " scans could not be registered (nothing written; --keep-going writes the others):" + text);
+        ThrowFailure(
+            std::to_string(failed.size()) + " of " + std::to_string(files.size()) +
+            " scans could not be registered (nothing written; --keep-going writes the others):" + text);
       }
       Warn(std::to_string(failed.size()) + " scans left out:" + text);
     }
@@ -318,11 +353,12 @@ class RegisterCommand : public Command {
     auto t = context->report.Stage("write");
     for (std::size_t i = 0; i < files.size(); ++i) {
       if (!r.success[i]) continue;
-      WriteTransformJson(staged_T[i], r.T_frame_scan[i],
-                         {{"source", files[i].string()},
-                          {"target", "cohort frame (reference " + summary["reference"].get<std::string>() + ")"},
-                          {"rms_mm", r.rms_mm[i]},
-                          {"inlier_fraction", r.inlier_fraction[i]}});
+      WriteTransformJson(
+          staged_T[i], r.T_frame_scan[i],
+          {{"source", files[i].string()},
+           {"target", "cohort frame (reference " + summary["reference"].get<std::string>() + ")"},
+           {"rms_mm", r.rms_mm[i]},
+           {"inlier_fraction", r.inlier_fraction[i]}});
       if (write_moved_) {
         TriangleMesh mesh = ReadMesh(files[i], read_options_);
         TransformInPlace(r.T_frame_scan[i], &mesh);
@@ -330,13 +366,16 @@ class RegisterCommand : public Command {
       }
     }
     WriteFileAtomically(staged_summary, summary.dump(2) + "\n");
-    Info("registered " + std::to_string(files.size() - failed.size()) + " of " + std::to_string(files.size()) +
-         " scans into the frame of " + summary["reference"].get<std::string>() + " -> " + output_);
+    Info("registered " + std::to_string(files.size() - failed.size()) + " of " +
+         std::to_string(files.size()) + " scans into the frame of " +
+         summary["reference"].get<std::string>() + " -> " + output_);
   }
 
-  std::string moving_, fixed_, moving_landmarks_, fixed_landmarks_, initial_, output_, transform_, cohort_, reference_;
+  std::string moving_, fixed_, moving_landmarks_, fixed_landmarks_, initial_, output_, transform_, cohort_,
+      reference_;
   std::string units_, method_, loss_;
   bool groupwise_ = false, write_moved_ = false, keep_going_ = false, scale_ = false, no_refine_ = false;
+  std::optional<double> trim_, max_distance_, final_distance_, patch_radius_, max_rms_, min_inliers_;
   PairRegistrationOptions options_;
   ReadOptions read_options_;
   LandmarkReadOptions landmark_options_;

@@ -33,7 +33,38 @@ Eigen::Matrix<double, 6, 1> FaceWeights(const Points3& nodes, const Eigen::Matri
   return w;
 }
 
+// Dunavant's 7-point rule on the reference triangle (degree 5): (r, s) and weights summing to 1/2.
+constexpr double kA1 = 0.059715871789770, kB1 = 0.470142064105115;
+constexpr double kA2 = 0.797426985353087, kB2 = 0.101286507323456;
+constexpr double kPoints7[7][2] = {{1.0 / 3.0, 1.0 / 3.0}, {kB1, kB1}, {kA1, kB1}, {kB1, kA1},
+                                   {kB2, kB2}, {kA2, kB2}, {kB2, kA2}};
+constexpr double kWeights7[7] = {0.5 * 0.225,
+                                 0.5 * 0.132394152788506, 0.5 * 0.132394152788506, 0.5 * 0.132394152788506,
+                                 0.5 * 0.125939180544827, 0.5 * 0.125939180544827, 0.5 * 0.125939180544827};
+
 }  // namespace
+
+double AddProfiledTraction(const Points3& nodes, const Tri6Connectivity& faces, const Eigen::Vector3d& traction,
+                           const std::function<double(const Eigen::Vector3d&)>& phi, Eigen::VectorXd* forces) {
+  double integral = 0.0;
+  Eigen::Matrix<double, 6, 1> N;
+  Eigen::Matrix<double, 6, 2> dN;
+  for (Eigen::Index f = 0; f < faces.rows(); ++f) {
+    Eigen::Matrix<double, 6, 3> X;
+    for (int a = 0; a < 6; ++a) X.row(a) = nodes.row(faces(f, a));
+    for (int q = 0; q < 7; ++q) {
+      Tri6(kPoints7[q][0], kPoints7[q][1], &N, &dN);
+      const Eigen::Vector3d x = X.transpose() * N;
+      const Eigen::Vector3d xr = X.transpose() * dN.col(0), xs = X.transpose() * dN.col(1);
+      const double w = kWeights7[q] * xr.cross(xs).norm() * phi(x);
+      if (w == 0.0) continue;
+      integral += w;
+      if (forces == nullptr) continue;
+      for (int a = 0; a < 6; ++a) forces->segment<3>(3 * faces(f, a)) += (w * N(a)) * traction;
+    }
+  }
+  return integral;
+}
 
 double FacesArea(const Points3& nodes, const Tri6Connectivity& faces) {
   double area = 0.0;

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 
 #include "planner_plugin/fem/tet_mesh.h"
 #include "shape/core/geometry.h"
@@ -25,5 +26,16 @@ void AddUniformTraction(const Points3& nodes, const Tri6Connectivity& faces, con
 /// to F exactly). Throws Error(kBadInput) if the patch is empty or has zero area.
 void AddForceOverPatch(const Points3& nodes, const Tri6Connectivity& patch, const Eigen::Vector3d& force_n,
                        Eigen::VectorXd* forces);
+
+/// Adds to `forces` the consistent nodal forces f_a = integral N_a phi(x) t dA of a traction t shaped by
+/// a profile phi >= 0 (7-point rule per face, degree 5), and returns integral phi dA (mm²). A profile
+/// that moves continuously moves the forces continuously (unlike a patch of whole faces).
+/// @param[in]     nodes    #nodes by 3 positions, mm
+/// @param[in]     faces    6-node boundary triangles
+/// @param[in]     traction traction vector at phi = 1, N/mm²
+/// @param[in]     phi      the profile, a function of position (mm)
+/// @param[in,out] forces   3 #nodes nodal forces, N (nullptr: only the integral)
+double AddProfiledTraction(const Points3& nodes, const Tri6Connectivity& faces, const Eigen::Vector3d& traction,
+                           const std::function<double(const Eigen::Vector3d&)>& phi, Eigen::VectorXd* forces);
 
 }  // namespace pectus::planner

@@ -192,9 +192,13 @@ PatientRibcage MakePatientRibcage(const GenericRibcage& generic, const PatientMe
   auto landmark = [&](const std::string& label, std::int32_t node, const std::string& description) {
     out.landmarks.items.push_back({label, out.mesh.nodes.row(node).transpose(), description});
   };
-  landmark("sternal_notch", generic.landmarks.sternal_notch, "top of the manubrium, anterior midline");
-  landmark("manubriosternal_junction", generic.landmarks.manubriosternal_junction, "sternal angle, anterior midline");
-  landmark("xiphisternal_junction", generic.landmarks.xiphisternal_junction, "lower end of the sternal body");
+  // Labels as everywhere in pectus (datasets/chest_landmarks.h): "xiphoid" is the xiphisternal joint.
+  landmark("sternal_notch", generic.landmarks.sternal_notch, "suprasternal notch, top of the manubrium");
+  const Eigen::Vector3d notch = out.mesh.nodes.row(generic.landmarks.sternal_notch).transpose();
+  const Eigen::Vector3d angle = out.mesh.nodes.row(generic.landmarks.manubriosternal_junction).transpose();
+  out.landmarks.items.push_back({"manubrium_centre", 0.5 * (notch + angle), "centre of the manubrium, anterior"});
+  landmark("sternal_angle", generic.landmarks.manubriosternal_junction, "manubriosternal joint, anterior midline");
+  landmark("xiphoid", generic.landmarks.xiphisternal_junction, "xiphisternal joint, anterior midline");
   landmark("xiphoid_tip", generic.landmarks.xiphoid_tip, "lower end of the xiphoid process");
   return out;
 }

@@ -70,7 +70,7 @@ struct PatientRibcage {
   std::vector<std::int32_t> fixed_nodes;    ///< every node (corner and mid-edge) on the posterior rib ends
   Tri6Connectivity sternum_posterior_faces; ///< boundary faces on the sternum's posterior surface (bar contact)
   std::vector<std::int32_t> sternum_anterior_midline;  ///< corner nodes, notch first
-  LandmarkSet landmarks;   ///< sternal_notch, manubriosternal_junction, xiphisternal_junction, xiphoid_tip (mm)
+  LandmarkSet landmarks;   ///< sternal_notch, manubrium_centre, sternal_angle, xiphoid (joint), xiphoid_tip (mm)
   RibcageSurface surface;  ///< the corner-node bone surface with parts and spine, for measurements
   PatientMapParameters parameters;         ///< the fitted map
   PatientMeasurements targets;             ///< what was asked for

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <numbers>
 
 #include "planner_plugin/fem/assembly.h"
 #include "planner_plugin/fem/surface_load.h"
@@ -72,28 +73,39 @@ Tri6Connectivity RibcageFem::ContactPatch(const BarLoad& load) const {
   }
   const Tri6Connectivity& faces = ribcage_.sternum_posterior_faces;
   const Points3& x = ribcage_.mesh.nodes;
-  std::vector<double> centroid_z(static_cast<std::size_t>(faces.rows()));
-  double nearest = std::numeric_limits<double>::infinity();
-  for (Eigen::Index f = 0; f < faces.rows(); ++f) {
-    centroid_z[f] = (x(faces(f, 0), 2) + x(faces(f, 1), 2) + x(faces(f, 2), 2)) / 3.0;
-    nearest = std::min(nearest, std::abs(centroid_z[f] - level));
-  }
-  const double half = std::max(0.5 * options_.contact_width_mm, nearest + 1e-9);
+  // Faces whose height range comes within one contact width of the level (the profile's support).
   std::vector<Eigen::Index> chosen;
+  const double reach = options_.contact_width_mm;
   for (Eigen::Index f = 0; f < faces.rows(); ++f) {
-    if (std::abs(centroid_z[f] - level) <= half) chosen.push_back(f);
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (int a = 0; a < 6; ++a) {
+      lo = std::min(lo, x(faces(f, a), 2));
+      hi = std::max(hi, x(faces(f, a), 2));
+    }
+    if (hi > level - reach && lo < level + reach) chosen.push_back(f);
   }
+  if (chosen.empty()) ThrowFailure("bar at " + load.Name() + ": no sternal face near the bar level");
   Tri6Connectivity patch(static_cast<Eigen::Index>(chosen.size()), 6);
   for (std::size_t k = 0; k < chosen.size(); ++k) patch.row(static_cast<Eigen::Index>(k)) = faces.row(chosen[k]);
   return patch;
+}
+
+double RibcageFem::ContactProfile(const BarLoad& load, double z) const {
+  const double s = std::abs(z - BarLevelZ(load)) / options_.contact_width_mm;
+  return s < 1.0 ? 0.5 * (1.0 + std::cos(std::numbers::pi * s)) : 0.0;
 }
 
 Eigen::VectorXd RibcageFem::NodalForces(const BarLoad& load) const {
   if (!(load.force_n > 0) || !std::isfinite(load.force_n)) {
     ThrowUsage("bar at " + load.Name() + ": the force must be positive and finite");
   }
+  const Tri6Connectivity patch = ContactPatch(load);
+  auto phi = [&](const Eigen::Vector3d& x) { return ContactProfile(load, x.z()); };
+  const double area = AddProfiledTraction(ribcage_.mesh.nodes, patch, Eigen::Vector3d::Zero(), phi, nullptr);
+  if (!(area > 0)) ThrowFailure("bar at " + load.Name() + ": the contact profile has no area on the sternum");
+  // A uniform traction F / area shaped by the profile: the nodal forces sum to F exactly.
   Eigen::VectorXd f = Eigen::VectorXd::Zero(3 * ribcage_.mesh.num_nodes());
-  AddForceOverPatch(ribcage_.mesh.nodes, ContactPatch(load), load.force_n * options_.push_direction, &f);
+  AddProfiledTraction(ribcage_.mesh.nodes, patch, load.force_n / area * options_.push_direction, phi, &f);
   return f;
 }
 
@@ -137,7 +149,9 @@ std::vector<BarResult> RibcageFem::Solve(const std::vector<BarLoad>& loads) cons
     cases.push_back({unit.Name(), NodalForces(unit), {}});
     const Tri6Connectivity patch = ContactPatch(unit);
     faces.push_back(patch.rows());
-    areas.push_back(FacesArea(ribcage_.mesh.nodes, patch));
+    areas.push_back(AddProfiledTraction(ribcage_.mesh.nodes, patch, Eigen::Vector3d::Zero(),
+                                        [&](const Eigen::Vector3d& x) { return ContactProfile(unit, x.z()); },
+                                        nullptr));
   }
   const std::vector<Points3> unit_displacement = solver_->Solve(cases);
   std::vector<double> unit_lift, unit_max;

@@ -34,7 +34,9 @@ std::vector<BarLoad> DissertationLoadCases();
 struct RibcageFemOptions {
   /// Materials per region (sternum, rib, costal cartilage); Table 1 of the dissertation by default.
   RibcageMaterials materials;
-  /// Cranio-caudal extent of the contact patch under the sternum (the bar's width), mm. Default 12.
+  /// Cranio-caudal width of the bar's contact under the sternum, mm (the bar's width). The push is spread
+  /// over the sternum's back with a raised-cosine profile of this full width at half maximum (twice
+  /// this in all), so the load moves continuously with the bar. Default 12.
   double contact_width_mm = 12.0;
   /// Direction of the bar's push (normalised): anterior, -y in LPS, by default.
   Eigen::Vector3d push_direction = -Eigen::Vector3d::UnitY();
@@ -49,7 +51,7 @@ struct BarResult {
   double sternum_lift_mm = 0; ///< anterior displacement of the sternum at the level of deepest depression
   double max_displacement_mm = 0;
   Eigen::Index contact_faces = 0;
-  double contact_area_mm2 = 0;
+  double contact_area_mm2 = 0;  ///< integral of the contact profile over the sternum's back (effective area)
 };
 
 /// The force a bar position needs to lift the sternum by the patient's depression (the model is
@@ -74,9 +76,12 @@ class RibcageFem {
 
   /// Height (z, mm) at which a bar at `load.position` meets the sternum.
   double BarLevelZ(const BarLoad& load) const;
-  /// The sternum's posterior faces whose centroids lie within half the contact width of the bar level
-  /// (at least the row of faces nearest to it).
+  /// The sternum's posterior faces the contact profile reaches (within one contact width of the bar
+  /// level; at least the row of faces nearest to it).
   Tri6Connectivity ContactPatch(const BarLoad& load) const;
+  /// The contact profile at height z: 1 at the bar level, falling as a raised cosine to 0 one contact
+  /// width away.
+  double ContactProfile(const BarLoad& load, double z) const;
   /// Nodal forces of a load, 3 #nodes, N.
   Eigen::VectorXd NodalForces(const BarLoad& load) const;
   /// Anterior displacement of the sternum's anterior midline at the measurement slice (the level of

@@ -138,31 +138,35 @@ SkinSurface BuildSkinSurface(const PatientRibcage& ribcage, const SkinSurfaceOpt
       skin.mesh.faces.row(f++) << b, d, e;
     }
   }
+  // The landmarks: on the midline (between the two columns around theta = 0) at each bone landmark's
+  // height, as bilinear weights of the four skin vertices around it.
+  const double middle = 0.5 * (options.columns - 1);
+  const int c0 = static_cast<int>(std::floor(middle)), c1 = std::min(c0 + 1, options.columns - 1);
+  const double tc = middle - c0;
+  const Points3& v = skin.mesh.vertices.positions;
+  for (const Landmark& bone : ribcage.landmarks.items) {
+    const double z = bone.position.z();
+    SkinPoint point{bone.label, "skin over the " + bone.label, {}};
+    for (int r = 0; r + 1 < options.rows && point.weights.empty(); ++r) {
+      const Eigen::Index a0 = static_cast<Eigen::Index>(r) * options.columns + c0, a1 = a0 - c0 + c1;
+      const Eigen::Index b0 = a0 + options.columns, b1 = a1 + options.columns;
+      const double za = (1 - tc) * v(a0, 2) + tc * v(a1, 2), zb = (1 - tc) * v(b0, 2) + tc * v(b1, 2);
+      if ((za - z) * (zb - z) > 0 || za == zb) continue;
+      const double t = (z - za) / (zb - za);
+      point.weights = {{a0, (1 - t) * (1 - tc)}, {a1, (1 - t) * tc}, {b0, t * (1 - tc)}, {b1, t * tc}};
+    }
+    if (point.weights.empty()) ThrowFailure("skin landmarks: " + bone.label + " lies outside the skin's extent");
+    skin.landmark_points.push_back(std::move(point));
+  }
   return skin;
 }
 
-LandmarkSet SkinLandmarks(const SkinSurface& skin, const Points3& skin_positions, const PatientRibcage& ribcage) {
+LandmarkSet SkinSurface::Landmarks(const Points3& positions) const {
   LandmarkSet out;
-  // The midline column(s): interpolate between the two columns around theta = 0.
-  const double middle = 0.5 * (skin.columns - 1);
-  const int c0 = static_cast<int>(std::floor(middle)), c1 = std::min(c0 + 1, skin.columns - 1);
-  const double tc = middle - c0;
-  for (const Landmark& bone : ribcage.landmarks.items) {
-    const double z = bone.position.z();
-    Eigen::Vector3d best = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
-    for (int r = 0; r + 1 < skin.rows; ++r) {
-      auto at = [&](int row) -> Eigen::Vector3d {
-        return ((1 - tc) * skin_positions.row(row * skin.columns + c0) + tc * skin_positions.row(row * skin.columns + c1))
-            .transpose();
-      };
-      const Eigen::Vector3d a = at(r), b = at(r + 1);
-      if ((a.z() - z) * (b.z() - z) <= 0 && a.z() != b.z()) {
-        best = a + (z - a.z()) / (b.z() - a.z()) * (b - a);
-        break;
-      }
-    }
-    if (!best.allFinite()) ThrowFailure("skin landmarks: " + bone.label + " lies outside the skin's extent");
-    out.items.push_back({bone.label, best, "skin over the " + bone.label});
+  for (const SkinPoint& point : landmark_points) {
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    for (const auto& [vertex, w] : point.weights) p += w * positions.row(vertex).transpose();
+    out.items.push_back({point.label, p, point.description});
   }
   return out;
 }

@@ -34,6 +34,13 @@ struct SkinSurfaceOptions {
   bool IsValid(std::string* why) const;
 };
 
+/// A material point of the skin: a fixed combination of skin vertices, so it moves with the skin.
+struct SkinPoint {
+  std::string label;
+  std::string description;
+  std::vector<std::pair<Eigen::Index, double>> weights;  ///< (skin vertex, weight), weights summing to 1
+};
+
 /// The skin of one patient: a grid of vertices over the chest wall, each tied to bone nodes.
 struct SkinSurface {
   TriangleMesh mesh;  ///< (rows x columns) vertices, row-major from the top row, right to left; outward faces
@@ -43,18 +50,20 @@ struct SkinSurface {
   /// from the chest's axis at the weighted depth of these bone nodes plus soft_tissue_mm.
   std::vector<std::vector<std::pair<std::int32_t, double>>> ties;
   double soft_tissue_mm = 0;
+  /// The bone landmarks of the ribcage projected forward onto the skin (same labels: sternal_notch,
+  /// manubrium_centre, sternal_angle, xiphoid, xiphoid_tip): where the skin's midline reaches each
+  /// landmark's height, for registering the predicted chest to the average chest. Material points of
+  /// the skin, so a deformed skin carries them along (Landmarks()).
+  std::vector<SkinPoint> landmark_points;
 
   /// The skin moved with the ribcage: vertex j + sum_i w_ij u_i, for #mesh nodes by 3 displacements (mm).
   Points3 Deformed(const Points3& displacement) const;
+  /// The skin landmarks on skin vertices `positions` (undeformed or Deformed()).
+  LandmarkSet Landmarks(const Points3& positions) const;
 };
 
 /// Builds the skin over `ribcage` (its undeformed, patient-specific shape). Throws Error(kUsage) for
 /// invalid options.
 SkinSurface BuildSkinSurface(const PatientRibcage& ribcage, const SkinSurfaceOptions& options = {});
-
-/// The bone landmarks of the ribcage projected forward onto the skin (same labels: sternal_notch,
-/// manubriosternal_junction, xiphisternal_junction, xiphoid_tip), for registering the predicted chest
-/// to the average chest. `skin_positions` are the skin's vertices (undeformed or deformed).
-LandmarkSet SkinLandmarks(const SkinSurface& skin, const Points3& skin_positions, const PatientRibcage& ribcage);
 
 }  // namespace pectus::planner

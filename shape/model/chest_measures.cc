@@ -1,5 +1,6 @@
 #include "shape/model/chest_measures.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -11,9 +12,9 @@
 namespace pectus {
 namespace {
 
-// One transverse section: the crossing points (u, w) of the triangles with the plane v = level.
+// One transverse section: the segments (u0, w0, u1, w1) where the triangles cross the plane v = level.
 struct Section {
-  std::vector<double> u, w;
+  std::vector<Eigen::Vector4d> segments;
   int boundary_crossings = 0;
 };
 
@@ -21,19 +22,46 @@ Section Cut(const TriangleMesh& mesh, const Points3& uvw, double level,
             const std::vector<std::pair<std::int32_t, std::int32_t>>& boundary) {
   Section s;
   for (Eigen::Index f = 0; f < mesh.num_faces(); ++f) {
-    for (int e = 0; e < 3; ++e) {
+    // A vertex on the plane counts as above it, so every crossing triangle gives exactly two points.
+    double u[2], w[2];
+    int found = 0;
+    for (int e = 0; e < 3 && found < 2; ++e) {
       const auto a = uvw.row(mesh.faces(f, e)), b = uvw.row(mesh.faces(f, (e + 1) % 3));
       const double da = a(1) - level, db = b(1) - level;
       if ((da < 0.0) == (db < 0.0)) continue;
       const double t = da / (da - db);
-      s.u.push_back(a(0) + t * (b(0) - a(0)));
-      s.w.push_back(a(2) + t * (b(2) - a(2)));
+      u[found] = a(0) + t * (b(0) - a(0));
+      w[found] = a(2) + t * (b(2) - a(2));
+      ++found;
     }
+    if (found == 2) s.segments.emplace_back(u[0], w[0], u[1], w[1]);
   }
   for (const auto& [i, j] : boundary) {
     if ((uvw(i, 1) < level) != (uvw(j, 1) < level)) ++s.boundary_crossings;
   }
   return s;
+}
+
+// The front profile of a section: in each lateral bin, the most anterior point of the section polyline
+// (its segments' ends in the bin and the segments crossing the bin's centre line), -inf for an empty bin.
+std::vector<double> FrontProfile(const Section& s, double u0, double bin, int bins) {
+  std::vector<double> top(static_cast<std::size_t>(bins), -std::numeric_limits<double>::infinity());
+  auto put = [&](int b, double w) {
+    if (b >= 0 && b < bins) top[b] = std::max(top[b], w);
+  };
+  for (const Eigen::Vector4d& g : s.segments) {
+    put(static_cast<int>(std::floor((g[0] - u0) / bin)), g[1]);
+    put(static_cast<int>(std::floor((g[2] - u0) / bin)), g[3]);
+    const double lo = std::min(g[0], g[2]), hi = std::max(g[0], g[2]);
+    if (!(hi > lo)) continue;
+    const int first = std::max(0, static_cast<int>(std::ceil((lo - u0) / bin - 0.5)));
+    const int last = std::min(bins - 1, static_cast<int>(std::floor((hi - u0) / bin - 0.5)));
+    for (int b = first; b <= last; ++b) {
+      const double uc = u0 + (b + 0.5) * bin;
+      put(b, g[1] + (g[3] - g[1]) * (uc - g[0]) / (g[2] - g[0]));
+    }
+  }
+  return top;
 }
 
 }  // namespace
@@ -91,12 +119,7 @@ ChestMeasures MeasureChest(const TriangleMesh& surface, const ChestRoi& roi, con
   for (int l = 0; l < options.levels; ++l) {
     const double level = roi.v_min + roi.height() * static_cast<double>(l) / (options.levels - 1);
     Section s = Cut(surface, uvw, level, boundary);
-    // Front profile: the most anterior skin point in each lateral bin.
-    std::vector<double> top(static_cast<std::size_t>(bins), -std::numeric_limits<double>::infinity());
-    for (std::size_t k = 0; k < s.u.size(); ++k) {
-      const int b = static_cast<int>(std::floor((s.u[k] - u0) / options.bin_mm));
-      if (b >= 0 && b < bins) top[b] = std::max(top[b], s.w[k]);
-    }
+    const std::vector<double> top = FrontProfile(s, u0, options.bin_mm, bins);
     // The straight edge rests on the highest point on each side of the midline.
     int left = -1, right = -1;
     for (int b = 0; b < bins; ++b) {
@@ -128,15 +151,20 @@ ChestMeasures MeasureChest(const TriangleMesh& surface, const ChestRoi& roi, con
   best.depression_depth_mm = std::max(0.0, best.depression_depth_mm);
 
   // External indices at the deepest section, when it goes round the torso.
-  best.closed_section = best_section.boundary_crossings == 0 && !best_section.u.empty();
+  best.closed_section = best_section.boundary_crossings == 0 && !best_section.segments.empty();
   if (best.closed_section) {
-    const Eigen::Map<const Eigen::VectorXd> u(best_section.u.data(), static_cast<Eigen::Index>(best_section.u.size()));
-    const Eigen::Map<const Eigen::VectorXd> w(best_section.w.data(), static_cast<Eigen::Index>(best_section.w.size()));
-    const double back = w.minCoeff();
+    double u_min = std::numeric_limits<double>::infinity(), u_max = -u_min, w_min = u_min, w_max = -u_min;
+    for (const Eigen::Vector4d& g : best_section.segments) {
+      u_min = std::min({u_min, g[0], g[2]});
+      u_max = std::max({u_max, g[0], g[2]});
+      w_min = std::min({w_min, g[1], g[3]});
+      w_max = std::max({w_max, g[1], g[3]});
+    }
+    const double back = w_min;
     const double deepest = roi.ToRoi(best.deepest_point.transpose())(0, 2);
-    best.chest_width_mm = u.maxCoeff() - u.minCoeff();
+    best.chest_width_mm = u_max - u_min;
     best.ap_depth_min_mm = deepest - back;
-    best.ap_depth_max_mm = w.maxCoeff() - back;
+    best.ap_depth_max_mm = w_max - back;
     if (best.ap_depth_min_mm > 0.0) best.external_haller_index = best.chest_width_mm / best.ap_depth_min_mm;
     if (best.ap_depth_max_mm > 0.0) {
       best.external_correction_index_pct = 100.0 * (best.ap_depth_max_mm - best.ap_depth_min_mm) / best.ap_depth_max_mm;

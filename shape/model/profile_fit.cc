@@ -45,6 +45,7 @@ bool ProfileFitOptions::IsValid(std::string* why) const {
   if (polynomial_degree < 1 || polynomial_degree > 20) return fail("polynomial degree must be in [1, 20]");
   if (!(knot_spacing_mm > 0.0) || !std::isfinite(knot_spacing_mm)) return fail("knot spacing must be > 0 mm");
   if (!(smoothing >= 0.0) || !std::isfinite(smoothing)) return fail("spline smoothing must be >= 0");
+  if (penalty_order != 2 && penalty_order != 3) return fail("spline penalty order must be 2 or 3");
   return true;
 }
 
@@ -116,8 +117,9 @@ ProfileCurve FitProfile(const Eigen::VectorXd& t, const Eigen::VectorXd& y, doub
     }
     curve.coefficients_ = A.colPivHouseholderQr().solve(y);
   } else {
-    if (distinct < (options.smoothing > 0.0 ? 2 : 4)) return curve;
-    // P-spline (Eilers & Marx 1996): (B'B / n + smoothing * D'D / nb) a = B'y / n, D = second differences.
+    if (distinct < (options.smoothing > 0.0 ? options.penalty_order : 4)) return curve;
+    // P-spline (Eilers & Marx 1996): (B'B / n + smoothing * D'D / nb) a = B'y / n, D = differences of
+    // order q.
     const auto intervals =
         std::max<Eigen::Index>(1, static_cast<Eigen::Index>(std::ceil((curve.hi_ - curve.lo_) / options.knot_spacing_mm)));
     curve.step_ = (curve.hi_ - curve.lo_) / static_cast<double>(intervals);
@@ -134,11 +136,14 @@ ProfileCurve FitProfile(const Eigen::VectorXd& t, const Eigen::VectorXd& y, doub
         for (int s = 0; s < 4; ++s) normal(c + r, c + s) += b[r] * b[s] / static_cast<double>(n);
       }
     }
+    // Difference penalty of order q: rows (1, -2, 1) or (-1, 3, -3, 1).
+    const int q = options.penalty_order;
+    const double d2[3] = {1.0, -2.0, 1.0}, d3[4] = {-1.0, 3.0, -3.0, 1.0};
+    const double* dj = q == 2 ? d2 : d3;
     const double weight = options.smoothing / static_cast<double>(nb);
-    for (Eigen::Index j = 0; j + 2 < nb; ++j) {
-      const double dj[3] = {1.0, -2.0, 1.0};
-      for (int r = 0; r < 3; ++r) {
-        for (int s = 0; s < 3; ++s) normal(j + r, j + s) += weight * dj[r] * dj[s];
+    for (Eigen::Index j = 0; j + q < nb; ++j) {
+      for (int r = 0; r <= q; ++r) {
+        for (int s = 0; s <= q; ++s) normal(j + r, j + s) += weight * dj[r] * dj[s];
       }
     }
     // A tiny ridge keeps the system definite where a basis has neither data nor penalty (smoothing 0).

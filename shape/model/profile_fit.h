@@ -25,16 +25,21 @@ struct ProfileFitOptions {
   int polynomial_degree = 8;     ///< kPolynomial: degree in [1, 20]
   double knot_spacing_mm = 5.0;  ///< kSmoothingSpline: distance between knots (> 0, mm)
   /// kSmoothingSpline: weight of the roughness penalty, dimensionless (>= 0; > 0 if the data may have
-  /// gaps wider than a knot interval). The fit minimises mean(r^2) + smoothing * mean((D2 a)^2) over
-  /// the spline coefficients a, both terms in mm^2. Where there are no data the penalty continues the
-  /// curve smoothly (linearly beyond the ends).
+  /// gaps wider than a knot interval). The fit minimises mean(r^2) + smoothing * mean((Dq a)^2) over
+  /// the spline coefficients a (Dq: differences of order q = penalty_order), both terms in mm^2.
   double smoothing = 1e-3;
+  /// kSmoothingSpline: order q of the difference penalty, 2 or 3. Where there are no data the penalty
+  /// continues the curve as a polynomial of degree q - 1 (Eilers & Marx 1996, Sec. 8): q = 2 goes on
+  /// linearly beyond the data, q = 3 keeps the curvature, which follows a chest's transverse curve over
+  /// a hole or past the edge of a scan much better (measured in docs/shape_model.md).
+  int penalty_order = 3;
 
   /// False, with the reason, for a value out of range.
   bool IsValid(std::string* why) const;
 };
 
-/// A fitted profile curve. Default-constructed it is invalid (too few points to fit).
+/// A fitted profile curve. Default-constructed it is invalid (too few points to fit). Beyond the interval it
+/// was fitted on, it continues linearly along its end tangents.
 class ProfileCurve {
  public:
   ProfileCurve() = default;
@@ -66,7 +71,7 @@ class ProfileCurve {
 
 /// Fits y(t) to the points (t_k, y_k). The curve is defined over [min(t_min, min t), max(t_max, max t)].
 /// Returns an invalid curve if there are too few distinct points: fewer than degree + 1 for a
-/// polynomial, fewer than 4 (or 2 with smoothing > 0) for a spline.
+/// polynomial, fewer than 4 (or penalty_order with smoothing > 0) for a spline.
 /// @param[in] t, y   #n abscissae and ordinates (mm)
 /// @param[in] t_min, t_max  the interval the curve will be evaluated on
 ProfileCurve FitProfile(const Eigen::VectorXd& t, const Eigen::VectorXd& y, double t_min, double t_max,

@@ -84,9 +84,10 @@ ShapeModel BuildShapeModel(const Eigen::MatrixXd& shapes, const ShapeModelOption
   model.mean = shapes.colwise().mean().transpose();
   const Eigen::MatrixXd X = shapes.rowwise() - model.mean.transpose();
 
-  // Gram matrix G = X X' (N by N) and its eigen decomposition G = V S^2 V'.
-  Eigen::MatrixXd G(n, n);
-  G.noalias() = X * X.transpose();
+  // Gram matrix G = X X' (N by N; its lower half, a symmetric rank-3m update at half the cost of the
+  // product) and its eigen decomposition G = V S^2 V', which reads only the lower half.
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(n, n);
+  G.selfadjointView<Eigen::Lower>().rankUpdate(X);
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(G);
   if (eig.info() != Eigen::Success) ThrowFailure("the eigen decomposition of the Gram matrix failed for " + what);
   // Eigenvalues ascending: reverse to descending.

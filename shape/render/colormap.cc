@@ -1,6 +1,7 @@
 // pectus: colour maps (OpenCV's viridis and turbo tables; a blue-white-red diverging map) and a colour bar.
 #include "shape/render/colormap.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -92,7 +93,10 @@ Rgb CategoryColor(int index) {
 }
 
 Image ColorBar(double lo, double hi, Colormap map, const std::string& label, int height, int ticks) {
-  const int bar_w = 28, top = 30, bottom = 20, width = 120;
+  const int bar_w = 28, top = 30, bottom = 20;
+  int label_w = 0, label_h = 0;
+  TextSize(label, 0.45, 1, &label_w, &label_h);
+  const int width = std::max(120, label_w + 12);  // wide enough for the label
   Image im(width, height, kWhite);
   const int bar_h = height - top - bottom;
   for (int y = 0; y < bar_h; ++y) {

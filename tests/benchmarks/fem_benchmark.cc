@@ -1,18 +1,26 @@
 // FE benchmark of the Nuss planner's engine (issue 7 acceptance): one patient's ribcage, all 24 load
 // cases of the dissertation (3 bar positions x 8 forces), timed stage by stage; or, with --all, every
-// patient of the table, optionally writing the 1488-result dataset. Prints JSON.
+// patient of the table, optionally writing the 1488-result dataset. With --ccx, the peer: CalculiX
+// (C3D10) on the identical mesh and load, timed in the same run, with the largest difference. With
+// --cartilage-sweep, the force to lift the sternum by its depression for a range of cartilage moduli.
+// Prints JSON.
 //
 //   fem_benchmark [--patient 57] [--all] [--dataset fem_dataset.h5] [--table nuss_ct_parameters.csv]
-//                 [--threads N] [--cell-mm 6]
+//                 [--threads N] [--cell-mm 6] [--ccx /usr/bin/ccx] [--cartilage-sweep]
 #include <omp.h>
 
+#include <algorithm>
 #include <chrono>
+#include <numeric>
+#include <vector>
 #include <cstdio>
 #include <ctime>
+#include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "planner_plugin/fem/calculix_io.h"
 #include "planner_plugin/io/fem_dataset_h5.h"
 #include "planner_plugin/ribcage/generic_ribcage.h"
 #include "planner_plugin/ribcage/patient_ribcage.h"
@@ -24,6 +32,7 @@
 namespace {
 
 using namespace pectus::planner;
+using pectus::Points3;
 using Clock = std::chrono::steady_clock;
 
 double CpuSeconds() {
@@ -82,12 +91,59 @@ nlohmann::json RunPatient(const GenericRibcage& generic, const PatientRow& row, 
   return out;
 }
 
+// CalculiX on the identical mesh, materials, constraints and one load case (0.85 L, 100 N).
+nlohmann::json RunCalculixPeer(const GenericRibcage& generic, const PatientRow& row, const std::string& ccx) {
+  const PatientRibcage ribcage = MakePatientRibcage(generic, row.measurements);
+  Stopwatch ours;
+  const RibcageFem fem(ribcage);
+  const LoadCase load{"bar", fem.NodalForces({0.85, false, 100.0}), {}};
+  const Points3 u = fem.solver().Solve({load}).front();
+  const nlohmann::json ours_time = ours.Lap();
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "pectus_fem_benchmark_ccx";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const RibcageMaterials m;
+  WriteCalculixInput(dir / "ribcage.inp", ribcage.mesh, {m.sternum, m.rib, m.cartilage},
+                     fem.solver().partition().prescribed, load);
+  Stopwatch theirs;
+  const std::string command = "cd '" + dir.string() + "' && '" + ccx + "' -i ribcage > ccx.log 2>&1";
+  const int status = std::system(command.c_str());
+  const nlohmann::json ccx_time = theirs.Lap();  // cpu_s is pectus's only: ccx runs in a child process
+  if (status != 0) return {{"error", "ccx failed; see " + (dir / "ccx.log").string()}};
+  const Points3 v = ReadCalculixDisplacements(dir / "ribcage.dat", ribcage.mesh.num_nodes());
+  std::filesystem::remove_all(dir);
+  const double ours_s = ours_time["wall_s"], ccx_s = ccx_time["wall_s"];
+  return {{"mesh_nodes", ribcage.mesh.num_nodes()},
+          {"pectus_assembly_factorisation_solve", ours_time},
+          {"ccx_wall_s", ccx_s},
+          {"ccx_over_pectus_wall", ccx_s / ours_s},
+          {"max_abs_difference_over_max_abs_u", (u - v).cwiseAbs().maxCoeff() / v.cwiseAbs().maxCoeff()}};
+}
+
+// Force to lift the sternum by its depression at 0.65/0.75/0.85 L for cartilage moduli from 5 to 640 MPa.
+nlohmann::json CartilageSweep(const GenericRibcage& generic, const PatientRow& row) {
+  const PatientRibcage ribcage = MakePatientRibcage(generic, row.measurements);
+  nlohmann::json out = nlohmann::json::array();
+  for (double e : {5.0, 10.0, 20.0, 40.0, 80.0, 160.0, 320.0, 640.0}) {
+    RibcageFemOptions options;
+    options.materials.cartilage.youngs_modulus_mpa = e;
+    const RibcageFem fem(ribcage, options);
+    nlohmann::json entry = {{"cartilage_mpa", e}};
+    for (const ForceToLift& f : fem.ForceToLiftSternum({{0.65, false, 1}, {0.75, false, 1}, {0.85, false, 1}})) {
+      entry["force_to_lift_n"].push_back(f.force_n);
+      entry["force_per_20mm_n"].push_back(20.0 / f.lift_per_newton_mm);
+    }
+    out.push_back(entry);
+  }
+  return out;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string table = std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv";
-  std::string patient = "57", dataset_path;
-  bool all = false;
+  std::string patient = "57", dataset_path, ccx;
+  bool all = false, sweep = false;
   GenericRibcageOptions generic_options;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -108,11 +164,15 @@ int main(int argc, char** argv) {
       table = next();
     } else if (a == "--threads") {
       omp_set_num_threads(std::stoi(next()));
+    } else if (a == "--ccx") {
+      ccx = next();
+    } else if (a == "--cartilage-sweep") {
+      sweep = true;
     } else if (a == "--cell-mm") {
       generic_options.rib_cell_length_mm = std::stod(next());
     } else {
       std::cerr << "usage: fem_benchmark [--patient ID | --all] [--dataset OUT.h5] [--table CSV] [--threads N] "
-                   "[--cell-mm MM]\n";
+                   "[--cell-mm MM] [--ccx CCX] [--cartilage-sweep]\n";
       return 2;
     }
   }
@@ -126,6 +186,8 @@ int main(int argc, char** argv) {
     const GenericRibcage generic = BuildGenericRibcage(generic_options);
     report["generic_ribcage"] = {{"corner_nodes", generic.nodes.rows()}, {"tets", generic.tets.rows()},
                                  {"build", total.Lap()}};
+    if (!ccx.empty()) report["calculix_peer"] = RunCalculixPeer(generic, FindPatient(rows, patient), ccx);
+    if (sweep) report["cartilage_sweep"] = CartilageSweep(generic, FindPatient(rows, patient));
     if (!all) {
       report["patients"].push_back(RunPatient(generic, FindPatient(rows, patient), nullptr));
     } else {
@@ -136,6 +198,20 @@ int main(int argc, char** argv) {
         report["patients"].push_back(RunPatient(generic, row, dataset.get()));
         progress.Advance();
       }
+      // Summary over the patients: time per patient and force to lift at each position.
+      nlohmann::json summary;
+      std::vector<double> seconds;
+      for (const auto& p : report["patients"]) seconds.push_back(p["timings"]["total"]["wall_s"]);
+      summary["patient_wall_s_max"] = *std::max_element(seconds.begin(), seconds.end());
+      summary["patient_wall_s_mean"] = std::accumulate(seconds.begin(), seconds.end(), 0.0) / seconds.size();
+      for (const char* position : {"0.65", "0.75", "0.85"}) {
+        std::vector<double> f;
+        for (const auto& p : report["patients"]) f.push_back(p["force_to_lift_n"][position]);
+        std::sort(f.begin(), f.end());
+        summary["force_to_lift_n"][position] = {{"min", f.front()}, {"median", f[f.size() / 2]}, {"max", f.back()},
+                                                {"mean", std::accumulate(f.begin(), f.end(), 0.0) / f.size()}};
+      }
+      report["summary"] = summary;
       if (dataset) {
         dataset->Commit();
         report["dataset"] = {{"path", dataset_path}, {"results", rows.size() * 24},

@@ -53,7 +53,7 @@ std::vector<PointCloud> DomeStrips(int strips, std::vector<Rigid3>* T_world_swee
     std::vector<Eigen::Vector3d> pts;
     for (double x = -120; x <= 120; x += 1.0) {
       for (double y = y0; y <= y1; y += 1.0) {
-        const double z = 60.0 - 0.002 * (x * x + y * y) + 4.0 * std::sin(x / 17.0) * std::cos(y / 23.0);
+        const double z = 60.0 - 0.002 * (x * x + y * y) + 4.0 * std::sin(x / 17.0) * std::cos(y / 23.0 + 0.7);
         pts.emplace_back(x, y, z + noise(rng));
       }
     }
@@ -71,6 +71,11 @@ std::vector<PointCloud> DomeStrips(int strips, std::vector<Rigid3>* T_world_swee
   return out;
 }
 
+// The strips carry 0.05 mm noise and overlap in 30 mm bands of 80 mm strips, so the roll of a strip about
+// its long axis is known to about 0.02 degrees per link (the data's own limit: more samples of the same
+// points do not help); over a chain of three links that is up to ~0.1 mm at a strip's far edge.
+constexpr double kStripTolerance = 0.12;
+
 TEST(SweepMerge, RecoversKnownPosesOfSyntheticStrips) {
   std::vector<Rigid3> truth;
   const auto strips = DomeStrips(4, &truth);
@@ -80,12 +85,12 @@ TEST(SweepMerge, RecoversKnownPosesOfSyntheticStrips) {
   const SweepMergeResult r = MergeSweeps(strips, start);
   ASSERT_EQ(r.T_world_sweep.size(), 4u);
   for (std::size_t s = 0; s < strips.size(); ++s) {
-    EXPECT_LT(RmsDisplacement(strips[s].positions, r.T_world_sweep[s], truth[s]), 0.05) << "strip " << s;
+    EXPECT_LT(RmsDisplacement(strips[s].positions, r.T_world_sweep[s], truth[s]), kStripTolerance) << "strip " << s;
     EXPECT_GT(r.correction_mm[s] + r.correction_deg[s], s == 0 ? -1.0 : 0.1) << "the start was disturbed";
   }
   EXPECT_EQ(r.pairs.size(), 3u);  // neighbouring strips overlap, others do not
   for (const auto& p : r.pairs) {
-    EXPECT_LT(p.rms_after_mm, 0.1);
+    EXPECT_NEAR(p.rms_after_mm, 0.05 * std::sqrt(2.0), 0.01) << "residuals at the noise level of two sweeps";
     EXPECT_GT(p.rms_before_mm, p.rms_after_mm);
   }
   EXPECT_EQ(r.points_in, r.points_out + r.outliers_removed);
@@ -95,17 +100,25 @@ TEST(SweepMerge, RecoversKnownPosesOfSyntheticStrips) {
   EXPECT_TRUE(std::abs(up) > 0.98 * r.merged.size()) << up << " of " << r.merged.size();
 }
 
-TEST(SweepMerge, FarFromOriginWorks) {
+TEST(SweepMerge, FarFromOriginGivesTheSameAnswer) {
   std::vector<Rigid3> truth;
   auto strips = DomeStrips(3, &truth);
-  const Eigen::Vector3d far(1e7, -2e6, 5e5);  // a scanner frame 10 km away
-  for (auto& T : truth) T.translation() += far;
   std::mt19937_64 rng(5);
   std::vector<Rigid3> start = truth;
   for (std::size_t s = 1; s < start.size(); ++s) start[s] = DisturbAbout(&rng, 2.0, 3.0, strips[s], truth[s]);
-  const SweepMergeResult r = MergeSweeps(strips, start);
+  const SweepMergeResult near = MergeSweeps(strips, start);
+  // The same scan with the world frame 10 km away: the same poses up to the shift, to 1 micrometre.
+  Rigid3 shift = Rigid3::Identity();
+  shift.translation() = Eigen::Vector3d(1e7, -2e6, 5e5);
+  std::vector<Rigid3> far_truth, far_start;
   for (std::size_t s = 0; s < strips.size(); ++s) {
-    EXPECT_LT(RmsDisplacement(strips[s].positions, r.T_world_sweep[s], truth[s]), 0.05) << "strip " << s;
+    far_truth.push_back(shift * truth[s]);
+    far_start.push_back(shift * start[s]);
+  }
+  const SweepMergeResult far = MergeSweeps(strips, far_start);
+  for (std::size_t s = 0; s < strips.size(); ++s) {
+    EXPECT_LT(RmsDisplacement(strips[s].positions, far.T_world_sweep[s], shift * near.T_world_sweep[s]), 1e-3) << s;
+    EXPECT_LT(RmsDisplacement(strips[s].positions, far.T_world_sweep[s], far_truth[s]), kStripTolerance) << s;
   }
 }
 
@@ -145,6 +158,27 @@ TEST(SweepMerge, SmoothingBlendsOffsetSweepsAndDecimationSetsSpacing) {
   EXPECT_NEAR(static_cast<double>(r.points_out), 30.0 * 30.0, 120.0);
 }
 
+// The rigid motion G that best maps the placements `estimate` of all sweeps onto `truth` (least squares
+// over every 10th point of every sweep): the frame of a merge is fixed by its (disturbed) anchor sweep.
+Rigid3 BestCommonMotion(const std::vector<PointCloud>& sweeps, const std::vector<Rigid3>& estimate,
+                        const std::vector<Rigid3>& truth) {
+  std::vector<Eigen::Vector3d> a, b;
+  for (std::size_t s = 0; s < sweeps.size(); ++s) {
+    for (Eigen::Index i = 0; i < sweeps[s].size(); i += 10) {
+      a.push_back(estimate[s] * sweeps[s].positions.row(i).transpose());
+      b.push_back(truth[s] * sweeps[s].positions.row(i).transpose());
+    }
+  }
+  Eigen::Matrix3Xd A(3, Eigen::Index(a.size())), B(3, Eigen::Index(b.size()));
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    A.col(Eigen::Index(k)) = a[k];
+    B.col(Eigen::Index(k)) = b[k];
+  }
+  Rigid3 G;
+  G.matrix() = Eigen::umeyama(A, B, false);
+  return G;
+}
+
 TEST(SweepMerge, RealBunnyFromDisturbedPosesReturnsToPublishedPlacement) {
   const std::string dir = std::string(PECTUS_SHARED_DIR) + "/datasets/stanford_bunny/";
   std::vector<ScanPose> poses = ReadStanfordConf(dir + "bun.conf");
@@ -157,13 +191,18 @@ TEST(SweepMerge, RealBunnyFromDisturbedPosesReturnsToPublishedPlacement) {
   for (const auto& p : poses) {
     sweeps.push_back(ReadPointCloud(dir + p.file, ro));
     truth.push_back(p.T_common_scan);
-    // Every sweep but the anchor (bun000) disturbed about its centroid: up to 3 degrees and 5 mm.
-    start.push_back(truth.size() == 1 ? truth.back() : DisturbAbout(&rng, 3.0, 5.0, sweeps.back(), truth.back()));
+    // Every sweep disturbed about its centroid: up to 3 degrees and 5 mm.
+    start.push_back(DisturbAbout(&rng, 3.0, 5.0, sweeps.back(), truth.back()));
   }
   const SweepMergeResult r = MergeSweeps(sweeps, start);
+  // The anchor (bun000) stays where it started, so the merged set is compared with bun.conf up to one
+  // common rigid motion.
+  const Rigid3 G = BestCommonMotion(sweeps, r.T_world_sweep, truth);
   for (std::size_t s = 0; s < sweeps.size(); ++s) {
-    EXPECT_LE(RmsDisplacement(sweeps[s].positions, r.T_world_sweep[s], truth[s]), 0.3) << poses[s].file;
+    EXPECT_LE(RmsDisplacement(sweeps[s].positions, G * r.T_world_sweep[s], truth[s]), 0.3) << poses[s].file;
+    EXPECT_GE(RmsDisplacement(sweeps[s].positions, G * start[s], truth[s]), s == 0 ? 0.0 : 0.3) << "disturbed";
   }
+  for (const auto& p : r.pairs) EXPECT_LT(p.rms_after_mm, 0.3) << p.i << "-" << p.j;
 }
 
 }  // namespace

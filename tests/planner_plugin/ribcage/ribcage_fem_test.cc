@@ -91,6 +91,22 @@ TEST_F(RibcageFemTest, ForceToLiftTheSternumByItsDepression) {
   EXPECT_LT(g.force_n / f[1].force_n, 2.0);
 }
 
+// The push is spread with a smooth profile, so moving the bar by a fraction of a millimetre changes the
+// lift by a little, smoothly: no jumps as rows of faces enter or leave the contact.
+TEST_F(RibcageFemTest, TheLoadMovesContinuouslyWithTheBar) {
+  const double length = patient_->measured.sternal_length_mm;
+  std::vector<BarLoad> loads;
+  for (int k = 0; k <= 10; ++k) loads.push_back({0.8 * length + 0.1 * k, true, 100.0});
+  const std::vector<BarResult> r = fem_->Solve(loads);
+  for (int k = 1; k < 10; ++k) {
+    // Second differences are tiny compared with first differences: the lift is smooth in the position.
+    const double first = r[k + 1].sternum_lift_mm - r[k - 1].sternum_lift_mm;
+    const double second = r[k + 1].sternum_lift_mm - 2 * r[k].sternum_lift_mm + r[k - 1].sternum_lift_mm;
+    EXPECT_LT(std::abs(second), 0.05 * std::abs(first) + 1e-9 * r[k].sternum_lift_mm) << k;
+    EXPECT_LT(std::abs(first), 0.01 * r[k].sternum_lift_mm) << k;
+  }
+}
+
 TEST_F(RibcageFemTest, BarOffTheSternumIsRefused) {
   EXPECT_THROW(fem_->Solve({{1.2, false, 100}}), Error);
   EXPECT_THROW(fem_->Solve({{0.8, false, -5}}), Error);

@@ -11,7 +11,8 @@
 
 namespace pectus::testing {
 
-/// z = f(x, y) in the chest's own frame: x across (left +), y down the sternum, z anterior (mm).
+/// z = f(x, s) in the chest's own frame, the pectus frame (x to the subject's left, y up, z anterior; mm),
+/// with s = -y the distance down the sternum: the point (x, -s, f(x, s)).
 struct AnalyticChest {
   double radius = 160.0;      // transverse curvature radius
   double slope = 0.03;        // forward lean along the sternum
@@ -20,13 +21,14 @@ struct AnalyticChest {
   double dent_y = 110.0;
   Similarity3 T_world_chest;  // where the chest sits in the test's "scanner" frame
 
-  double f(double x, double y) const {
-    return -x * x / (2.0 * radius) + slope * y -
-           dent_depth * std::exp(-(x * x + (y - dent_y) * (y - dent_y)) / (2.0 * dent_sigma * dent_sigma));
+  double f(double x, double s) const {
+    return -x * x / (2.0 * radius) + slope * s -
+           dent_depth * std::exp(-(x * x + (s - dent_y) * (s - dent_y)) / (2.0 * dent_sigma * dent_sigma));
   }
-  Eigen::Vector3d At(double x, double y) const { return T_world_chest * Eigen::Vector3d(x, y, f(x, y)); }
+  /// The point at (x, s) in the world frame.
+  Eigen::Vector3d At(double x, double s) const { return T_world_chest * Eigen::Vector3d(x, -s, f(x, s)); }
 
-  /// A triangle mesh over x in [x0, x1], y in [y0, y1] with `step` mm spacing, in the world frame.
+  /// A triangle mesh over x in [x0, x1], s in [y0, y1] with `step` mm spacing, in the world frame.
   TriangleMesh Mesh(double x0, double x1, double y0, double y1, double step) const {
     const int nx = static_cast<int>(std::round((x1 - x0) / step)) + 1;
     const int ny = static_cast<int>(std::round((y1 - y0) / step)) + 1;
@@ -43,15 +45,15 @@ struct AnalyticChest {
     for (int j = 0; j + 1 < ny; ++j) {
       for (int i = 0; i + 1 < nx; ++i) {
         const int a = j * nx + i, b = a + 1, c = a + nx, d = c + 1;
-        // x cross y = +z (anterior): counter-clockwise seen from the front.
-        m.faces.row(f++) << a, b, c;
-        m.faces.row(f++) << b, d, c;
+        // (a, c, b): x cross (-s) = x cross y = +z (anterior), counter-clockwise seen from the front.
+        m.faces.row(f++) << a, c, b;
+        m.faces.row(f++) << b, c, d;
       }
     }
     return m;
   }
 
-  /// Landmarks on the surface: notch at y = 0, xiphoid at y = 180, cartilage at x = 45, y = 15.
+  /// Landmarks on the surface: notch at s = 0, xiphoid at s = 180, cartilage at x = 45, s = 15.
   LandmarkSet Landmarks() const {
     LandmarkSet s;
     s.items.push_back({"sternal_notch", At(0.0, 0.0), ""});
@@ -65,7 +67,7 @@ struct AnalyticChest {
     const Similarity3 T_chest_world = T_world_chest.Inverse();
     auto g = [&](double w) {
       const Eigen::Vector3d p = T_chest_world * roi.FromRoi(u, v, w);
-      return p.z() - f(p.x(), p.y());
+      return p.z() - f(p.x(), -p.y());
     };
     double w = 0.0;
     for (int it = 0; it < 60; ++it) {

@@ -35,11 +35,18 @@ TEST(CrossSectionResampler, SplineResamplesAnAnalyticChestWithinTwentiethOfAMill
   EXPECT_EQ(r.profiles_unfitted, 0);
   EXPECT_LT(WorstDepthError(chest, r), 0.05);
   EXPECT_DOUBLE_EQ(r.supported_fraction, 1.0);
+  // The ROI plane passes through the three landmarks and faces the chest's anterior (+z of its frame).
+  const Eigen::Vector3d n = chest.T_world_chest.rotation.transpose() * r.roi.normal;
+  const Eigen::Vector3d notch(0.0, 0.0, chest.f(0.0, 0.0)), xiphoid(0.0, -180.0, chest.f(0.0, 180.0)),
+      cartilage(45.0, -15.0, chest.f(45.0, 15.0));
+  EXPECT_NEAR(n.dot((xiphoid - notch).normalized()), 0.0, 1e-9);
+  EXPECT_NEAR(n.dot((cartilage - notch).normalized()), 0.0, 1e-9);
+  EXPECT_GT(n.z(), 0.9);
   // The vertices lie on the surface: their depth in the chest frame matches f.
   const Similarity3 T = chest.T_world_chest.Inverse();
   for (Eigen::Index k = 0; k < r.mesh.num_vertices(); k += 97) {
     const Eigen::Vector3d p = T * Eigen::Vector3d(r.mesh.vertices.positions.row(k).transpose());
-    EXPECT_NEAR(p.z(), chest.f(p.x(), p.y()), 0.05);
+    EXPECT_NEAR(p.z(), chest.f(p.x(), -p.y()), 0.05);
   }
 }
 
@@ -68,7 +75,7 @@ TEST(CrossSectionResampler, PointCloudInputMatchesTheMesh) {
 }
 
 TEST(CrossSectionResampler, ExtrapolatesBeyondTheEdgeOfTheScan) {
-  // The scan stops 8 mm short of the ROI on the right and 10 mm above the notch is missing too.
+  // The scan stops 8 mm short of the ROI on the right and the first 10 mm below the notch are missing.
   const AnalyticChest chest = PlacedChest();
   const TriangleMesh mesh = chest.Mesh(-37.0, 110.0, 10.0, 220.0, 1.5);
   CrossSectionOptions o;

@@ -1,0 +1,180 @@
+// pectus pipeline COHORT_DIR --out OUT_DIR: the main job. From a folder of raw subjects (sweeps +
+// landmarks, as `pectus synth cohort` writes them) to the average chest with its modes, model quality,
+// each subject's distance to the mean, and one HTML report (pictures and numbers).
+#include <sstream>
+
+#include "apps/command.h"
+#include "shape/core/error.h"
+#include "shape/core/log.h"
+#include "shape/io/landmark_io.h"
+#include "shape/io/mesh_io.h"
+#include "shape/model/cohort_pipeline.h"
+#include "shape/model/model_figures.h"
+#include "shape/model/pipeline_report.h"
+#include "shape/model/statismo_io.h"
+
+namespace pectus::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string Csv(const std::vector<std::string>& header, const std::vector<std::vector<double>>& rows,
+                const std::vector<std::string>& row_names = {}) {
+  std::ostringstream out;
+  out.precision(10);
+  for (std::size_t c = 0; c < header.size(); ++c) out << (c ? "," : "") << header[c];
+  out << '\n';
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    if (!row_names.empty()) out << row_names[r];
+    for (std::size_t c = 0; c < rows[r].size(); ++c) out << (c || !row_names.empty() ? "," : "") << rows[r][c];
+    out << '\n';
+  }
+  return out.str();
+}
+
+class PipelineCommand : public Command {
+ public:
+  std::string Name() const override { return "pipeline"; }
+  std::string Summary() const override {
+    return "The main job: raw sweeps of a cohort to the average chest, its modes, quality and an HTML report";
+  }
+  std::string Example() const override {
+    return "  pectus synth cohort --subjects 11 --seed 7 --out cohort\n"
+           "  pectus pipeline cohort --out results --report results/pipeline.json\n"
+           "  (then open results/report.html; per subject: merge -> reconstruct -> register to the reference\n"
+           "   by landmarks then ICP -> resample on the landmark grid; then the model and distance maps.\n"
+           "   A subject that fails is listed in the report and the others go on.)";
+  }
+  void Configure(CLI::App* app) override {
+    app->add_option("cohort", cohort_, "Folder with one sub-folder per subject (sweep_NN.ply + landmarks.mrk.json)")
+        ->required();
+    app->add_option("-o,--out", out_, "Output folder (report.html, model.h5, figures/, subjects/)")->required();
+    app->add_option("--sweeps", sweep_pattern_, "Sweep file names in a subject folder")->default_val("sweep_*.ply");
+    app->add_option("--landmarks-name", landmarks_name_, "Landmarks file name in a subject folder")
+        ->default_val("landmarks.mrk.json");
+    app->add_option("--reference", options_.reference, "Reference subject (default: the first that reconstructs)");
+    app->add_option("--grid", grid_, "Resampling grid LATERALxSTERNAL")->default_val("51x101");
+    app->add_option("--fit", fit_, "Profile curve: spline or polynomial")->default_val("spline");
+    app->add_option("--crop-margin", options_.crop_margin_mm,
+                    "Sweeps cut to the landmark ROI widened by this, mm (0: whole sweeps)")
+        ->default_val(options_.crop_margin_mm);
+    app->add_option("--surface-spacing", options_.reconstruct.spacing, "Isosurface step of the surfaces, mm")
+        ->default_val(options_.reconstruct.spacing);
+    app->add_option("--merge-spacing", options_.merge.target_spacing_mm, "Merged cloud decimated to this spacing, mm")
+        ->default_val(options_.merge.target_spacing_mm);
+    app->add_option("--samples", options_.quality_options.specificity_samples, "Random shapes for specificity")
+        ->default_val(options_.quality_options.specificity_samples);
+    app->add_flag("--no-quality", no_quality_, "Skip compactness, generalization and specificity");
+    app->add_option("--distance-range", report_.distance_range_mm, "Colour scale of the distance maps, +-mm (0: auto)")
+        ->default_val(0.0);
+    app->add_flag("--no-surfaces", no_surfaces_, "Do not write each subject's registered surface");
+  }
+  std::vector<fs::path> Inputs() const override {
+    std::vector<fs::path> in;
+    for (const CohortSubject& s : subjects_) {
+      in.insert(in.end(), s.sweeps.begin(), s.sweeps.end());
+      in.push_back(s.landmarks);
+    }
+    return in;
+  }
+
+  void Run(Context* context) override {
+    options_.resample.grid = ParseGridSize(grid_);
+    options_.resample.fit.kind = ParseProfileFitKind(fit_);
+    options_.quality = !no_quality_;
+    options_.keep_surfaces = !no_surfaces_;
+    std::string why;
+    if (!options_.IsValid(&why)) ThrowUsage(why);
+    const fs::path out(out_);
+    subjects_ = FindCohortSubjects(cohort_, sweep_pattern_, landmarks_name_);
+    const fs::path html = StageOutput(context, *this, out / "report.html");  // refuses an input early
+    Info("pipeline: " + std::to_string(subjects_.size()) + " subjects in " + cohort_);
+
+    // 1-8. Every stage, subject by subject (the library reports failures per subject).
+    PipelineResult result;
+    {
+      auto t = context->report.Stage("pipeline");
+      Progress progress("pipeline: subjects through surface and resampling", 2 * static_cast<std::int64_t>(subjects_.size()));
+      result = RunCohortPipeline(subjects_, options_, [&](const SubjectOutcome& s, const std::string& stage) {
+        if (!s.failed_stage.empty() && (stage == "surface" || s.failed_stage == "register" || s.failed_stage == "resample")) {
+          Warn(s.name + " failed at " + s.failed_stage + ": " + s.error);
+        }
+        progress.Advance();
+      });
+    }
+    for (const auto& [stage, t] : result.seconds) context->report.AddTime(stage, t);
+    Info(result.message);
+
+    // 9. Files: the model, tables, meshes per subject, and the report with its figures.
+    auto t = context->report.Stage("write");
+    if (result.has_model) {
+      const ShapeModel& m = result.model;
+      WriteStatismoModel(StageOutput(context, *this, out / "model.h5"), m,
+                         {{"source", "pectus pipeline"}, {"cohort", cohort_}, {"reference", result.reference}});
+      WriteMesh(StageOutput(context, *this, out / "mean.ply"), m.ToMesh(m.mean));
+      std::vector<std::string> header{"subject"};
+      for (int k = 1; k <= m.num_modes(); ++k) header.push_back("mode" + std::to_string(k) + "_mm");
+      std::vector<std::vector<double>> rows;
+      for (Eigen::Index r = 0; r < m.scores.rows(); ++r) rows.emplace_back(m.scores.row(r).data(), m.scores.row(r).data() + m.num_modes());
+      WriteFileAtomically(StageOutput(context, *this, out / "scores.csv"), Csv(header, rows, m.names));
+      rows.clear();
+      const Eigen::VectorXd f = m.ExplainedFraction(), c = m.CumulativeFraction();
+      for (int k = 0; k < m.num_modes(); ++k) rows.push_back({double(k + 1), m.variances[k], f[k], c[k]});
+      WriteFileAtomically(StageOutput(context, *this, out / "eigen.csv"),
+                          Csv({"mode", "eigenvalue_mm2", "explained", "cumulative"}, rows));
+    }
+    if (result.has_quality) {
+      const ModelQualityCurves& q = result.quality;
+      std::vector<std::vector<double>> rows;
+      for (Eigen::Index k = 0; k < q.modes.size(); ++k) {
+        rows.push_back({double(q.modes[k]), q.compactness[k], q.compactness_sd[k], q.generalization_mm[k],
+                        q.generalization_sd[k], q.specificity_mm[k], q.specificity_sd[k]});
+      }
+      WriteFileAtomically(StageOutput(context, *this, out / "quality.csv"),
+                          Csv({"modes", "compactness_mm2", "compactness_sd_mm2", "generalization_mm",
+                               "generalization_sd_mm", "specificity_mm", "specificity_sd_mm"}, rows));
+    }
+    for (const SubjectOutcome& s : result.subjects) {
+      const fs::path dir = out / "subjects" / s.name;
+      if (options_.keep_surfaces && s.surface.num_faces() > 0) WriteMesh(StageOutput(context, *this, dir / "surface.ply"), s.surface);
+      if (!s.ok) continue;
+      WriteMesh(StageOutput(context, *this, dir / "grid.ply"), s.grid.mesh);
+      WriteLandmarks(StageOutput(context, *this, dir / "landmarks.mrk.json"), s.landmarks);
+      if (s.to_mean.distances.size() > 0) {
+        TriangleMesh coloured = s.grid.mesh;
+        coloured.vertices.scalars["distance_mm"] = s.to_mean.distances;
+        const double r = std::max(1.0, s.to_mean.stats.max_abs);
+        coloured.vertices.colors = ColorsForValues(s.to_mean.distances, -r, r);
+        WriteMesh(StageOutput(context, *this, dir / "distance_to_mean.ply"), coloured);
+      }
+    }
+    report_.run = {{"command", "pectus pipeline " + cohort_ + " --out " + out_},
+                   {"subjects", subjects_.size()},
+                   {"grid", grid_},
+                   {"profile fit", fit_},
+                   {"threads", context->threads}};
+    for (const ReportFile& file : MakePipelineReport(result, report_)) {
+      WriteFileAtomically(file.path == "report.html" ? html : StageOutput(context, *this, out / file.path), file.bytes);
+    }
+    nlohmann::json summary = PipelineJson(result);
+    for (const auto& [key, value] : summary.items()) context->report[key] = value;
+    context->report["cohort"] = cohort_;
+    context->report["out"] = out_;
+    context->report["subjects_total"] = subjects_.size();
+    context->report["grid"] = {{"lateral", options_.resample.grid.lateral}, {"sternal", options_.resample.grid.sternal}};
+    context->report["profile_fit"] = ToString(options_.resample.fit.kind);
+    Info("pipeline: " + result.message + "; report: " + (out / "report.html").string());
+  }
+
+ private:
+  std::string cohort_, out_, sweep_pattern_, landmarks_name_, grid_, fit_;
+  bool no_quality_ = false, no_surfaces_ = false;
+  PipelineOptions options_;
+  PipelineReportOptions report_;
+  std::vector<CohortSubject> subjects_;
+};
+
+PECTUS_REGISTER_COMMAND(PipelineCommand, 110);
+
+}  // namespace
+}  // namespace pectus::cli

@@ -1,0 +1,302 @@
+// pectus synth cohort|subject|pair|patient: synthetic handheld chest scans with their ground truth
+// (docs/datasets.md).
+#include <mutex>
+#include <optional>
+
+#include "apps/command.h"
+#include "datasets/chest_population.h"
+#include "datasets/patient_table.h"
+#include "datasets/scan_writer.h"
+#include "datasets/synth.h"
+#include "datasets/synth_preview.h"
+#include "shape/core/atomic_file.h"
+#include "shape/core/error.h"
+#include "shape/core/log.h"
+
+namespace pectus::cli {
+namespace {
+
+namespace ds = pectus::datasets;
+
+class SynthCommand : public Command {
+ public:
+  std::string Name() const override { return "synth"; }
+  std::string Summary() const override {
+    return "Synthetic handheld chest scans with ground truth: a cohort, a subject, a growth pair, a patient";
+  }
+  std::string Example() const override {
+    return "  pectus synth cohort --subjects 11 --seed 7 --out cohort      # 11 normal chests, 5 sweeps "
+           "each\n"
+           "  pectus synth cohort --subjects 20 --pectus-fraction 0.5 --noise 0.3 --out mixed\n"
+           "  pectus synth subject --seed 3 --pectus-depth 35 --pectus-type cup --torsion 15 --out pe\n"
+           "  pectus synth pair --seed 3 --pectus-depth 25 --years 2 --out pair  # pair/pre, pair/post\n"
+           "  pectus synth patient --row 57 --out p57 --table "
+           "../shared/datasets/patients/nuss_ct_parameters.csv\n"
+           "Each subject folder holds sweep_NN.ply (the scanner's points), landmarks.mrk.json and truth/\n"
+           "(surface.ply, chest_wall.ply, poses.json, poses.conf, landmarks.mrk.json, subject.json,\n"
+           "sweep_NN.ply); a cohort also gets population/ (exact mean and modes). Frame: mm, x to the\n"
+           "subject's left, y up, z anterior.";
+  }
+
+  void Configure(CLI::App* app) override {
+    app->require_subcommand(1, 1);
+    cohort_ =
+        app->add_subcommand("cohort", "Subjects drawn from the population, with its true mean and modes");
+    cohort_->add_option("--subjects", cohort_options_.subjects, "Number of subjects")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 10000));
+    cohort_->add_option("--pectus-fraction", subject_.pectus.fraction, "Share of subjects given a depression")
+        ->capture_default_str();
+    cohort_->add_option("--pectus-min", subject_.pectus.depth_min_mm, "Shallowest drawn depression (mm)")
+        ->capture_default_str();
+    cohort_->add_option("--pectus-max", subject_.pectus.depth_max_mm, "Deepest drawn depression (mm)")
+        ->capture_default_str();
+    cohort_->add_option("--cup-fraction", subject_.pectus.cup_fraction, "Share of cup-type depressions")
+        ->capture_default_str();
+    cohort_->add_option("--modes", modes_, "True modes written to population/")->capture_default_str();
+    cohort_->add_option("--grid", grid_, "Shape grid of the true statistics: NUxNV")->capture_default_str();
+    subject_cmd_ = app->add_subcommand("subject", "One subject, optionally with a given depression");
+    subject_cmd_->add_option("--index", index_, "Which subject of the seed's population draw")
+        ->capture_default_str();
+    pair_ = app->add_subcommand("pair", "One subject scanned twice: now (pre/) and after growth (post/)");
+    pair_->add_option("--index", index_, "Which subject of the seed's population draw")
+        ->capture_default_str();
+    pair_->add_option("--years", growth_.years, "Years of growth between the scans")->capture_default_str();
+    pair_->add_option("--depth-change", growth_.pectus_depth_factor, "Depression depth multiplied by this")
+        ->capture_default_str();
+    patient_ = app->add_subcommand("patient", "Chests of Nuss patients from their CT parameters");
+    patient_->add_option("--row", rows_, "Patient number (repeatable)");
+    patient_->add_flag("--all", all_rows_, "Every patient of the table");
+    patient_->add_option("--table", table_, "The CT parameter table (CSV)")->capture_default_str();
+    for (CLI::App* sub : {cohort_, subject_cmd_, pair_, patient_}) {
+      sub->fallthrough();  // --report, --threads, --quiet belong to `synth`
+      sub->footer("\nExample:\n" + Example());
+      AddCommonOptions(sub);
+      if (sub == subject_cmd_ || sub == pair_) AddPectusOptions(sub);
+    }
+  }
+
+  std::vector<std::filesystem::path> Inputs() const override {
+    if (patient_ && patient_->parsed()) return {table_};
+    return {};
+  }
+
+  void Run(Context* context) override {
+    std::string why;
+    cohort_options_.seed = seed_;
+    cohort_options_.subject = subject_;
+    cohort_options_.scan = scan_;
+    if (!cohort_options_.IsValid(&why)) ThrowUsage(why);
+    if (!write_.IsValid(&why)) ThrowUsage(why);
+    Report& report = context->report;
+    report["out"] = out_.string();
+    report["seed"] = seed_;
+    std::vector<ds::SyntheticSubject> subjects;
+    std::vector<std::string> folders;
+    {
+      auto t = report.Stage("shapes");
+      if (cohort_->parsed()) {
+        report["mode"] = "cohort";
+        subjects = ds::MakeCohortSubjects(cohort_options_);
+      } else if (subject_cmd_->parsed()) {
+        report["mode"] = "subject";
+        subjects.push_back(ds::MakeSubjectWithPectus(subject_, seed_, index_, Pectus()));
+      } else if (pair_->parsed()) {
+        report["mode"] = "pair";
+        const ds::SyntheticSubject pre = ds::MakeSubjectWithPectus(subject_, seed_, index_, Pectus());
+        subjects = {pre, ds::GrowSubject(pre, growth_, "post")};
+        subjects[0].name = "pre";
+      } else {
+        report["mode"] = "patient";
+        subjects = PatientSubjects(&report);
+      }
+    }
+    // A single subject goes straight into --out; several get a folder each.
+    const bool single = subjects.size() == 1 && !cohort_->parsed() && !patient_->parsed();
+    std::mutex stage_mutex;
+    const ds::StagePath stage = [&](const std::filesystem::path& target) {
+      std::lock_guard<std::mutex> lock(stage_mutex);
+      return StageOutput(context, *this, target);
+    };
+    std::vector<std::uintmax_t> bytes(subjects.size(), 0);
+    std::vector<Eigen::Index> points(subjects.size(), 0);
+    std::vector<std::string> errors(subjects.size());
+    {
+      auto t = report.Stage("scan_and_write");
+      Progress progress("synthesising subjects", static_cast<std::int64_t>(subjects.size()));
+#pragma omp parallel for schedule(dynamic)
+      for (std::size_t i = 0; i < subjects.size(); ++i) {
+        try {
+          const std::uint64_t scan_seed = ds::CohortScanSeed(seed_, static_cast<int>(i));
+          const ds::ScannedSubject scanned =
+              ds::ScanSubject(subjects[i], scan_, subject_.landmark_sd_mm, scan_seed);
+          const std::filesystem::path folder = single ? out_ : out_ / subjects[i].name;
+          bytes[i] = ds::WriteSubjectFolder(scanned, folder, write_, stage);
+          for (const ds::Sweep& s : scanned.scan.sweeps) points[i] += s.cloud.size();
+          if (preview_) ds::WriteSubjectPreview(scanned, folder / "preview.png", stage);
+        } catch (const std::exception& e) {
+          errors[i] = e.what();
+        }
+        progress.Advance();
+      }
+    }
+    for (std::size_t i = 0; i < subjects.size(); ++i) {
+      if (!errors[i].empty()) ThrowFailure(subjects[i].name + ": " + errors[i]);
+    }
+    if (cohort_->parsed()) WritePopulation(context);
+    nlohmann::json list = nlohmann::json::array();
+    std::uintmax_t total_bytes = 0;
+    Eigen::Index total_points = 0;
+    for (std::size_t i = 0; i < subjects.size(); ++i) {
+      list.push_back({{"name", subjects[i].name},
+                      {"origin", subjects[i].origin},
+                      {"points", points[i]},
+                      {"pectus_depth_mm", subjects[i].parameters.pectus.depth_mm}});
+      total_bytes += bytes[i];
+      total_points += points[i];
+    }
+    nlohmann::json index = {{"mode", report["mode"]},
+                            {"seed", seed_},
+                            {"frame", "mm; x to the subject's left, y up (superior), z anterior"},
+                            {"subjects", list}};
+    const std::filesystem::path index_file = out_ / (single ? "truth/synth.json" : "synth.json");
+    WriteFileAtomically(StageOutput(context, *this, index_file), index.dump(2) + "\n");
+    report["subjects"] = subjects.size();
+    report["sweeps_per_subject"] = scan_.sweeps;
+    report["points"] = total_points;
+    report["bytes_written"] = total_bytes;
+    Info("wrote " + std::to_string(subjects.size()) + " subject(s), " + std::to_string(total_points) +
+         " scan points, to " + out_.string());
+  }
+
+ private:
+  void AddCommonOptions(CLI::App* sub) {
+    sub->add_option("-o,--out", out_, "Output folder")->required();
+    sub->add_option("--seed", seed_, "Random seed (same seed, same data)")->capture_default_str();
+    sub->add_option("--sweeps", scan_.sweeps, "Sweeps per subject (3-8 usual)")->capture_default_str();
+    sub->add_option("--overlap", scan_.overlap, "Fraction of a strip shared with each neighbour")
+        ->capture_default_str();
+    sub->add_option("--spacing", scan_.spacing_mm, "Point spacing at a strip's centre (mm)")
+        ->capture_default_str();
+    sub->add_option("--noise", scan_.noise_mm, "Range noise along each ray, sd (mm)")->capture_default_str();
+    sub->add_option("--tracker-deg", scan_.tracker_deg, "Rotation error of each sweep's pose (deg)")
+        ->capture_default_str();
+    sub->add_option("--tracker-mm", scan_.tracker_mm, "Translation error of each sweep's pose (mm)")
+        ->capture_default_str();
+    sub->add_option("--breathing", scan_.breathing_mm, "Breathing displacement between sweeps, up to (mm)")
+        ->capture_default_str();
+    sub->add_option("--holes", scan_.subject_holes, "Holes in every sweep (hair, dark skin)")
+        ->capture_default_str();
+    sub->add_option("--sweep-holes", scan_.sweep_holes, "Holes per sweep (occlusion, glare)")
+        ->capture_default_str();
+    sub->add_option("--hole-min", scan_.hole_min_mm, "Smallest hole diameter (mm)")->capture_default_str();
+    sub->add_option("--hole-max", scan_.hole_max_mm, "Largest hole diameter (mm)")->capture_default_str();
+    sub->add_option("--ragged", scan_.ragged_mm, "Wander of the strips' borders (mm)")->capture_default_str();
+    sub->add_option("--outliers", scan_.outlier_fraction, "Fraction of outlier points")
+        ->capture_default_str();
+    sub->add_option("--standoff", scan_.standoff_mm, "Wand-to-skin distance (mm)")->capture_default_str();
+    sub->add_option("--tremor-mm", scan_.tremor_mm, "Hand tremor of the wand's position (mm)")
+        ->capture_default_str();
+    sub->add_option("--tremor-deg", scan_.tremor_deg, "Hand tremor of the wand's direction (deg)")
+        ->capture_default_str();
+    sub->add_option("--max-incidence", scan_.max_incidence_deg, "No return beyond this incidence angle (deg)")
+        ->capture_default_str();
+    sub->add_option("--incidence-falloff", scan_.incidence_falloff, "Points kept with probability cos^this")
+        ->capture_default_str();
+    sub->add_option("--landmark-sd", subject_.landmark_sd_mm, "Placement error of landmarks.mrk.json (mm)")
+        ->capture_default_str();
+    sub->add_option("--pose-deg", subject_.pose_deg, "Random turn of each subject in the scanner frame (deg)")
+        ->capture_default_str();
+    sub->add_option("--pose-mm", subject_.pose_mm, "Random shift of each subject in the scanner frame (mm)")
+        ->capture_default_str();
+    sub->add_option("--truth-spacing", write_.truth_spacing_mm, "Edge length of the true meshes (mm)")
+        ->capture_default_str();
+    sub->add_flag("--no-chest-wall", no_chest_wall_, "Do not write truth/chest_wall.ply")
+        ->each([this](const std::string&) { write_.chest_wall = false; });
+    sub->add_flag("--no-sweep-truth", no_sweep_truth_, "Do not write truth/sweep_NN.ply")
+        ->each([this](const std::string&) { write_.sweep_truth = false; });
+    sub->add_flag("--preview", preview_,
+                  "Also write preview.png (the subject, its sweeps coloured by sweep)");
+  }
+
+  void AddPectusOptions(CLI::App* sub) {
+    sub->add_option("--pectus-depth", pectus_.depth_mm, "Depression depth (mm, 0-60; 0: none)")
+        ->capture_default_str();
+    sub->add_option("--pectus-type", pectus_type_, "saucer (broad) or cup (localised)")
+        ->capture_default_str();
+    sub->add_option("--pectus-x", pectus_.centre_x_mm, "Centre's offset to the subject's left (mm)")
+        ->capture_default_str();
+    sub->add_option("--pectus-y", pectus_.centre_y_mm, "Centre's height above the reference level (mm)")
+        ->capture_default_str();
+    sub->add_option("--asymmetry", pectus_.asymmetry, "Left half (1 + a) times as wide as the right (1 - a)")
+        ->capture_default_str();
+    sub->add_option("--torsion", pectus_.torsion_deg, "Sternal torsion (deg; + sinks the right side)")
+        ->capture_default_str();
+  }
+
+  ds::PectusParameters Pectus() const {
+    ds::PectusParameters p = pectus_;
+    p.type = ds::ParsePectusType(pectus_type_);
+    std::string why;
+    if (!p.IsValid(&why)) ThrowUsage(why);
+    return p;
+  }
+
+  std::vector<ds::SyntheticSubject> PatientSubjects(Report* report) {
+    if (rows_.empty() && !all_rows_) ThrowUsage("synth patient: give --row N (repeatable) or --all");
+    const std::vector<ds::PatientRow> table = ds::ReadPatientTable(table_);
+    std::vector<ds::PatientRow> chosen;
+    if (all_rows_) {
+      chosen = table;
+    } else {
+      for (int r : rows_) chosen.push_back(ds::FindPatient(table, r, table_.string()));
+    }
+    std::vector<ds::SyntheticSubject> subjects(chosen.size());
+#pragma omp parallel for schedule(dynamic)
+    for (std::size_t i = 0; i < chosen.size(); ++i)
+      subjects[i] = ds::MakePatientSubject(chosen[i], seed_, subject_);
+    nlohmann::json fits = nlohmann::json::array();
+    for (const ds::SyntheticSubject& s : subjects) {
+      fits.push_back({{"name", s.name}, {"residual_mm", s.extra["fit_residual_mm"]}});
+    }
+    (*report)["patient_fits"] = fits;
+    return subjects;
+  }
+
+  void WritePopulation(Context* context) {
+    auto t = context->report.Stage("population");
+    ds::ShapeGrid grid;
+    if (std::sscanf(grid_.c_str(), "%dx%d", &grid.nu, &grid.nv) != 2 || grid.nu < 2 || grid.nv < 2 ||
+        grid.nu > 1000 || grid.nv > 1000) {
+      ThrowUsage("--grid must read NUxNV with 2 to 1000 vertices each way, e.g. 51x101");
+    }
+    if (modes_ < 1 || modes_ > 100) ThrowUsage("--modes must be within [1, 100]");
+    const ds::TrueShapeStatistics st = ds::ComputeTrueShapeStatistics(subject_.population, grid, modes_);
+    ds::WritePopulationFolder(subject_.population, st, out_ / "population",
+                              [&](const std::filesystem::path& p) { return StageOutput(context, *this, p); });
+    context->report["true_eigenvalues_mm2"] =
+        std::vector<double>(st.eigenvalues.data(), st.eigenvalues.data() + st.eigenvalues.size());
+  }
+
+  CLI::App *cohort_ = nullptr, *subject_cmd_ = nullptr, *pair_ = nullptr, *patient_ = nullptr;
+  std::filesystem::path out_;
+  std::filesystem::path table_ = "../shared/datasets/patients/nuss_ct_parameters.csv";
+  std::uint64_t seed_ = 7;
+  int index_ = 0;
+  int modes_ = 10;
+  std::string grid_ = "51x101";
+  std::vector<int> rows_;
+  bool all_rows_ = false, no_chest_wall_ = false, no_sweep_truth_ = false, preview_ = false;
+  ds::ScanOptions scan_;
+  ds::SubjectOptions subject_;
+  ds::CohortOptions cohort_options_;
+  ds::SubjectWriteOptions write_;
+  ds::GrowthOptions growth_;
+  ds::PectusParameters pectus_;
+  std::string pectus_type_ = "saucer";
+};
+
+PECTUS_REGISTER_COMMAND(SynthCommand, 90);
+
+}  // namespace
+}  // namespace pectus::cli

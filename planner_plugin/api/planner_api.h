@@ -1,0 +1,217 @@
+/* pectus planner plugin: the C interface between a host (`pectus plan`, or any program) and the
+ * planner's shared library (libpectus_planner.so). Plain C so that any compiler and language can use
+ * it; versioned so that a host never calls a plugin built for another interface.
+ *
+ * The plugin exports one symbol, pectus_planner_interface(), which returns a table of functions whose
+ * first field is the interface version the plugin implements. A host compares it with
+ * PECTUS_PLANNER_INTERFACE_VERSION and refuses any other (docs/planner.md, "Plugin interface").
+ *
+ * Rules every function keeps:
+ *  - It never throws and never aborts: every failure comes back as a status code (the same numbers as
+ *    pectus's exit codes and pectus::ErrorKind) with a message naming the file, patient or value at fault.
+ *  - Units: millimetres, newtons, megapascals, degrees. Frame: LPS (x to the patient's left, y posterior,
+ *    z superior) with the origin at the patient's sternal notch on the front of the manubrium.
+ *  - Arrays are row-major. Arrays the plugin hands out (PectusPlannerMesh) belong to the planner and stay
+ *    valid until it is destroyed; arrays the host passes in are the host's.
+ *  - One planner may be used by one thread at a time; different planners are independent.
+ */
+#ifndef PECTUS_PLANNER_API_H_
+#define PECTUS_PLANNER_API_H_
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** The interface version this header describes. Any change to a struct or function below bumps it. */
+#define PECTUS_PLANNER_INTERFACE_VERSION 1u
+/** The name of the one exported symbol (for dlsym). */
+#define PECTUS_PLANNER_ENTRY_POINT "pectus_planner_interface"
+
+/** Status codes: the numbers of pectus::ErrorKind and of the command line's exit codes. */
+enum PectusPlannerCode {
+  PECTUS_PLANNER_OK = 0,
+  PECTUS_PLANNER_FAILURE = 1,   /**< a computation or a write did not succeed */
+  PECTUS_PLANNER_USAGE = 2,     /**< the caller asked for something impossible (bad option) */
+  PECTUS_PLANNER_BAD_INPUT = 3  /**< a file or value is wrong (malformed table, measurement out of range) */
+};
+
+/** What a call did: `code` (PectusPlannerCode) and, unless OK, a message ("FILE:LINE: what is wrong"). */
+typedef struct PectusPlannerStatus {
+  int32_t code;
+  char message[1024];
+} PectusPlannerStatus;
+
+/** A patient's CT measurements (dissertation §4.1.1, Figure 24). Lengths in mm on the image; divided
+ *  by `magnification` for true size. */
+typedef struct PectusPlannerPatient {
+  char id[64];                 /**< patient identifier, NUL-terminated (e.g. "57") */
+  double magnification;        /**< of the CT images; must be given, 1 if none */
+  double width_mm;             /**< ribcage width on the slice of deepest depression */
+  double depth_mm;             /**< ribcage depth on that slice */
+  double sternal_length_mm;    /**< used when slice_spacing_mm is 0 */
+  double first_sternum_slice;  /**< with last_sternum_slice and slice_spacing_mm (> 0): the sternal length */
+  double last_sternum_slice;
+  double slice_spacing_mm;
+  double depression_mm;        /**< sternal depression, 0 to 60 */
+  double torsion_deg;          /**< sternal torsion, -45 to 45 (positive: the right edge deeper) */
+  double ct_haller_index;      /**< as measured on the CT, 0 if unknown (reported, not used) */
+} PectusPlannerPatient;
+
+/** Materials, mesh and skin settings. Fill with default_options() first, then change what you need. */
+typedef struct PectusPlannerOptions {
+  double sternum_youngs_modulus_mpa;    /**< default 11500 (dissertation Table 1) */
+  double sternum_poisson_ratio;         /**< default 0.3 */
+  double rib_youngs_modulus_mpa;        /**< default 5000 */
+  double rib_poisson_ratio;             /**< default 0.3 */
+  double cartilage_youngs_modulus_mpa;  /**< default 20: the one to set per patient (stiffer with age) */
+  double cartilage_poisson_ratio;       /**< default 0.4 */
+  double contact_width_mm;              /**< cranio-caudal width of the bar's contact patch, default 12 */
+  double rib_cell_length_mm;            /**< mesh: cell length along ribs and cartilages, default 6 */
+  int32_t sternum_cells_along;          /**< mesh: cells along the sternum, default 34 */
+  double soft_tissue_mm;                /**< skin: soft-tissue thickness over the bones, default 15 */
+  int32_t skin_rows;                    /**< skin grid rows (top to bottom), default 64 */
+  int32_t skin_columns;                 /**< skin grid columns (right to left), default 96 */
+} PectusPlannerOptions;
+
+/** What the generated ribcage measures, the way the CT was measured; and the fit that made it. */
+typedef struct PectusPlannerMeasurements {
+  double width_mm, depth_mm, sternal_length_mm, depression_mm, torsion_deg;
+  double inner_width_mm;       /**< between the inner surfaces of the ribs on the slice */
+  double sternum_to_spine_mm;  /**< posterior sternum to anterior vertebral body on the slice */
+  double haller_index;         /**< inner_width_mm / sternum_to_spine_mm */
+  double slice_z_mm;           /**< height of the slice of deepest depression */
+  double fit_residual_mm;      /**< largest difference between a target and what the ribcage measures */
+  int32_t fit_converged;       /**< 1 if every residual is within the fit's tolerance */
+  int32_t fit_iterations;
+  int64_t nodes, tets;         /**< of the quadratic tetrahedral mesh */
+  int64_t free_dofs;
+  double factorization_seconds;  /**< assembly and Cholesky factorisation, s (wall) */
+} PectusPlannerMeasurements;
+
+/** A triangle mesh owned by the planner. */
+typedef struct PectusPlannerMesh {
+  int64_t num_vertices;
+  const double* vertices;      /**< num_vertices by 3, mm */
+  int64_t num_faces;
+  const int32_t* faces;        /**< num_faces by 3 vertex indices, outward */
+  const int32_t* face_labels;  /**< num_faces labels (bone: 0 sternum, 1 rib, 2 cartilage), or NULL */
+} PectusPlannerMesh;
+
+/** A named point. Labels: "sternal_notch", "manubrium_centre", "sternal_angle", "xiphoid" (the
+ *  xiphisternal joint), "xiphoid_tip". */
+
+/** Which landmarks landmarks() gives. */
+enum PectusPlannerLandmarkSet {
+  PECTUS_PLANNER_BONE_LANDMARKS = 0,      /**< on the ribcage (anterior midline of the sternum) */
+  PECTUS_PLANNER_SKIN_LANDMARKS = 1,      /**< projected forward onto the undeformed skin */
+  /** The skin landmarks of the skin without the deformity (skin_surface(..., 1, ...)): the frame to
+   *  register every predicted chest in, since the bar moves the real ones. */
+  PECTUS_PLANNER_REFERENCE_LANDMARKS = 2
+};
+typedef struct PectusPlannerLandmark {
+  char label[48];
+  double position[3];  /**< mm */
+} PectusPlannerLandmark;
+
+/** Where the bar pushes and how hard. */
+typedef struct PectusPlannerBar {
+  double position;         /**< along the sternum from the notch: fraction of the sternal length, or mm */
+  int32_t position_in_mm;  /**< 1 if `position` is in mm */
+  double force_n;          /**< > 0 */
+} PectusPlannerBar;
+
+/** Figures of one solved load case. */
+typedef struct PectusPlannerCaseResult {
+  double sternum_lift_mm;       /**< anterior displacement of the sternum at the slice of deepest depression */
+  double max_displacement_mm;   /**< over the whole ribcage */
+  double bar_level_z_mm;        /**< height at which the bar meets the sternum */
+  double contact_area_mm2;
+  int64_t contact_faces;
+} PectusPlannerCaseResult;
+
+/** Force to lift the sternum by the patient's depression with the bar at one position. */
+typedef struct PectusPlannerForceToLift {
+  double lift_per_newton_mm;  /**< sternal lift under 1 N */
+  double force_n;             /**< depression / lift_per_newton_mm */
+} PectusPlannerForceToLift;
+
+/** Called as work advances (done of total); may be NULL. */
+typedef void (*PectusPlannerProgressFn)(void* user, int64_t done, int64_t total);
+
+/** Summary of a written dataset. */
+typedef struct PectusPlannerDatasetSummary {
+  int64_t patients, load_cases, results, surface_nodes;
+  double seconds;
+} PectusPlannerDatasetSummary;
+
+typedef struct PectusPlanner PectusPlanner; /**< opaque */
+
+/** The plugin's function table. Every function returning int32_t returns a PectusPlannerCode and fills
+ *  `status` (which may be NULL if the caller does not want the message). */
+typedef struct PectusPlannerInterface {
+  uint32_t version;     /**< PECTUS_PLANNER_INTERFACE_VERSION of the plugin; check it before anything else */
+  uint32_t struct_size; /**< sizeof(PectusPlannerInterface) in the plugin */
+  const char* description; /**< e.g. "pectus planner 0.1.0 (quadratic tetrahedra, CHOLMOD)" */
+
+  /** Fills `options` with the defaults. */
+  void (*default_options)(PectusPlannerOptions* options);
+
+  /** Reads `patient` from a patient table (CSV: patient, width_mm, sternal_length_mm, depth_mm,
+   *  depression_mm, optional haller_index, magnification, torsion_deg). */
+  int32_t (*read_patient)(const char* table_path, const char* patient, PectusPlannerPatient* out,
+                          PectusPlannerStatus* status);
+
+  /** Builds the patient's ribcage, fits it to the measurements, meshes it with quadratic tetrahedra,
+   *  assembles and factorises the stiffness once, and builds the skin. On success *out is a planner to
+   *  pass to destroy(). `options` may be NULL (defaults). */
+  int32_t (*create)(const PectusPlannerPatient* patient, const PectusPlannerOptions* options, PectusPlanner** out,
+                    PectusPlannerStatus* status);
+  /** Frees a planner (NULL is allowed). */
+  void (*destroy)(PectusPlanner* planner);
+
+  int32_t (*measurements)(const PectusPlanner* planner, PectusPlannerMeasurements* out, PectusPlannerStatus* status);
+  /** The bone surface (corner nodes of the mesh boundary; labels: material region per face). */
+  int32_t (*bone_surface)(const PectusPlanner* planner, PectusPlannerMesh* out, PectusPlannerStatus* status);
+  /** The skin over the chest wall, a rows by columns grid: as measured (`without_deformity` 0), or as the
+   *  same ribcage without depression and torsion would carry it (1; same faces, vertex by vertex). */
+  int32_t (*skin_surface)(const PectusPlanner* planner, int32_t without_deformity, PectusPlannerMesh* out,
+                          PectusPlannerStatus* status);
+  /** The landmarks of `set` (PectusPlannerLandmarkSet). Writes at most `capacity` into `out` and the
+   *  number there are into *count. */
+  int32_t (*landmarks)(const PectusPlanner* planner, int32_t set, PectusPlannerLandmark* out, int32_t capacity,
+                       int32_t* count, PectusPlannerStatus* status);
+
+  /** Solves `count` load cases on the one factorisation. Each output may be NULL; otherwise it holds
+   *  count blocks, one per case in order:
+   *   bone_positions  count x bone vertices x 3: deformed bone surface vertices, mm
+   *   skin_positions  count x skin vertices x 3: deformed skin vertices, mm
+   *   skin_landmarks  count x landmark count x 3: skin landmarks of the deformed skin, mm
+   *   results         count figures. */
+  int32_t (*solve)(const PectusPlanner* planner, const PectusPlannerBar* bars, int64_t count, double* bone_positions,
+                   double* skin_positions, double* skin_landmarks, PectusPlannerCaseResult* results,
+                   PectusPlannerStatus* status);
+
+  /** Force to lift the sternum by the patient's depression at each of `count` bar positions
+   *  (bars[i].force_n is ignored). */
+  int32_t (*force_to_lift)(const PectusPlanner* planner, const PectusPlannerBar* bars, int64_t count,
+                           PectusPlannerForceToLift* out, PectusPlannerStatus* status);
+
+  /** The dissertation's dataset: every patient of `table_path` x 3 bar positions (0.65, 0.75, 0.85 of the
+   *  sternal length) x 8 forces (50, 70, 100, 200, 400, 800, 1500, 2000 N), surface-node displacements
+   *  written as one HDF5 file at `output_path` (replaced only when complete). */
+  int32_t (*write_dataset)(const char* table_path, const char* output_path, const PectusPlannerOptions* options,
+                           PectusPlannerProgressFn progress, void* progress_user, PectusPlannerDatasetSummary* out,
+                           PectusPlannerStatus* status);
+} PectusPlannerInterface;
+
+/** The one exported symbol: the plugin's function table (static storage; never NULL). */
+typedef const PectusPlannerInterface* (*PectusPlannerEntryFn)(void);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PECTUS_PLANNER_API_H_ */

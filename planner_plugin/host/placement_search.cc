@@ -1,0 +1,190 @@
+#include "planner_plugin/host/placement_search.h"
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include "shape/core/error.h"
+
+namespace pectus::planner {
+
+bool PlacementSearchOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& reason) {
+    if (why) *why = reason;
+    return false;
+  };
+  if (!(position_from > 0 && position_to <= 1 && position_from < position_to)) {
+    return fail("positions must satisfy 0 < from < to <= 1 (fractions of the sternal length)");
+  }
+  if (positions < 2 || forces < 2) return fail("at least 2 positions and 2 forces");
+  if (!(force_max_n > 0 && force_max_n <= 20000)) return fail("force_max_n must be in (0, 20000] N");
+  if (!(lift_limit >= 1 && lift_limit <= 100)) return fail("lift_limit must be 1 to 100");
+  if (golden_iterations < 0 || golden_iterations > 60) return fail("golden_iterations must be 0 to 60");
+  if (objective != "rms" && objective != "central_rms") return fail("objective must be 'rms' or 'central_rms'");
+  return true;
+}
+
+nlohmann::json PlacementSearchResult::ToJson() const {
+  nlohmann::json grid = nlohmann::json::array();
+  for (Eigen::Index i = 0; i < objective_mm.rows(); ++i) {
+    std::vector<double> row(static_cast<std::size_t>(objective_mm.cols()));
+    for (Eigen::Index j = 0; j < objective_mm.cols(); ++j) row[static_cast<std::size_t>(j)] = objective_mm(i, j);
+    grid.push_back(row);
+  }
+  return {{"best", {{"position", best.position}, {"force_n", best.force_n}, {"objective_mm", best_objective_mm}}},
+          {"best_score", best_score.ToJson()},
+          {"positions", positions},
+          {"forces_n", forces_n},
+          {"force_limit_n", force_limit_n},
+          {"objective_mm", grid},
+          {"evaluations", evaluations},
+          {"solves", solves},
+          {"seconds", seconds}};
+}
+
+namespace {
+
+// The skin at one position, per newton (the model is linear).
+struct UnitResponse {
+  Points3 skin0, skin_per_n;
+  double lift_per_n = 0;
+};
+
+// Golden-section search of f over [lo, hi]; improves (*x, *value) if it finds a lower value.
+template <typename F>
+void GoldenSection(double lo, double hi, int iterations, F&& f, double* x, double* value) {
+  constexpr double kInvPhi = 0.6180339887498949;
+  double a = lo, b = hi;
+  double c = b - kInvPhi * (b - a), d = a + kInvPhi * (b - a);
+  double fc = f(c), fd = f(d);
+  for (int k = 0; k < iterations; ++k) {
+    if (fc < fd) {
+      b = d;
+      d = c;
+      fd = fc;
+      c = b - kInvPhi * (b - a);
+      fc = f(c);
+    } else {
+      a = c;
+      c = d;
+      fc = fd;
+      d = a + kInvPhi * (b - a);
+      fd = f(d);
+    }
+  }
+  for (const auto& [xi, fi] : {std::pair{c, fc}, std::pair{d, fd}}) {
+    if (fi < *value) {
+      *value = fi;
+      *x = xi;
+    }
+  }
+}
+
+}  // namespace
+
+PlacementSearchResult SearchBestPlacement(const PlannerClient& planner, const AverageChest& average,
+                                          const ChestRegistrationResult& registration,
+                                          const PlanScoreOptions& score_options,
+                                          const PlacementSearchOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) ThrowUsage("placement search: " + why);
+  const auto start = std::chrono::steady_clock::now();
+  PlacementSearchResult out;
+  PlanScoreOptions fast = score_options;
+  fast.map_predicted_skin = false;
+  std::map<double, UnitResponse> responses;
+  auto response = [&](double position) -> const UnitResponse& {
+    auto it = responses.find(position);
+    if (it != responses.end()) return it->second;
+    const PlannedCase unit = planner.Solve({{position, false, 1.0}}, false).front();
+    ++out.solves;
+    UnitResponse r;
+    r.skin0 = planner.skin().vertices.positions;
+    r.skin_per_n = unit.skin - r.skin0;
+    r.lift_per_n = unit.figures.sternum_lift_mm;
+    return responses.emplace(position, std::move(r)).first->second;
+  };
+  auto evaluate = [&](double position, double force, PlanScore* keep) {
+    const UnitResponse& r = response(position);
+    TriangleMesh skin = planner.skin();
+    skin.vertices.positions = r.skin0 + force * r.skin_per_n;
+    PlanScore score = ScorePlan(skin, planner.reference_skin(), registration, average, fast);
+    ++out.evaluations;
+    const double value = options.objective == "rms" ? score.roi.rms : score.central_roi.rms;
+    if (keep != nullptr) *keep = std::move(score);
+    return value;
+  };
+  // Step 1: the grid.
+  for (int i = 0; i < options.positions; ++i) {
+    out.positions.push_back(options.position_from +
+                            (options.position_to - options.position_from) * i / (options.positions - 1));
+  }
+  // The force range: up to lift_limit times the largest force to lift the sternum by its depression (at
+  // least 10 mm of lift, for a flat chest).
+  double least_lift_per_n = std::numeric_limits<double>::infinity();
+  for (double p : out.positions) least_lift_per_n = std::min(least_lift_per_n, response(p).lift_per_n);
+  const double depression = std::max(10.0, planner.measurements().depression_mm);
+  out.force_limit_n = options.force_max_n;
+  if (least_lift_per_n > 0) out.force_limit_n = std::min(out.force_limit_n, options.lift_limit * depression / least_lift_per_n);
+  for (int j = 1; j <= options.forces; ++j) out.forces_n.push_back(out.force_limit_n * j / options.forces);
+  out.objective_mm.resize(options.positions, options.forces);
+  // The best force at one position: the best of the force grid (or of its cells within `window` of
+  // `near`), refined between its neighbours.
+  const double kUnset = std::numeric_limits<double>::infinity();
+  auto best_force = [&](double position, const double* grid_values, double* value, int near = -1, int window = 3) {
+    std::vector<double> values(out.forces_n.size(), kUnset);
+    for (std::size_t j = 0; j < values.size(); ++j) {
+      if (grid_values != nullptr) {
+        values[j] = grid_values[j];
+      } else if (near < 0 || std::abs(static_cast<int>(j) - near) <= window) {
+        values[j] = evaluate(position, out.forces_n[j], nullptr);
+      }
+    }
+    const auto j = static_cast<std::size_t>(std::min_element(values.begin(), values.end()) - values.begin());
+    const double lo = j == 0 ? 0.0 : out.forces_n[j - 1];
+    const double hi = j + 1 == values.size() ? out.force_limit_n : out.forces_n[j + 1];
+    double force = out.forces_n[j];
+    *value = values[j];
+    GoldenSection(lo, hi, options.golden_iterations, [&](double f) { return f > 0 ? evaluate(position, f, nullptr) : 1e300; },
+                  &force, value);
+    return force;
+  };
+  double best = std::numeric_limits<double>::infinity(), position = out.positions[0], force = out.forces_n[0];
+  int bi = 0;
+  auto force_index = [&](double f) {
+    return static_cast<int>(std::lround(f / (out.forces_n[1] - out.forces_n[0]))) - 1;
+  };
+  for (int i = 0; i < options.positions; ++i) {
+    for (int j = 0; j < options.forces; ++j) out.objective_mm(i, j) = evaluate(out.positions[i], out.forces_n[j], nullptr);
+    double value = 0;
+    const double f = best_force(out.positions[i], out.objective_mm.row(i).eval().data(), &value);
+    if (value < best) {
+      best = value;
+      bi = i;
+      position = out.positions[i];
+      force = f;
+    }
+  }
+  // Step 2: the position between the grid's neighbours of the best, each at its best force.
+  const double lo = out.positions[std::max(0, bi - 1)], hi = out.positions[std::min(options.positions - 1, bi + 1)];
+  GoldenSection(lo, hi, options.golden_iterations,
+                [&](double p) {
+                  double value = 0;
+                  // The best force changes little with the position: search the grid near the best one.
+                  const double f = best_force(p, nullptr, &value, force_index(force));
+                  if (value < best) {
+                    best = value;
+                    position = p;
+                    force = f;
+                  }
+                  return value;
+                },
+                &position, &best);
+  out.best = {position, false, force};
+  out.best_objective_mm = evaluate(position, force, &out.best_score);
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+}  // namespace pectus::planner

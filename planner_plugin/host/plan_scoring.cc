@@ -1,0 +1,131 @@
+#include "planner_plugin/host/plan_scoring.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "planner_plugin/host/depth_difference.h"
+#include "shape/core/error.h"
+
+namespace pectus::planner {
+namespace {
+
+DistanceStats StatsOf(const Eigen::VectorXd& values, const Eigen::Matrix<bool, Eigen::Dynamic, 1>* mask) {
+  std::vector<double> kept;
+  for (Eigen::Index i = 0; i < values.size(); ++i) {
+    if (std::isfinite(values(i)) && (mask == nullptr || (*mask)(i))) kept.push_back(values(i));
+  }
+  return SummarizeDistances(Eigen::Map<const Eigen::VectorXd>(kept.data(), static_cast<Eigen::Index>(kept.size())));
+}
+
+}  // namespace
+
+bool PlanScoreOptions::IsValid(std::string* why) const {
+  if (!(central_fraction > 0 && central_fraction <= 1)) {
+    if (why) *why = "central_fraction must be in (0, 1]";
+    return false;
+  }
+  return registration.IsValid(why);
+}
+
+nlohmann::json PlanScore::ToJson() const {
+  nlohmann::json j = roi.ToJson();
+  j["central"] = central_roi.ToJson();
+  j["landmark_rms_mm"] = registration.landmark_rms_mm;
+  j["scale"] = registration.T_target_source.scale;
+  j["landmarks_used"] = registration.used;
+  j["uncovered_vertices"] = uncovered;
+  return j;
+}
+
+TriangleMesh PredictedChest(const PlanScore& score, const AverageChest& average, const TriangleMesh& skin,
+                            bool relative, Eigen::VectorXd* difference_mm) {
+  TriangleMesh chest;
+  if (relative) {
+    chest = average.mesh;
+    const Eigen::Vector3d anterior = AnteriorDirection(average.mesh, "average chest");
+    for (Eigen::Index i = 0; i < chest.num_vertices(); ++i) {
+      const double d = score.difference_mm(i);
+      if (std::isfinite(d)) chest.vertices.positions.row(i) += d * anterior.transpose();
+    }
+    *difference_mm = score.difference_mm;
+  } else {
+    chest.vertices.positions = score.predicted_in_average;
+    chest.faces = skin.faces;
+    *difference_mm = score.predicted_distance_mm;
+  }
+  return chest;
+}
+
+Eigen::Matrix<bool, Eigen::Dynamic, 1> CentralRegion(const AverageChest& average, double fraction) {
+  const Eigen::Vector3d notch = average.landmarks.Position("sternal_notch", average.landmark_source);
+  const Eigen::Vector3d axis = average.landmarks.Position("xiphoid", average.landmark_source) - notch;
+  const Eigen::Vector3d e1 = axis.normalized();
+  const Eigen::Vector3d anterior = AnteriorDirection(average.mesh, "average chest");
+  const Eigen::Vector3d lateral = anterior.cross(e1).normalized();
+  const Points3& x = average.mesh.vertices.positions;
+  double u_max = 0;
+  for (Eigen::Index i = 0; i < x.rows(); ++i) u_max = std::max(u_max, std::abs((x.row(i).transpose() - notch).dot(lateral)));
+  const double length = axis.norm();
+  Eigen::Matrix<bool, Eigen::Dynamic, 1> central(x.rows());
+  for (Eigen::Index i = 0; i < x.rows(); ++i) {
+    const Eigen::Vector3d d = x.row(i).transpose() - notch;
+    const double v = d.dot(e1) / length;
+    central(i) = std::abs(v - 0.5) <= 0.5 * fraction && std::abs(d.dot(lateral)) <= fraction * u_max;
+  }
+  return central;
+}
+
+PlanScore ScorePlan(const TriangleMesh& skin, const LandmarkSet& landmarks, const AverageChest& average,
+                    const PlanScoreOptions& options) {
+  PlanScoreOptions modelled = options;
+  modelled.relative = false;
+  return ScorePlan(skin, Points3(),
+                   RegisterChestByLandmarks(landmarks, AnteriorDirection(skin, "predicted skin"), average.landmarks,
+                                            AnteriorDirection(average.mesh, "average chest"), options.registration),
+                   average, modelled);
+}
+
+PlanScore ScorePlan(const TriangleMesh& skin, const Points3& without_deformity,
+                    const ChestRegistrationResult& registration, const AverageChest& average,
+                    const PlanScoreOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) ThrowUsage("plan scoring: " + why);
+  if (options.relative && without_deformity.rows() != skin.num_vertices()) {
+    ThrowUsage("plan scoring: the relative skin model needs the skin without the deformity, vertex by vertex");
+  }
+  PlanScore score;
+  // Step 1: the predicted chest (and its undeformed self) in the average chest's frame.
+  score.registration = registration;
+  const Similarity3& T = score.registration.T_target_source;
+  auto to_average = [&](const Points3& x) {
+    Points3 y(x.rows(), 3);
+    for (Eigen::Index i = 0; i < x.rows(); ++i) y.row(i) = (T * Eigen::Vector3d(x.row(i).transpose())).transpose();
+    return y;
+  };
+  TriangleMesh moved = skin;
+  moved.vertices.positions = to_average(skin.vertices.positions);
+  const Points3& p = moved.vertices.positions;
+  score.predicted_in_average = p;
+  TriangleMesh reference = skin;
+  if (options.relative) reference.vertices.positions = to_average(without_deformity);
+  // Step 2: at every average-chest vertex, how far in front of it the predicted chest lies: directly
+  // (modelled skin), or as the average chest carrying the deformity and correction (relative).
+  const Eigen::Vector3d anterior = AnteriorDirection(average.mesh, "average chest");
+  const Points3& q = average.mesh.vertices.positions;
+  score.difference_mm = DepthDifference(q, anterior, moved);
+  if (options.relative) score.difference_mm -= DepthDifference(q, anterior, reference);
+  score.uncovered = score.difference_mm.array().isNaN().count();
+  // Step 3: statistics over the region of interest and its central part.
+  score.central = CentralRegion(average, options.central_fraction);
+  score.roi = StatsOf(score.difference_mm, nullptr);
+  score.central_roi = StatsOf(score.difference_mm, &score.central);
+  // Step 4 (pictures): the same difference on the predicted skin, inside the average chest's extent.
+  if (options.map_predicted_skin && !options.relative) {
+    score.predicted_distance_mm = -DepthDifference(p, anterior, average.mesh);
+  }
+  return score;
+}
+
+}  // namespace pectus::planner

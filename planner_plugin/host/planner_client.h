@@ -1,0 +1,95 @@
+// pectus planner host: one patient's planner through the plugin, as C++ (RAII, pectus::Error on
+// failure, Eigen arrays). Nothing here knows how the plugin computes; it only speaks planner_api.h.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "planner_plugin/api/planner_api.h"
+#include "planner_plugin/host/planner_plugin_loader.h"
+#include "shape/core/geometry.h"
+#include "shape/core/landmarks.h"
+
+namespace pectus::planner {
+
+/// Throws the pectus::Error matching a plugin status (kind = code, message = the plugin's) unless OK.
+void ThrowIfFailed(std::int32_t code, const PectusPlannerStatus& status);
+
+/// A bar placement: position along the sternum from the notch (fraction of the sternal length, or mm)
+/// and force.
+struct BarPlacement {
+  double position = 0.85;
+  bool position_in_mm = false;
+  double force_n = 1700;
+  /// "0.85 L, 1700 N" or "140 mm, 1700 N".
+  std::string Name() const;
+};
+
+/// One solved placement as the host sees it.
+struct PlannedCase {
+  BarPlacement bar;
+  Points3 bone;               ///< deformed bone surface vertices, mm
+  Points3 skin;               ///< deformed skin vertices, mm
+  LandmarkSet skin_landmarks; ///< on the deformed skin
+  PectusPlannerCaseResult figures{};
+};
+
+/// A patient's planner in the plugin (created on construction, destroyed with this object).
+class PlannerClient {
+ public:
+  /// Creates the planner (fit, mesh, factorisation, skin). Throws the plugin's error as pectus::Error.
+  PlannerClient(const PlannerPlugin& plugin, const PectusPlannerPatient& patient, const PectusPlannerOptions& options);
+  ~PlannerClient();
+  PlannerClient(const PlannerClient&) = delete;
+  PlannerClient& operator=(const PlannerClient&) = delete;
+
+  const PectusPlannerPatient& patient() const { return patient_; }
+  const PectusPlannerOptions& options() const { return options_; }
+  const PectusPlannerMeasurements& measurements() const { return measurements_; }
+  /// Undeformed bone surface; face scalars are not kept in TriangleMesh, so regions come separately.
+  const TriangleMesh& bone() const { return bone_; }
+  const Eigen::VectorXi& bone_regions() const { return bone_regions_; }
+  const TriangleMesh& skin() const { return skin_; }
+  /// The skin the same ribcage without depression and torsion would carry (vertex by vertex as skin()).
+  const Points3& reference_skin() const { return reference_skin_; }
+  const LandmarkSet& bone_landmarks() const { return bone_landmarks_; }
+  const LandmarkSet& skin_landmarks() const { return skin_landmarks_; }
+  /// Where the skin landmarks would be without the deformity: the frame for registering every plan.
+  const LandmarkSet& reference_landmarks() const { return reference_landmarks_; }
+
+  /// Solves the placements on the plugin's one factorisation. `with_bone` false skips the bone surface.
+  std::vector<PlannedCase> Solve(const std::vector<BarPlacement>& bars, bool with_bone = true) const;
+  /// Force to lift the sternum by the depression at each position (force_n of the bars ignored).
+  std::vector<PectusPlannerForceToLift> ForceToLift(const std::vector<BarPlacement>& positions) const;
+
+ private:
+  LandmarkSet Landmarks(int set) const;
+  const PectusPlannerInterface* api_;
+  PectusPlanner* planner_ = nullptr;
+  PectusPlannerPatient patient_{};
+  PectusPlannerOptions options_{};
+  PectusPlannerMeasurements measurements_{};
+  TriangleMesh bone_, skin_;
+  Points3 reference_skin_;
+  Eigen::VectorXi bone_regions_;
+  LandmarkSet bone_landmarks_, skin_landmarks_, reference_landmarks_;
+};
+
+/// Reads one patient of a patient table through the plugin.
+PectusPlannerPatient ReadPlannerPatient(const PlannerPlugin& plugin, const std::filesystem::path& table,
+                                        const std::string& patient);
+
+/// The plugin's defaults.
+PectusPlannerOptions PluginDefaultOptions(const PlannerPlugin& plugin);
+
+/// Writes the FE dataset of every patient of `table` through the plugin; `progress(done, total)`.
+PectusPlannerDatasetSummary WritePlannerDataset(const PlannerPlugin& plugin, const std::filesystem::path& table,
+                                                const std::filesystem::path& output,
+                                                const PectusPlannerOptions& options,
+                                                const std::function<void(std::int64_t, std::int64_t)>& progress);
+
+}  // namespace pectus::planner

@@ -1,0 +1,26 @@
+// pectus planner plugin: the dissertation's finite element dataset (§4.1.2): every patient of a table
+// under the 24 load cases, written with FemDatasetWriter (io/fem_dataset_h5.h).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+
+#include "planner_plugin/plugin/planner_session.h"
+
+namespace pectus::planner {
+
+/// What the dataset run did.
+struct FemDatasetSummary {
+  std::int64_t patients = 0, load_cases = 0, results = 0, surface_nodes = 0;
+  double seconds = 0;  ///< wall time of the whole run
+};
+
+/// Builds, solves and writes every patient of `table` (one generic ribcage, one factorisation per
+/// patient, DissertationLoadCases()). `progress(done, total)` is called after each patient. Nothing
+/// appears at `output` unless every patient succeeds. Throws pectus::Error naming the patient at fault.
+FemDatasetSummary RunFemDataset(const std::filesystem::path& table, const std::filesystem::path& output,
+                                const PlannerSettings& settings,
+                                const std::function<void(std::int64_t, std::int64_t)>& progress);
+
+}  // namespace pectus::planner

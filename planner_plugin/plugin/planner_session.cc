@@ -1,0 +1,220 @@
+#include "planner_plugin/plugin/planner_session.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+#include "planner_plugin/fem/tet_mesh.h"
+#include "shape/core/error.h"
+
+namespace pectus::planner {
+
+void DefaultPlannerOptions(PectusPlannerOptions* options) {
+  const RibcageMaterials materials;
+  const GenericRibcageOptions generic;
+  const SkinSurfaceOptions skin;
+  const RibcageFemOptions fem;
+  options->sternum_youngs_modulus_mpa = materials.sternum.youngs_modulus_mpa;
+  options->sternum_poisson_ratio = materials.sternum.poisson_ratio;
+  options->rib_youngs_modulus_mpa = materials.rib.youngs_modulus_mpa;
+  options->rib_poisson_ratio = materials.rib.poisson_ratio;
+  options->cartilage_youngs_modulus_mpa = materials.cartilage.youngs_modulus_mpa;
+  options->cartilage_poisson_ratio = materials.cartilage.poisson_ratio;
+  options->contact_width_mm = fem.contact_width_mm;
+  options->rib_cell_length_mm = generic.rib_cell_length_mm;
+  options->sternum_cells_along = generic.sternum_cells_along;
+  options->soft_tissue_mm = skin.soft_tissue_mm;
+  options->skin_rows = skin.rows;
+  options->skin_columns = skin.columns;
+}
+
+PlannerSettings SettingsFrom(const PectusPlannerOptions* options) {
+  PectusPlannerOptions o;
+  DefaultPlannerOptions(&o);
+  if (options != nullptr) o = *options;
+  PlannerSettings s;
+  s.fem.materials.sternum = {"sternum", o.sternum_youngs_modulus_mpa, o.sternum_poisson_ratio};
+  s.fem.materials.rib = {"rib", o.rib_youngs_modulus_mpa, o.rib_poisson_ratio};
+  s.fem.materials.cartilage = {"costal_cartilage", o.cartilage_youngs_modulus_mpa, o.cartilage_poisson_ratio};
+  s.fem.contact_width_mm = o.contact_width_mm;
+  s.generic.rib_cell_length_mm = o.rib_cell_length_mm;
+  s.generic.sternum_cells_along = o.sternum_cells_along;
+  s.skin.soft_tissue_mm = o.soft_tissue_mm;
+  s.skin.rows = o.skin_rows;
+  s.skin.columns = o.skin_columns;
+  std::string why;
+  if (!(o.rib_cell_length_mm >= 2 && o.rib_cell_length_mm <= 20)) {
+    ThrowUsage("planner options: rib_cell_length_mm must be 2 to 20 mm, got " + std::to_string(o.rib_cell_length_mm));
+  }
+  if (!s.generic.IsValid(&why)) ThrowUsage("planner options (mesh): " + why);
+  if (!s.fem.IsValid(&why)) ThrowUsage("planner options: " + why);
+  if (!s.skin.IsValid(&why)) ThrowUsage("planner options (skin): " + why);
+  return s;
+}
+
+PatientMeasurements MeasurementsFrom(const PectusPlannerPatient& patient) {
+  PatientMeasurements m;
+  const void* end = std::memchr(patient.id, '\0', sizeof(patient.id));
+  if (end == nullptr) ThrowBadInput("patient", "the patient id is not NUL-terminated within 64 bytes");
+  m.patient = patient.id;
+  m.magnification = patient.magnification;
+  m.width_mm = patient.width_mm;
+  m.depth_mm = patient.depth_mm;
+  m.sternal_length_mm = patient.sternal_length_mm;
+  m.first_sternum_slice = patient.first_sternum_slice;
+  m.last_sternum_slice = patient.last_sternum_slice;
+  m.slice_spacing_mm = patient.slice_spacing_mm;
+  m.depression_mm = patient.depression_mm;
+  m.torsion_deg = patient.torsion_deg;
+  return m;
+}
+
+PectusPlannerPatient PatientFrom(const PatientMeasurements& m, double ct_haller_index) {
+  PectusPlannerPatient p{};
+  if (m.patient.size() >= sizeof(p.id)) ThrowBadInput("patient table", "patient id '" + m.patient + "' is too long");
+  std::memcpy(p.id, m.patient.c_str(), m.patient.size() + 1);
+  p.magnification = m.magnification;
+  p.width_mm = m.width_mm;
+  p.depth_mm = m.depth_mm;
+  p.sternal_length_mm = m.sternal_length_mm;
+  p.first_sternum_slice = m.first_sternum_slice;
+  p.last_sternum_slice = m.last_sternum_slice;
+  p.slice_spacing_mm = m.slice_spacing_mm;
+  p.depression_mm = m.depression_mm;
+  p.torsion_deg = m.torsion_deg;
+  p.ct_haller_index = ct_haller_index;
+  return p;
+}
+
+std::vector<BarLoad> LoadsFrom(const PectusPlannerBar* bars, std::int64_t count) {
+  if (count < 0 || (count > 0 && bars == nullptr)) ThrowUsage("bars: NULL array or negative count");
+  std::vector<BarLoad> loads;
+  for (std::int64_t i = 0; i < count; ++i) {
+    if (!std::isfinite(bars[i].position) || !std::isfinite(bars[i].force_n)) {
+      ThrowUsage("bar " + std::to_string(i) + ": position and force must be finite");
+    }
+    loads.push_back({bars[i].position, bars[i].position_in_mm != 0, bars[i].force_n});
+  }
+  return loads;
+}
+
+BoneSurface MakeBoneSurface(const PatientRibcage& ribcage) {
+  const MeshBoundary boundary = ExtractBoundary(ribcage.mesh);
+  BoneSurface out;
+  std::vector<std::int32_t> index(static_cast<std::size_t>(ribcage.mesh.num_nodes()), -1);
+  out.faces.resize(boundary.faces.rows(), 3);
+  out.regions.resize(boundary.faces.rows());
+  for (Eigen::Index f = 0; f < boundary.faces.rows(); ++f) {
+    for (int i = 0; i < 3; ++i) {
+      std::int32_t& k = index[boundary.faces(f, i)];
+      if (k < 0) {
+        k = static_cast<std::int32_t>(out.mesh_nodes.size());
+        out.mesh_nodes.push_back(boundary.faces(f, i));
+      }
+      out.faces(f, i) = k;
+    }
+    out.regions(f) = ribcage.mesh.regions(boundary.face_tet(f));
+  }
+  out.vertices.resize(static_cast<Eigen::Index>(out.mesh_nodes.size()), 3);
+  for (std::size_t i = 0; i < out.mesh_nodes.size(); ++i) {
+    out.vertices.row(static_cast<Eigen::Index>(i)) = ribcage.mesh.nodes.row(out.mesh_nodes[i]);
+  }
+  return out;
+}
+
+PlannerSession::PlannerSession(const PatientMeasurements& patient, const PlannerSettings& settings)
+    : generic_(BuildGenericRibcage(settings.generic)),
+      ribcage_(MakePatientRibcage(generic_, patient, settings.patient)) {
+  if (!ribcage_.converged && ribcage_.residual_mm > 1.0) {
+    ThrowFailure("the generated ribcage does not reproduce the CT measurements: " + ribcage_.message);
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  fem_ = std::make_unique<RibcageFem>(ribcage_, settings.fem);
+  factorization_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  skin_ = BuildSkinSurface(ribcage_, settings.skin);
+  skin_landmarks_ = skin_.Landmarks(skin_.mesh.vertices.positions);
+  // The reference: the skin carried by the same ribcage mapped without depression and torsion (the
+  // patient's chest without the deformity), and its landmarks (material points of the skin).
+  PatientMapParameters undeformed = ribcage_.parameters;
+  undeformed.depression_mm = 0;
+  undeformed.torsion_rad = 0;
+  const TetMesh straight = MakeQuadratic(MapGenericNodes(generic_, undeformed, settings.patient.skinning),
+                                         generic_.tets, generic_.regions);  // same node order as ribcage_.mesh
+  reference_skin_ = skin_.Deformed(straight.nodes - ribcage_.mesh.nodes);
+  reference_landmarks_ = skin_.Landmarks(reference_skin_);
+  bone_ = MakeBoneSurface(ribcage_);
+}
+
+const LandmarkSet& PlannerSession::Landmarks(int set) const {
+  switch (set) {
+    case PECTUS_PLANNER_BONE_LANDMARKS: return ribcage_.landmarks;
+    case PECTUS_PLANNER_SKIN_LANDMARKS: return skin_landmarks_;
+    case PECTUS_PLANNER_REFERENCE_LANDMARKS: return reference_landmarks_;
+    default: ThrowUsage("landmarks: set " + std::to_string(set) + " is not 0 (bone), 1 (skin) or 2 (reference)");
+  }
+}
+
+PectusPlannerMeasurements PlannerSession::Measurements() const {
+  const RibcageMeasurements& m = ribcage_.measured;
+  PectusPlannerMeasurements out{};
+  out.width_mm = m.width_mm;
+  out.depth_mm = m.depth_mm;
+  out.sternal_length_mm = m.sternal_length_mm;
+  out.depression_mm = m.depression_mm;
+  out.torsion_deg = m.torsion_deg;
+  out.inner_width_mm = m.inner_width_mm;
+  out.sternum_to_spine_mm = m.sternum_to_spine_mm;
+  out.haller_index = m.haller_index;
+  out.slice_z_mm = m.slice_z_mm;
+  out.fit_residual_mm = ribcage_.residual_mm;
+  out.fit_converged = ribcage_.converged ? 1 : 0;
+  out.fit_iterations = ribcage_.iterations;
+  out.nodes = ribcage_.mesh.num_nodes();
+  out.tets = ribcage_.mesh.num_tets();
+  out.free_dofs = fem_->solver().summary().free_dofs;
+  out.factorization_seconds = factorization_seconds_;
+  return out;
+}
+
+PectusPlannerMesh PlannerSession::BoneMesh() const {
+  return {bone_.vertices.rows(), bone_.vertices.data(), bone_.faces.rows(), bone_.faces.data(), bone_.regions.data()};
+}
+
+PectusPlannerMesh PlannerSession::SkinMesh(bool without_deformity) const {
+  const TriangleMesh& m = skin_.mesh;
+  const double* positions = without_deformity ? reference_skin_.data() : m.vertices.positions.data();
+  return {m.num_vertices(), positions, m.num_faces(), m.faces.data(), nullptr};
+}
+
+void PlannerSession::Solve(const std::vector<BarLoad>& loads, double* bone_positions, double* skin_positions,
+                           double* skin_landmarks, PectusPlannerCaseResult* results) const {
+  const std::vector<BarResult> solved = fem_->Solve(loads);
+  const Eigen::Index nb = bone_.vertices.rows(), ns = skin_.mesh.num_vertices();
+  const auto nl = static_cast<Eigen::Index>(skin_landmarks_.size());
+  for (std::size_t k = 0; k < solved.size(); ++k) {
+    const BarResult& r = solved[k];
+    const auto kk = static_cast<Eigen::Index>(k);
+    if (bone_positions != nullptr) {
+      Eigen::Map<Points3> out(bone_positions + kk * nb * 3, nb, 3);
+      for (Eigen::Index i = 0; i < nb; ++i) out.row(i) = bone_.vertices.row(i) + r.displacement.row(bone_.mesh_nodes[i]);
+    }
+    if (skin_positions != nullptr || skin_landmarks != nullptr) {
+      const Points3 skin = skin_.Deformed(r.displacement);
+      if (skin_positions != nullptr) Eigen::Map<Points3>(skin_positions + kk * ns * 3, ns, 3) = skin;
+      if (skin_landmarks != nullptr) {
+        const LandmarkSet on_skin = skin_.Landmarks(skin);
+        Eigen::Map<Points3> out(skin_landmarks + kk * nl * 3, nl, 3);
+        for (Eigen::Index i = 0; i < nl; ++i) out.row(i) = on_skin.items[i].position.transpose();
+      }
+    }
+    if (results != nullptr) {
+      results[k].sternum_lift_mm = r.sternum_lift_mm;
+      results[k].max_displacement_mm = r.max_displacement_mm;
+      results[k].bar_level_z_mm = fem_->BarLevelZ(r.load);
+      results[k].contact_area_mm2 = r.contact_area_mm2;
+      results[k].contact_faces = r.contact_faces;
+    }
+  }
+}
+
+}  // namespace pectus::planner

@@ -1,0 +1,85 @@
+// pectus planner plugin: one patient's planner behind the C interface (planner_api.h): the patient's
+// ribcage fitted to the CT measurements, its finite element model factorised once, the skin over it, and
+// the bone surface handed to the host. C++ inside; the C entry points (plugin_entry.cc) wrap every call.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "planner_plugin/api/planner_api.h"
+#include "planner_plugin/ribcage/generic_ribcage.h"
+#include "planner_plugin/ribcage/patient_ribcage.h"
+#include "planner_plugin/ribcage/ribcage_fem.h"
+#include "planner_plugin/ribcage/skin_surface.h"
+#include "shape/core/geometry.h"
+
+namespace pectus::planner {
+
+/// Everything the C options set, in the engine's own option structs.
+struct PlannerSettings {
+  GenericRibcageOptions generic;
+  PatientRibcageOptions patient;
+  RibcageFemOptions fem;
+  SkinSurfaceOptions skin;
+};
+
+/// The defaults of planner_api.h's options.
+void DefaultPlannerOptions(PectusPlannerOptions* options);
+/// The engine's settings from C options (nullptr: defaults). Throws Error(kUsage) naming the bad value.
+PlannerSettings SettingsFrom(const PectusPlannerOptions* options);
+/// Engine measurements from a C patient. Throws Error(kBadInput) for an unterminated id.
+PatientMeasurements MeasurementsFrom(const PectusPlannerPatient& patient);
+/// A C patient from a patient table row.
+PectusPlannerPatient PatientFrom(const PatientMeasurements& measurements, double ct_haller_index);
+/// Engine bar loads from C bars; throws Error(kUsage) for a non-finite value.
+std::vector<BarLoad> LoadsFrom(const PectusPlannerBar* bars, std::int64_t count);
+
+/// The bone surface of a ribcage mesh: the corner nodes on its boundary, compacted, with the boundary's
+/// corner triangles and each triangle's material region.
+struct BoneSurface {
+  std::vector<std::int32_t> mesh_nodes;  ///< per surface vertex, its node in the tetrahedral mesh
+  Points3 vertices;                      ///< #vertices by 3, mm
+  Faces3 faces;                          ///< #faces by 3, outward
+  Eigen::VectorXi regions;               ///< #faces RibcageRegion
+};
+
+/// Extracts the bone surface of `ribcage`.
+BoneSurface MakeBoneSurface(const PatientRibcage& ribcage);
+
+/// One patient's planner (the object behind PectusPlanner*).
+class PlannerSession {
+ public:
+  /// Fits, meshes, factorises and builds the skin. Throws pectus::Error.
+  PlannerSession(const PatientMeasurements& patient, const PlannerSettings& settings);
+
+  /// The C measurements struct.
+  PectusPlannerMeasurements Measurements() const;
+  /// Views of the bone surface (labels: regions) and of the skin (as measured, or without the deformity).
+  PectusPlannerMesh BoneMesh() const;
+  PectusPlannerMesh SkinMesh(bool without_deformity) const;
+  /// Landmarks of a PectusPlannerLandmarkSet: bone, skin (undeformed), reference (undeformed skin's
+  /// landmarks moved as the bone would be without depression and torsion). Throws Error(kUsage) for
+  /// another set.
+  const LandmarkSet& Landmarks(int set) const;
+
+  /// Solves `loads` (one factorisation) and fills the optional outputs (see planner_api.h solve()).
+  void Solve(const std::vector<BarLoad>& loads, double* bone_positions, double* skin_positions,
+             double* skin_landmarks, PectusPlannerCaseResult* results) const;
+
+  const PatientRibcage& ribcage() const { return ribcage_; }
+  const RibcageFem& fem() const { return *fem_; }
+
+ private:
+  GenericRibcage generic_;
+  PatientRibcage ribcage_;
+  std::unique_ptr<RibcageFem> fem_;  // refers to ribcage_: declared after it
+  SkinSurface skin_;
+  LandmarkSet skin_landmarks_, reference_landmarks_;
+  Points3 reference_skin_;  // the skin without the deformity
+  BoneSurface bone_;
+  double factorization_seconds_ = 0;
+};
+
+}  // namespace pectus::planner

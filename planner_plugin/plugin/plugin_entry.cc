@@ -1,0 +1,189 @@
+// pectus planner plugin: the C entry points of planner_api.h. Every function runs its C++ body inside
+// Guard(), which turns any exception into a status code and a message: nothing is thrown across the
+// boundary and nothing aborts the host.
+#include <cstdio>
+#include <cstring>
+#include <new>
+#include <string>
+
+#include "planner_plugin/api/planner_api.h"
+#include "planner_plugin/plugin/fem_dataset_run.h"
+#include "planner_plugin/plugin/planner_session.h"
+#include "planner_plugin/ribcage/patient_table.h"
+#include "shape/core/error.h"
+
+#ifndef PECTUS_VERSION
+#define PECTUS_VERSION "unknown"
+#endif
+
+struct PectusPlanner {
+  pectus::planner::PlannerSession session;
+};
+
+namespace {
+
+using pectus::Error;
+using pectus::ErrorKind;
+
+void SetStatus(PectusPlannerStatus* status, std::int32_t code, const std::string& message) {
+  if (status == nullptr) return;
+  status->code = code;
+  std::snprintf(status->message, sizeof(status->message), "%s", message.c_str());
+}
+
+// Runs `body`; returns its status code, with the message of any exception in `status`.
+template <typename Body>
+std::int32_t Guard(PectusPlannerStatus* status, Body&& body) {
+  try {
+    body();
+    SetStatus(status, PECTUS_PLANNER_OK, "");
+    return PECTUS_PLANNER_OK;
+  } catch (const Error& e) {
+    const auto code = static_cast<std::int32_t>(e.kind());
+    SetStatus(status, code, e.what());
+    return code;
+  } catch (const std::bad_alloc&) {
+    SetStatus(status, PECTUS_PLANNER_FAILURE, "out of memory");
+  } catch (const std::exception& e) {
+    SetStatus(status, PECTUS_PLANNER_FAILURE, std::string("planner: ") + e.what());
+  } catch (...) {
+    SetStatus(status, PECTUS_PLANNER_FAILURE, "planner: unknown failure");
+  }
+  return PECTUS_PLANNER_FAILURE;
+}
+
+template <typename T>
+void Require(const T* pointer, const char* name) {
+  if (pointer == nullptr) pectus::ThrowUsage(std::string("planner: ") + name + " must not be NULL");
+}
+
+void DefaultOptions(PectusPlannerOptions* options) {
+  if (options != nullptr) pectus::planner::DefaultPlannerOptions(options);
+}
+
+std::int32_t ReadPatient(const char* table_path, const char* patient, PectusPlannerPatient* out,
+                         PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(table_path, "table_path");
+    Require(patient, "patient");
+    Require(out, "out");
+    const auto rows = pectus::planner::ReadPatientTable(table_path);
+    const pectus::planner::PatientRow& row = pectus::planner::FindPatient(rows, patient);
+    *out = pectus::planner::PatientFrom(row.measurements, row.haller_index);
+  });
+}
+
+std::int32_t Create(const PectusPlannerPatient* patient, const PectusPlannerOptions* options, PectusPlanner** out,
+                    PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(patient, "patient");
+    Require(out, "out");
+    *out = nullptr;
+    const auto settings = pectus::planner::SettingsFrom(options);
+    *out = new PectusPlanner{pectus::planner::PlannerSession(pectus::planner::MeasurementsFrom(*patient), settings)};
+  });
+}
+
+void Destroy(PectusPlanner* planner) { delete planner; }
+
+std::int32_t Measurements(const PectusPlanner* planner, PectusPlannerMeasurements* out, PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(planner, "planner");
+    Require(out, "out");
+    *out = planner->session.Measurements();
+  });
+}
+
+std::int32_t BoneSurface(const PectusPlanner* planner, PectusPlannerMesh* out, PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(planner, "planner");
+    Require(out, "out");
+    *out = planner->session.BoneMesh();
+  });
+}
+
+std::int32_t SkinSurface(const PectusPlanner* planner, std::int32_t without_deformity, PectusPlannerMesh* out,
+                         PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(planner, "planner");
+    Require(out, "out");
+    *out = planner->session.SkinMesh(without_deformity != 0);
+  });
+}
+
+std::int32_t Landmarks(const PectusPlanner* planner, std::int32_t which, PectusPlannerLandmark* out,
+                       std::int32_t capacity, std::int32_t* count, PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(planner, "planner");
+    Require(count, "count");
+    if (capacity > 0) Require(out, "out");
+    const pectus::LandmarkSet& set = planner->session.Landmarks(which);
+    *count = static_cast<std::int32_t>(set.size());
+    for (std::int32_t i = 0; i < capacity && i < *count; ++i) {
+      const pectus::Landmark& l = set.items[static_cast<std::size_t>(i)];
+      std::snprintf(out[i].label, sizeof(out[i].label), "%s", l.label.c_str());
+      for (int c = 0; c < 3; ++c) out[i].position[c] = l.position(c);
+    }
+  });
+}
+
+std::int32_t Solve(const PectusPlanner* planner, const PectusPlannerBar* bars, std::int64_t count,
+                   double* bone_positions, double* skin_positions, double* skin_landmarks,
+                   PectusPlannerCaseResult* results, PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(planner, "planner");
+    planner->session.Solve(pectus::planner::LoadsFrom(bars, count), bone_positions, skin_positions, skin_landmarks,
+                           results);
+  });
+}
+
+std::int32_t ForceToLift(const PectusPlanner* planner, const PectusPlannerBar* bars, std::int64_t count,
+                         PectusPlannerForceToLift* out, PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(planner, "planner");
+    if (count > 0) Require(out, "out");
+    std::vector<pectus::planner::BarLoad> loads = pectus::planner::LoadsFrom(bars, count);
+    for (auto& load : loads) load.force_n = 1.0;
+    const auto lift = planner->session.fem().ForceToLiftSternum(loads);
+    for (std::size_t i = 0; i < lift.size(); ++i) out[i] = {lift[i].lift_per_newton_mm, lift[i].force_n};
+  });
+}
+
+std::int32_t WriteDataset(const char* table_path, const char* output_path, const PectusPlannerOptions* options,
+                          PectusPlannerProgressFn progress, void* progress_user, PectusPlannerDatasetSummary* out,
+                          PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(table_path, "table_path");
+    Require(output_path, "output_path");
+    const auto summary = pectus::planner::RunFemDataset(
+        table_path, output_path, pectus::planner::SettingsFrom(options), [&](std::int64_t done, std::int64_t total) {
+          if (progress != nullptr) progress(progress_user, done, total);
+        });
+    if (out != nullptr) {
+      *out = {summary.patients, summary.load_cases, summary.results, summary.surface_nodes, summary.seconds};
+    }
+  });
+}
+
+const PectusPlannerInterface kInterface = {
+    PECTUS_PLANNER_INTERFACE_VERSION,
+    sizeof(PectusPlannerInterface),
+    "pectus planner " PECTUS_VERSION " (patient ribcage from CT measurements, quadratic tetrahedra, CHOLMOD)",
+    DefaultOptions,
+    ReadPatient,
+    Create,
+    Destroy,
+    Measurements,
+    BoneSurface,
+    SkinSurface,
+    Landmarks,
+    Solve,
+    ForceToLift,
+    WriteDataset,
+};
+
+}  // namespace
+
+extern "C" __attribute__((visibility("default"))) const PectusPlannerInterface* pectus_planner_interface(void) {
+  return &kInterface;
+}

@@ -1,0 +1,52 @@
+// pectus: a target surface prepared for ICP (registration/icp.h).
+#include <chrono>
+
+#include "registration/icp.h"
+#include "registration/voxel_downsample.h"
+#include "shape/core/error.h"
+
+namespace pectus {
+namespace {
+
+double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+}  // namespace
+
+void IcpTarget::Prepare(const Points3& positions, const std::string& name) {
+  const auto start = std::chrono::steady_clock::now();
+  if (positions.rows() < 3) ThrowBadInput(name, "an ICP target needs at least 3 points");
+  if (!positions.allFinite()) ThrowBadInput(name, "a position is not finite");
+  // Centred on the centroid: a scanner frame 10 km away keeps its sub-micrometre detail in the tree.
+  origin_ = positions.colwise().mean().transpose();
+  centred_ = positions.rowwise() - origin_.transpose();
+  tree_ = std::make_unique<KdTree3>(centred_);
+  spacing_mm_ = MedianPointSpacing(centred_, *tree_);
+  seconds_ = Seconds(start);
+}
+
+IcpTarget::IcpTarget(const Points3& positions, const Points3& normals, const std::string& name) {
+  if (normals.rows() != positions.rows()) {
+    ThrowBadInput(name, "has " + std::to_string(positions.rows()) + " points but " +
+                            std::to_string(normals.rows()) + " normals");
+  }
+  if (!normals.allFinite()) ThrowBadInput(name, "a normal is not finite");
+  Prepare(positions, name);
+  const auto start = std::chrono::steady_clock::now();
+  normals_ = normals;
+  seconds_ += Seconds(start);
+}
+
+IcpTarget::IcpTarget(const Points3& positions, const NormalOptions& normal_options, const std::string& name) {
+  Prepare(positions, name);
+  NormalOptions o = normal_options;
+  o.viewpoint -= origin_;
+  NormalResult normals = EstimateNormals(centred_, o, tree_.get());
+  normals_ = std::move(normals.normals);
+  normal_seconds_ = normals.seconds;
+}
+
+IcpTarget::~IcpTarget() = default;
+
+}  // namespace pectus

@@ -1,0 +1,182 @@
+// `pectus register` as a user meets it: a pair with landmarks recovers a known pose (10 km from the origin),
+// a cohort writes every transform and a summary, a poor fit or unusable landmarks exit non-zero and write
+// nothing.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <string>
+
+#include "registration/pose_error.h"
+#include "shape/io/landmark_io.h"
+#include "shape/io/mesh_io.h"
+#include "shape/io/transform_io.h"
+#include "tests/registration/synthetic_chest.h"
+
+namespace pectus {
+namespace {
+namespace fs = std::filesystem;
+
+struct Run {
+  int code;
+  std::string output;  // stdout and stderr
+};
+
+Run Pectus(const std::string& args) {
+  const std::string cmd = std::string(PECTUS_EXECUTABLE) + " " + args + " 2>&1";
+  Run run{-1, {}};
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  if (pipe == nullptr) return run;
+  std::array<char, 4096> buf{};
+  while (std::fgets(buf.data(), buf.size(), pipe) != nullptr) run.output += buf.data();
+  const int status = ::pclose(pipe);
+  run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return run;
+}
+
+// Landmarks on the analytic chest (phi in radians, h in mm), moved by T, with Gaussian noise per axis.
+LandmarkSet ChestLandmarks(const Rigid3& T, double noise_mm, std::uint64_t seed) {
+  const testing::ChestSurface s;
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0.0, noise_mm);
+  LandmarkSet set;
+  for (const auto& [label, phi, h] :
+       std::vector<std::tuple<std::string, double, double>>{{"sternal_notch", 0.0, 300.0},
+                                                            {"xiphoid", 0.0, 130.0},
+                                                            {"nipple_left", -0.6, 200.0},
+                                                            {"nipple_right", 0.6, 205.0},
+                                                            {"umbilicus", 0.05, 20.0}}) {
+    set.items.push_back({label, T * s.Point(phi, h) + Eigen::Vector3d(g(rng), g(rng), g(rng)), ""});
+  }
+  return set;
+}
+
+class RegisterCommand : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / (std::string("pectus_register_") +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string P(const std::string& name) const { return (dir_ / name).string(); }
+  std::size_t CountFiles(const fs::path& in) const {
+    return static_cast<std::size_t>(std::distance(fs::directory_iterator(in), {}));
+  }
+  // One sampling of the chest (0.2 mm noise) in the frame `T_world_scan`^-1, written with its landmarks
+  // (3 mm noise) as NAME.ply and NAME.mrk.json.
+  void WriteScan(const std::string& name, const Rigid3& T_world_scan, std::uint64_t seed,
+                 const fs::path& folder) const {
+    PointCloud c = testing::SampleChest(20000, seed, 0.2);
+    c.normals.resize(0, 3);
+    TransformInPlace(Similarity3::FromRigid(T_world_scan.inverse()), &c);
+    WritePointCloud(folder / (name + ".ply"), c);
+    WriteLandmarks(folder / (name + ".mrk.json"), ChestLandmarks(T_world_scan.inverse(), 3.0, seed + 7));
+  }
+  fs::path dir_;
+};
+
+// Moving and fixed scans 10 km from the origin, 20 degrees and 100 mm apart: landmarks then ICP give
+// T_target_source to 0.05 degrees and 0.1 mm; the moved scan, the transform and the report are written.
+TEST_F(RegisterCommand, PairWithLandmarksRecoversTheKnownPoseFarFromTheOrigin) {
+  Rigid3 far = Rigid3::Identity();
+  far.translation() << 1e7, -1e7, 2e6;
+  std::mt19937_64 rng(3);
+  const Rigid3 T_true =
+      far * testing::RandomPose(&rng, 20.0, 100.0, Eigen::Vector3d(0, 100, 160));  // fixed <- moving
+  WriteScan("fixed", far.inverse(), 1, dir_);
+  WriteScan("moving", T_true.inverse(), 2, dir_);
+  const Run r =
+      Pectus("register " + P("moving.ply") + " --to " + P("fixed.ply") + " --moving-landmarks " +
+             P("moving.mrk.json") + " --fixed-landmarks " + P("fixed.mrk.json") + " -o " + P("moved.ply") +
+             " --transform " + P("T.json") + " --report " + P("r.json") + " --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const Similarity3 T = ReadTransformJson(P("T.json"));
+  const PointCloud moving = ReadPointCloud(P("moving.ply"));
+  const PoseError e =
+      ComparePoses(T, Similarity3::FromRigid(T_true), moving.positions.colwise().mean().transpose());
+  EXPECT_LT(e.rotation_deg, 0.05);
+  EXPECT_LT(e.translation_mm, 0.1);
+  EXPECT_EQ(T.scale, 1.0);
+  // The moved scan lies on the fixed one: its centroid where the truth puts it (doubles in the PLY).
+  const PointCloud moved = ReadPointCloud(P("moved.ply"));
+  EXPECT_LT(
+      (moved.positions.colwise().mean().transpose() - T_true * moving.positions.colwise().mean().transpose())
+          .norm(),
+      0.1);
+  nlohmann::json report;
+  std::ifstream(P("r.json")) >> report;
+  EXPECT_TRUE(report["success"].get<bool>());
+  EXPECT_LT(report["icp"]["rms_mm"].get<double>(), 0.5);
+  EXPECT_EQ(report["landmarks"]["labels"].size(), 5u);
+}
+
+// A poor fit (a start 800 mm off, no overlap) exits 1 with the reason and writes nothing, not even the
+// report; landmarks with fewer than three labels in common exit 3 naming the file.
+TEST_F(RegisterCommand, PoorFitAndUnusableLandmarksExitNonZeroAndWriteNothing) {
+  WriteScan("fixed", Rigid3::Identity(), 1, dir_);
+  WriteScan("moving", Rigid3::Identity(), 2, dir_);
+  Rigid3 away = Rigid3::Identity();
+  away.translation() << 800.0, 0.0, 0.0;
+  WriteTransformJson(P("start.json"), Similarity3::FromRigid(away));
+  const std::size_t before = CountFiles(dir_);
+  const Run poor = Pectus("register " + P("moving.ply") + " --to " + P("fixed.ply") + " --initial " +
+                          P("start.json") + " --transform " + P("T.json") + " --report " + P("r.json"));
+  EXPECT_EQ(poor.code, 1) << poor.output;
+  EXPECT_NE(poor.output.find("overlap"), std::string::npos) << poor.output;
+  EXPECT_EQ(CountFiles(dir_), before);
+
+  LandmarkSet two = ChestLandmarks(Rigid3::Identity(), 0.0, 1);
+  two.items.resize(2);
+  WriteLandmarks(P("two.mrk.json"), two);
+  const Run bad =
+      Pectus("register " + P("moving.ply") + " --to " + P("fixed.ply") + " --moving-landmarks " +
+             P("two.mrk.json") + " --fixed-landmarks " + P("fixed.mrk.json") + " --transform " + P("T.json"));
+  EXPECT_EQ(bad.code, 3) << bad.output;
+  EXPECT_NE(bad.output.find("two.mrk.json"), std::string::npos) << bad.output;
+  EXPECT_NE(bad.output.find("at least 3"), std::string::npos) << bad.output;
+  EXPECT_EQ(CountFiles(dir_), before + 1);  // two.mrk.json only
+}
+
+// A cohort folder of three scans of one chest at known poses: to the reference (the second file) and
+// groupwise, every scan's transform into the reference frame to 0.05 degrees and 0.1 mm, and a summary.
+TEST_F(RegisterCommand, CohortWritesEveryTransformAndASummary) {
+  const fs::path scans = dir_ / "scans";
+  fs::create_directories(scans);
+  std::mt19937_64 rng(5);
+  std::vector<Rigid3> T_world(3);
+  for (int i = 0; i < 3; ++i) {
+    T_world[i] = i == 0 ? Rigid3(Rigid3::Identity())
+                        : testing::RandomPose(&rng, 15.0, 80.0, Eigen::Vector3d(0, 100, 160));
+    WriteScan("scan" + std::to_string(i), T_world[i], 10 + static_cast<std::uint64_t>(i), scans);
+  }
+  for (const std::string mode : {"", " --groupwise"}) {
+    const fs::path out = dir_ / ("aligned" + std::to_string(mode.size()));
+    const Run r = Pectus("register --cohort " + scans.string() + " --reference scan1.ply -o " + out.string() +
+                         mode + " --quiet");
+    ASSERT_EQ(r.code, 0) << mode << ": " << r.output;
+    nlohmann::json summary;
+    std::ifstream(out / "summary.json") >> summary;
+    EXPECT_EQ(summary["reference"], "scan1");
+    EXPECT_TRUE(summary["all_succeeded"].get<bool>());
+    ASSERT_EQ(summary["scans"].size(), 3u);
+    for (int i = 0; i < 3; ++i) {
+      const std::string name = "scan" + std::to_string(i);
+      const Similarity3 T = ReadTransformJson(out / (name + ".T.json"));
+      const PointCloud c = ReadPointCloud(scans / (name + ".ply"));
+      const Similarity3 truth = Similarity3::FromRigid(T_world[1].inverse() * T_world[i]);
+      const PoseError e = ComparePoses(T, truth, c.positions.colwise().mean().transpose());
+      EXPECT_LT(e.rotation_deg, 0.05) << mode << " " << name;
+      EXPECT_LT(e.translation_mm, 0.1) << mode << " " << name;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace pectus

@@ -1,0 +1,112 @@
+// The whole plan through the real plugin. The average chest is the patient's own predicted chest under a
+// known bar placement, moved to another frame and scaled: the search must find that placement again, at
+// a difference of zero, and the scenarios must score worse.
+#include "planner_plugin/host/nuss_plan.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "shape/model/shape_model.h"
+#include "shape/model/statismo_io.h"
+
+namespace pectus::planner {
+namespace {
+namespace fs = std::filesystem;
+
+const std::string kTable = std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv";
+
+TEST(NussPlan, TheSearchFindsTheKnownPlacementOfAnAverageChestMadeFromItAndTheFilesAreWritten) {
+  const fs::path dir = fs::temp_directory_path() / ("pectus_nuss_plan_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const PlannerPlugin plugin = PlannerPlugin::Load(PECTUS_PLANNER_PLUGIN_PATH);
+  PectusPlannerOptions options = PluginDefaultOptions(plugin);
+  options.rib_cell_length_mm = 10;
+  options.sternum_cells_along = 28;
+  options.skin_rows = 32;
+  options.skin_columns = 48;
+  const PlannerClient planner(plugin, ReadPlannerPatient(plugin, kTable, "57"), options);
+
+  // The "average chest": patient 57 under a bar at 0.78 of the sternum lifting the sternum by 80 % of its
+  // depression, in the pectus scan frame (x across, y up, z anterior), 10 % larger, written as a statismo
+  // model with its landmarks.
+  const double lift_force = planner.ForceToLift({{0.78, false, 1}}).front().force_n;
+  const BarPlacement truth{0.78, false, 0.8 * lift_force};
+  const PlannedCase target = planner.Solve({truth}, false).front();
+  Similarity3 T;
+  T.scale = 1.1;
+  T.rotation << 1, 0, 0, 0, 0, 1, 0, -1, 0;  // LPS to the scan frame
+  T.translation = Eigen::Vector3d(5, 1200, -40);
+  Points3 x = target.skin;
+  for (Eigen::Index i = 0; i < x.rows(); ++i) x.row(i) = (T * Eigen::Vector3d(x.row(i).transpose())).transpose();
+  nlohmann::json info;
+  // Its landmarks: the patient's reference landmarks (the chest without the deformity) in that frame.
+  for (const char* label : {"sternal_notch", "manubrium_centre", "xiphoid"}) {
+    const Eigen::Vector3d p = T * planner.reference_landmarks().Position(label, "reference");
+    info["landmarks"][label] = {p.x(), p.y(), p.z()};
+  }
+  Eigen::MatrixXd shapes(2, x.size());
+  shapes.row(0) = Eigen::Map<const Eigen::VectorXd>(x.data(), x.size()).transpose().array() + 0.25;
+  shapes.row(1) = Eigen::Map<const Eigen::VectorXd>(x.data(), x.size()).transpose().array() - 0.25;
+  ShapeModel model = BuildShapeModel(shapes);
+  model.faces = planner.skin().faces;
+  WriteStatismoModel(dir / "average.h5", model, info);
+  const AverageChest average = LoadAverageChest(dir / "average.h5");
+
+  // The modelled skin is what the average chest was made of: the search must find the placement again.
+  NussPlanOptions plan_options;
+  plan_options.score.relative = false;
+  plan_options.scenario_a = {0.85, false, 1700};
+  plan_options.search_options.positions = 6;
+  plan_options.search_options.forces = 11;
+  Report report;
+  const NussPlan plan = MakeNussPlan(planner, average, plan_options, &report);
+
+  // The search recovers the placement (float32 model file: a difference of micrometres remains).
+  ASSERT_TRUE(plan.search.has_value());
+  EXPECT_NEAR(plan.search->best.position, truth.position, 0.01);
+  EXPECT_NEAR(plan.search->best.force_n, truth.force_n, 0.03 * truth.force_n);
+  EXPECT_LT(plan.search->best_objective_mm, 0.05) << plan.search->ToJson().dump();
+  EXPECT_NEAR(plan.registration.T_target_source.scale, 1.1, 1e-6);
+  EXPECT_LT(plan.registration.landmark_rms_mm, 1e-4);
+  // Scenario B is 20 mm nearer the notch; both are worse than the best, the unoperated chest worse still.
+  ASSERT_EQ(plan.scenarios.size(), 3u);
+  EXPECT_TRUE(plan.scenarios[1].solved.bar.position_in_mm);
+  EXPECT_NEAR(plan.scenarios[1].solved.bar.position, 0.85 * planner.measurements().sternal_length_mm - 20, 1e-9);
+  EXPECT_GT(plan.scenarios[0].score.roi.rms, 10 * plan.search->best_objective_mm);
+  EXPECT_GT(plan.before.roi.rms, 1.0);
+  EXPECT_GE(plan.common_limit_mm, plan.scenarios[0].score.roi.max_abs);
+  // Force to lift at 0.65, 0.75, 0.85 and at A; the deeper the bar, the less force (the lower sternum is
+  // the deepest).
+  ASSERT_EQ(plan.force_to_lift.size(), 4u);
+  EXPECT_GT(plan.force_to_lift[0].force_n, plan.force_to_lift[2].force_n);
+  EXPECT_DOUBLE_EQ(plan.force_to_lift[3].force_n, plan.force_to_lift[2].force_n);
+  EXPECT_TRUE(plan.ToJson().contains("search"));
+
+  // The files.
+  const auto written = WriteNussPlan(plan, planner, average, plugin.description(), dir / "plan",
+                                     [](const fs::path& target_path) {
+                                       fs::create_directories(target_path.parent_path());
+                                       return target_path;
+                                     });
+  for (const char* name : {"predicted_chest_A.ply", "predicted_chest_B.ply", "predicted_chest_best.ply",
+                           "ribcage_A.ply", "comparison.png", "before.png", "ribcage_A.png", "search.png",
+                           "best.png", "report.html"}) {
+    EXPECT_TRUE(fs::exists(dir / "plan" / name)) << name;
+    EXPECT_GT(fs::file_size(dir / "plan" / name), 100u) << name;
+  }
+  EXPECT_EQ(written.size(), 10u);
+  std::ifstream html(dir / "plan" / "report.html");
+  std::stringstream text;
+  text << html.rdbuf();
+  for (const char* expected : {"patient 57", "Best bar placement", "comparison.png", "search.png", "Weber"}) {
+    EXPECT_NE(text.str().find(expected), std::string::npos) << expected;
+  }
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace pectus::planner

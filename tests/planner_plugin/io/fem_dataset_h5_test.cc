@@ -1,0 +1,95 @@
+// The FE dataset (dissertation §4.1.2): every patient x 24 load cases, read back with HDF5: the layout
+// docs/planner.md documents, the load cases in order, and displacements that are the FE solutions.
+#include "planner_plugin/io/fem_dataset_h5.h"
+
+#include <gtest/gtest.h>
+#include <hdf5.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <vector>
+
+#include "planner_plugin/plugin/fem_dataset_run.h"
+#include "planner_plugin/ribcage/patient_table.h"
+
+namespace pectus::planner {
+namespace {
+namespace fs = std::filesystem;
+
+std::vector<hsize_t> Dims(hid_t file, const char* name) {
+  const hid_t set = H5Dopen2(file, name, H5P_DEFAULT);
+  EXPECT_GE(set, 0) << name;
+  const hid_t space = H5Dget_space(set);
+  std::vector<hsize_t> dims(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space)));
+  H5Sget_simple_extent_dims(space, dims.data(), nullptr);
+  H5Sclose(space);
+  H5Dclose(set);
+  return dims;
+}
+
+template <typename T>
+std::vector<T> Read(hid_t file, const char* name, hid_t type, std::size_t count) {
+  std::vector<T> values(count);
+  const hid_t set = H5Dopen2(file, name, H5P_DEFAULT);
+  EXPECT_GE(H5Dread(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), 0) << name;
+  H5Dclose(set);
+  return values;
+}
+
+TEST(FemDataset, EveryPatientTimesTwentyFourLoadCasesReadsBack) {
+  const fs::path dir = fs::temp_directory_path() / ("pectus_fem_dataset_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  {
+    std::ofstream table(dir / "two.csv");
+    table << "patient,haller_index,width_mm,sternal_length_mm,depth_mm,depression_mm\n"
+             "57,6.5,231,168,123,21\n"
+             "3,6.3,280,165,151,40\n";
+  }
+  PlannerSettings settings = SettingsFrom(nullptr);
+  settings.generic.rib_cell_length_mm = 10;
+  settings.generic.rib_pairs = 7;
+  settings.generic.sternum_cells_along = 28;
+  int calls = 0;
+  const FemDatasetSummary s = RunFemDataset(dir / "two.csv", dir / "fem.h5", settings,
+                                            [&](std::int64_t done, std::int64_t total) {
+                                              ++calls;
+                                              EXPECT_EQ(done, calls);
+                                              EXPECT_EQ(total, 2);
+                                            });
+  EXPECT_EQ(calls, 2);
+  EXPECT_EQ(s.patients, 2);
+  EXPECT_EQ(s.results, 48);
+  ASSERT_TRUE(fs::exists(dir / "fem.h5"));
+  EXPECT_FALSE(fs::exists(dir / ".fem.h5.partial"));
+
+  const hid_t file = H5Fopen((dir / "fem.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  const auto forces = Read<double>(file, "/load_cases/force_n", H5T_NATIVE_DOUBLE, 24);
+  const auto positions = Read<double>(file, "/load_cases/position", H5T_NATIVE_DOUBLE, 24);
+  const double expected[8] = {50, 70, 100, 200, 400, 800, 1500, 2000};
+  for (int k = 0; k < 24; ++k) {
+    EXPECT_EQ(forces[k], expected[k % 8]);
+    EXPECT_EQ(positions[k], (k < 8 ? 0.65 : k < 16 ? 0.75 : 0.85));
+  }
+  const auto n = static_cast<hsize_t>(s.surface_nodes);
+  EXPECT_EQ(Dims(file, "/patients/57/nodes"), (std::vector<hsize_t>{n, 3}));
+  EXPECT_EQ(Dims(file, "/patients/3/displacements"), (std::vector<hsize_t>{24, n, 3}));
+  EXPECT_EQ(Dims(file, "/topology/faces")[1], 3u);
+  // The model is linear: at one position the 2000 N case is 40 times the 50 N case (float32 storage).
+  const auto u = Read<float>(file, "/patients/57/displacements", H5T_NATIVE_FLOAT, 24 * n * 3);
+  const auto lift = Read<double>(file, "/patients/57/sternum_lift", H5T_NATIVE_DOUBLE, 24);
+  double worst = 0, largest = 0;
+  for (std::size_t i = 0; i < n * 3; ++i) {
+    worst = std::max(worst, std::abs(static_cast<double>(u[23 * n * 3 + i]) - 40.0 * u[16 * n * 3 + i]));
+    largest = std::max(largest, std::abs(static_cast<double>(u[23 * n * 3 + i])));
+  }
+  EXPECT_LT(worst, 1e-5 * largest);
+  EXPECT_NEAR(lift[23], 40.0 * lift[16], 1e-9 * lift[23]);
+  EXPECT_GT(lift[23], 0.0);
+  H5Fclose(file);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace pectus::planner

@@ -1,0 +1,162 @@
+// The plugin's C boundary, loaded as any host would load it (dlopen): errors come back as status codes
+// with messages, never as exceptions or aborts; C and C++ agree on the interface's layout; a planner
+// made through the boundary measures like the CT.
+#include <dlfcn.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <string>
+
+#include "planner_plugin/api/planner_api.h"
+
+extern "C" void pectus_planner_api_layout_from_c(size_t* out, int capacity);
+
+namespace {
+
+const std::string kTable = std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv";
+
+class PluginEntry : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    handle_ = dlopen(PECTUS_PLANNER_PLUGIN_PATH, RTLD_NOW | RTLD_LOCAL);
+    ASSERT_NE(handle_, nullptr) << dlerror();
+    const auto entry = reinterpret_cast<PectusPlannerEntryFn>(dlsym(handle_, PECTUS_PLANNER_ENTRY_POINT));
+    ASSERT_NE(entry, nullptr);
+    api_ = entry();
+  }
+  static void TearDownTestSuite() { dlclose(handle_); }
+  // Coarse mesh and skin, to keep the tests quick.
+  static PectusPlannerOptions Coarse() {
+    PectusPlannerOptions o{};
+    api_->default_options(&o);
+    o.rib_cell_length_mm = 10;
+    o.sternum_cells_along = 28;
+    o.skin_rows = 24;
+    o.skin_columns = 32;
+    return o;
+  }
+  static void* handle_;
+  static const PectusPlannerInterface* api_;
+};
+void* PluginEntry::handle_ = nullptr;
+const PectusPlannerInterface* PluginEntry::api_ = nullptr;
+
+TEST_F(PluginEntry, ExportsOneVersionedTableThatCAndCppLayOutAlike) {
+  ASSERT_NE(api_, nullptr);
+  EXPECT_EQ(api_->version, PECTUS_PLANNER_INTERFACE_VERSION);
+  EXPECT_EQ(api_->struct_size, sizeof(PectusPlannerInterface));
+  EXPECT_NE(std::string(api_->description).find("pectus planner"), std::string::npos);
+  size_t c[15] = {};
+  pectus_planner_api_layout_from_c(c, 15);
+  const size_t cpp[15] = {sizeof(PectusPlannerStatus),         sizeof(PectusPlannerPatient),
+                          sizeof(PectusPlannerOptions),        sizeof(PectusPlannerMeasurements),
+                          sizeof(PectusPlannerMesh),           sizeof(PectusPlannerLandmark),
+                          sizeof(PectusPlannerBar),            sizeof(PectusPlannerCaseResult),
+                          sizeof(PectusPlannerForceToLift),    sizeof(PectusPlannerDatasetSummary),
+                          sizeof(PectusPlannerInterface),      offsetof(PectusPlannerInterface, write_dataset),
+                          offsetof(PectusPlannerPatient, ct_haller_index), offsetof(PectusPlannerOptions, skin_columns),
+                          PECTUS_PLANNER_INTERFACE_VERSION};
+  for (int i = 0; i < 15; ++i) EXPECT_EQ(c[i], cpp[i]) << "layout item " << i;
+  // Nothing but the entry point is visible: not even the engine's functions (which this test binary
+  // links itself, so the name below is the real one).
+  EXPECT_EQ(dlsym(handle_, "_ZN6pectus7planner19BuildGenericRibcageERKNS0_21GenericRibcageOptionsE"), nullptr);
+}
+
+TEST_F(PluginEntry, FailuresComeBackAsStatusesNamingWhatIsWrong) {
+  PectusPlannerStatus status{};
+  PectusPlannerPatient patient{};
+  // A table that is not there: bad input, naming the file.
+  EXPECT_EQ(api_->read_patient("/nonexistent/table.csv", "57", &patient, &status), PECTUS_PLANNER_BAD_INPUT);
+  EXPECT_NE(std::string(status.message).find("/nonexistent/table.csv"), std::string::npos) << status.message;
+  // A patient that is not in the table: a usage error listing what there is.
+  EXPECT_EQ(api_->read_patient(kTable.c_str(), "999", &patient, &status), PECTUS_PLANNER_USAGE);
+  EXPECT_NE(std::string(status.message).find("999"), std::string::npos) << status.message;
+  // NULL arguments.
+  PectusPlanner* planner = nullptr;
+  EXPECT_EQ(api_->create(nullptr, nullptr, &planner, &status), PECTUS_PLANNER_USAGE);
+  EXPECT_EQ(api_->measurements(nullptr, nullptr, nullptr), PECTUS_PLANNER_USAGE);  // status may be NULL
+  // A measurement out of range names the patient.
+  ASSERT_EQ(api_->read_patient(kTable.c_str(), "57", &patient, &status), PECTUS_PLANNER_OK) << status.message;
+  PectusPlannerPatient deep = patient;
+  deep.depression_mm = 90;
+  EXPECT_EQ(api_->create(&deep, nullptr, &planner, &status), PECTUS_PLANNER_BAD_INPUT);
+  EXPECT_EQ(planner, nullptr);
+  EXPECT_NE(std::string(status.message).find("patient 57"), std::string::npos) << status.message;
+  // An invalid material is a usage error naming the material.
+  PectusPlannerOptions options = Coarse();
+  options.cartilage_youngs_modulus_mpa = -1;
+  EXPECT_EQ(api_->create(&patient, &options, &planner, &status), PECTUS_PLANNER_USAGE);
+  EXPECT_NE(std::string(status.message).find("costal_cartilage"), std::string::npos) << status.message;
+  // An id that is not NUL-terminated is caught, not read past.
+  PectusPlannerPatient unterminated = patient;
+  std::memset(unterminated.id, 'x', sizeof(unterminated.id));
+  EXPECT_EQ(api_->create(&unterminated, nullptr, &planner, &status), PECTUS_PLANNER_BAD_INPUT);
+  // A dataset that cannot be written is a failure, and nothing is left behind.
+  EXPECT_EQ(api_->write_dataset("/nonexistent/table.csv", "/tmp/pectus_never.h5", nullptr, nullptr, nullptr, nullptr,
+                                &status),
+            PECTUS_PLANNER_BAD_INPUT);
+  EXPECT_FALSE(std::filesystem::exists("/tmp/pectus_never.h5"));
+}
+
+TEST_F(PluginEntry, APlannerThroughTheBoundaryMeasuresLikeTheCtAndSolves) {
+  PectusPlannerStatus status{};
+  PectusPlannerPatient patient{};
+  ASSERT_EQ(api_->read_patient(kTable.c_str(), "57", &patient, &status), PECTUS_PLANNER_OK) << status.message;
+  EXPECT_DOUBLE_EQ(patient.ct_haller_index, 6.5);
+  const PectusPlannerOptions options = Coarse();
+  PectusPlanner* planner = nullptr;
+  ASSERT_EQ(api_->create(&patient, &options, &planner, &status), PECTUS_PLANNER_OK) << status.message;
+  PectusPlannerMeasurements m{};
+  ASSERT_EQ(api_->measurements(planner, &m, &status), PECTUS_PLANNER_OK);
+  // Patient 57: width 231, sternal length 168, depth 123, depression 21 mm (Appendix A).
+  EXPECT_NEAR(m.width_mm, 231, 1.0);
+  EXPECT_NEAR(m.depth_mm, 123, 1.0);
+  EXPECT_NEAR(m.sternal_length_mm, 168, 1.0);
+  EXPECT_NEAR(m.depression_mm, 21, 1.0);
+  EXPECT_NEAR(m.haller_index, m.inner_width_mm / m.sternum_to_spine_mm, 1e-12);
+  EXPECT_GT(m.haller_index, 4.0);
+  // Landmarks: ask for the count first, then fill.
+  std::int32_t count = 0;
+  ASSERT_EQ(api_->landmarks(planner, 1, nullptr, 0, &count, &status), PECTUS_PLANNER_OK);
+  ASSERT_EQ(count, 5);
+  PectusPlannerLandmark marks[5];
+  ASSERT_EQ(api_->landmarks(planner, 1, marks, 5, &count, &status), PECTUS_PLANNER_OK);
+  EXPECT_STREQ(marks[0].label, "sternal_notch");
+  // The reference landmarks (the chest without the deformity): the notch stays, the xiphoid comes
+  // forward (-y) by more than the measured depression, less than twice it (the depression is measured
+  // from the ribcage's highest point, which the skinning pulls down with the sternum).
+  PectusPlannerLandmark reference[5];
+  ASSERT_EQ(api_->landmarks(planner, PECTUS_PLANNER_REFERENCE_LANDMARKS, reference, 5, &count, &status),
+            PECTUS_PLANNER_OK);
+  EXPECT_NEAR(reference[0].position[1], marks[0].position[1], 1e-9);
+  EXPECT_STREQ(reference[3].label, "xiphoid");
+  const double forward = marks[3].position[1] - reference[3].position[1];
+  EXPECT_GT(forward, 0.8 * m.depression_mm);
+  EXPECT_LT(forward, 2.0 * m.depression_mm);
+  EXPECT_EQ(api_->landmarks(planner, 3, reference, 5, &count, &status), PECTUS_PLANNER_USAGE);
+  // Solve two cases; the lift is linear in the force.
+  PectusPlannerMesh skin{};
+  ASSERT_EQ(api_->skin_surface(planner, 0, &skin, &status), PECTUS_PLANNER_OK);
+  EXPECT_EQ(skin.num_vertices, 24 * 32);
+  const PectusPlannerBar bars[2] = {{0.8, 0, 100.0}, {0.8, 0, 300.0}};
+  PectusPlannerCaseResult results[2];
+  std::vector<double> positions(2 * 3 * static_cast<std::size_t>(skin.num_vertices));
+  ASSERT_EQ(api_->solve(planner, bars, 2, nullptr, positions.data(), nullptr, results, &status), PECTUS_PLANNER_OK)
+      << status.message;
+  EXPECT_NEAR(results[1].sternum_lift_mm, 3.0 * results[0].sternum_lift_mm, 1e-9 * results[1].sternum_lift_mm);
+  // A bar off the sternum is refused with a message, not a crash.
+  const PectusPlannerBar off = {1.3, 0, 100.0};
+  EXPECT_EQ(api_->solve(planner, &off, 1, nullptr, nullptr, nullptr, nullptr, &status), PECTUS_PLANNER_USAGE);
+  EXPECT_NE(std::string(status.message).find("off the sternum"), std::string::npos) << status.message;
+  // Force to lift: force x lift per newton = the depression.
+  PectusPlannerForceToLift lift{};
+  ASSERT_EQ(api_->force_to_lift(planner, bars, 1, &lift, &status), PECTUS_PLANNER_OK);
+  EXPECT_NEAR(lift.force_n * lift.lift_per_newton_mm, m.depression_mm, 1e-9);
+  EXPECT_NEAR(lift.lift_per_newton_mm, results[0].sternum_lift_mm / 100.0, 1e-12);
+  api_->destroy(planner);
+  api_->destroy(nullptr);
+}
+
+}  // namespace
