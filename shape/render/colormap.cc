@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <vector>
 #include <opencv2/imgproc.hpp>
 
 namespace pectus::render {
@@ -56,10 +57,11 @@ const Table& TableOf(Colormap map) {
   return viridis;
 }
 
+// Fewest decimals that tell ticks `step` apart: 0 for a step of 1 or more, 1 for 0.1..1, and so on.
 std::string FormatTick(double v, double step) {
   char buf[32];
-  const int decimals = step >= 10 ? 0 : step >= 1 ? 1 : step >= 0.1 ? 2 : 3;
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  const int decimals = step >= 1 ? 0 : std::min(6, static_cast<int>(std::ceil(-std::log10(step) - 1e-9)));
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, std::abs(v) < 0.5 * step ? 0.0 : v);
   return buf;
 }
 
@@ -92,6 +94,27 @@ Rgb CategoryColor(int index) {
   return kPalette[i];
 }
 
+std::vector<double> NiceTicks(double lo, double hi, int about) {
+  if (!(hi > lo) || !std::isfinite(hi - lo)) return {};
+  const double raw = (hi - lo) / std::max(1, about - 1);
+  const double magnitude = std::pow(10.0, std::floor(std::log10(raw)));
+  const auto first = [&](double step) { return static_cast<long long>(std::ceil(lo / step - 1e-9)); };
+  const auto last = [&](double step) { return static_cast<long long>(std::floor(hi / step + 1e-9)); };
+  double best = 0.0;
+  long long best_miss = 0;
+  for (const double m : {1.0, 2.0, 2.5, 5.0, 10.0}) {  // ties go to the larger, rounder step
+    const double step = m * magnitude;
+    const long long miss = std::llabs(last(step) - first(step) + 1 - about);
+    if (best == 0.0 || miss <= best_miss) {
+      best = step;
+      best_miss = miss;
+    }
+  }
+  std::vector<double> ticks;
+  for (long long k = first(best); k <= last(best); ++k) ticks.push_back(static_cast<double>(k) * best);
+  return ticks;
+}
+
 Image ColorBar(double lo, double hi, Colormap map, const std::string& label, int height, int ticks) {
   const int bar_w = 28, top = 30, bottom = 20;
   int label_w = 0, label_h = 0;
@@ -107,13 +130,26 @@ Image ColorBar(double lo, double hi, Colormap map, const std::string& label, int
   DrawLine(&im, 10, top + bar_h - 1, 10 + bar_w, top + bar_h - 1, kBlack);
   DrawLine(&im, 10, top, 10, top + bar_h - 1, kBlack);
   DrawLine(&im, 10 + bar_w, top, 10 + bar_w, top + bar_h - 1, kBlack);
-  ticks = std::max(2, ticks);
-  const double step = (hi - lo) / (ticks - 1);
-  for (int k = 0; k < ticks; ++k) {
-    const double v = lo + step * k;
-    const int y = top + bar_h - 1 - static_cast<int>(std::lround((bar_h - 1) * (ticks == 1 ? 0.0 : double(k) / (ticks - 1))));
-    DrawLine(&im, 10 + bar_w, y, 10 + bar_w + 5, y, kBlack);
-    DrawText(&im, 10 + bar_w + 8, y + 5, FormatTick(v, std::abs(step)), 0.45);
+  // Ticks on round values inside the range; the ends of the range are labelled too unless a round tick
+  // sits within a label's height of them.
+  const double range = hi - lo;
+  if (!(range > 0.0) || !std::isfinite(range)) {
+    DrawText(&im, 10 + bar_w + 8, top + bar_h / 2 + 5, FormatTick(lo, 1.0), 0.45);
+  } else {
+    const std::vector<double> values = NiceTicks(lo, hi, std::max(2, ticks));
+    const double step = values.size() >= 2 ? values[1] - values[0] : range;
+    const auto y_of = [&](double v) { return top + bar_h - 1 - static_cast<int>(std::lround((bar_h - 1) * (v - lo) / range)); };
+    const auto tick = [&](double v) {
+      const int y = y_of(v);
+      DrawLine(&im, 10 + bar_w, y, 10 + bar_w + 5, y, kBlack);
+      DrawText(&im, 10 + bar_w + 8, y + 5, FormatTick(v, step), 0.45);
+    };
+    const double min_gap = 16.0 * range / std::max(1, bar_h - 1);  // a label's height, in data units
+    for (const double v : values) {
+      if (v - lo >= min_gap && hi - v >= min_gap) tick(v);
+    }
+    tick(lo);
+    tick(hi);
   }
   DrawText(&im, 4, 20, label, 0.45);
   return im;

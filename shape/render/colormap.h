@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 #include <string>
+#include <vector>
 
 #include "shape/core/geometry.h"
 #include "shape/render/image.h"
@@ -19,6 +20,10 @@ Rgb MapColor(double value, double lo, double hi, Colormap map);
 Colors3 MapColors(const Eigen::VectorXd& values, double lo, double hi, Colormap map);
 /// A distinct colour for category `index` (sweep number, subject, material region), 12 that cycle.
 Rgb CategoryColor(int index);
+
+/// Round tick values (1, 2, 2.5 or 5 times a power of ten apart) inside [lo, hi], about `about` of them;
+/// empty for an empty or non-finite range.
+std::vector<double> NiceTicks(double lo, double hi, int about);
 
 /// A vertical colour bar `height` pixels tall with tick labels and a label, as its own image, to be
 /// put beside a render with HStack so two pictures can share one fixed scale.

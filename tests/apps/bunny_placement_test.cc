@@ -51,8 +51,8 @@ TEST(BunnyPlacement, TenSweepsWithExactCounts) {
 double MedianOverlapDistance(const PointCloud& a, const KdTree3& b, std::size_t* overlap) {
   std::vector<double> d;
   for (Eigen::Index i = 0; i < a.size(); ++i) {
-    std::uint32_t j;
-    double d2;
+    std::uint32_t j = 0;
+    double d2 = 0.0;
     b.Nearest(a.positions.row(i).transpose(), &j, &d2);
     if (d2 < 9.0) d.push_back(std::sqrt(d2));
   }

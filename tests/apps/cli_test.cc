@@ -1,8 +1,6 @@
 // The `pectus` binary as a user meets it: exit codes, reports, atomic outputs, refused overwrites.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -13,27 +11,14 @@
 #include "registration/kdtree.h"
 #include "shape/io/mesh_io.h"
 #include "shape/render/image.h"
+#include "tests/support/cli_run.h"
 
 namespace pectus {
 namespace {
 namespace fs = std::filesystem;
 
-struct CliRun {
-  int code;
-  std::string output;  // stdout and stderr
-};
-
-CliRun Pectus(const std::string& args) {
-  const std::string cmd = std::string(PECTUS_EXECUTABLE) + " " + args + " 2>&1";
-  CliRun run{-1, {}};
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  if (pipe == nullptr) return run;
-  std::array<char, 4096> buf{};
-  while (std::fgets(buf.data(), buf.size(), pipe) != nullptr) run.output += buf.data();
-  const int status = ::pclose(pipe);
-  run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return run;
-}
+using testing_support::CliRun;
+using testing_support::Pectus;
 
 class CliTest : public ::testing::Test {
  protected:
@@ -164,9 +149,9 @@ TEST_F(CliTest, PlaceWritesOneCloudOfAllSweeps) {
   const KdTree3 tree(zipper.positions);
   std::vector<double> d;
   for (Eigen::Index i = 0; i < placed.size(); i += 7) {
-    std::uint32_t j;
-    double d2;
-    tree.Nearest(placed.positions.row(i).transpose(), &j, &d2);
+    std::uint32_t nearest = 0;
+    double d2 = 0.0;
+    tree.Nearest(placed.positions.row(i).transpose(), &nearest, &d2);
     d.push_back(std::sqrt(d2));
   }
   std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());

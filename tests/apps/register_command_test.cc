@@ -2,9 +2,7 @@
 // a cohort writes every transform and a summary, a poor fit or unusable landmarks exit non-zero and write
 // nothing.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -17,27 +15,14 @@
 #include "shape/io/mesh_io.h"
 #include "shape/io/transform_io.h"
 #include "tests/registration/synthetic_chest.h"
+#include "tests/support/cli_run.h"
 
 namespace pectus {
 namespace {
 namespace fs = std::filesystem;
 
-struct Run {
-  int code;
-  std::string output;  // stdout and stderr
-};
-
-Run Pectus(const std::string& args) {
-  const std::string cmd = std::string(PECTUS_EXECUTABLE) + " " + args + " 2>&1";
-  Run run{-1, {}};
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  if (pipe == nullptr) return run;
-  std::array<char, 4096> buf{};
-  while (std::fgets(buf.data(), buf.size(), pipe) != nullptr) run.output += buf.data();
-  const int status = ::pclose(pipe);
-  run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return run;
-}
+using testing_support::CliRun;
+using testing_support::Pectus;
 
 // Landmarks on the analytic chest (phi in radians, h in mm), moved by T, with Gaussian noise per axis.
 LandmarkSet ChestLandmarks(const Rigid3& T, double noise_mm, std::uint64_t seed) {
@@ -91,8 +76,9 @@ TEST_F(RegisterCommand, PairWithLandmarksRecoversTheKnownPoseFarFromTheOrigin) {
   const Rigid3 T_true =
       far * testing::RandomPose(&rng, 20.0, 100.0, Eigen::Vector3d(0, 100, 160));  // fixed <- moving
   WriteScan("fixed", far.inverse(), 1, dir_);
-  WriteScan("moving", T_true.inverse(), 2, dir_);
-  const Run r =
+  // x_fixed = far x_world and x_fixed = T_true x_moving: the moving scan's T_world_scan is far^-1 T_true.
+  WriteScan("moving", far.inverse() * T_true, 2, dir_);
+  const CliRun r =
       Pectus("register " + P("moving.ply") + " --to " + P("fixed.ply") + " --moving-landmarks " +
              P("moving.mrk.json") + " --fixed-landmarks " + P("fixed.mrk.json") + " -o " + P("moved.ply") +
              " --transform " + P("T.json") + " --report " + P("r.json") + " --quiet");
@@ -126,8 +112,8 @@ TEST_F(RegisterCommand, PoorFitAndUnusableLandmarksExitNonZeroAndWriteNothing) {
   away.translation() << 800.0, 0.0, 0.0;
   WriteTransformJson(P("start.json"), Similarity3::FromRigid(away));
   const std::size_t before = CountFiles(dir_);
-  const Run poor = Pectus("register " + P("moving.ply") + " --to " + P("fixed.ply") + " --initial " +
-                          P("start.json") + " --transform " + P("T.json") + " --report " + P("r.json"));
+  const CliRun poor = Pectus("register " + P("moving.ply") + " --to " + P("fixed.ply") + " --initial " +
+                             P("start.json") + " --transform " + P("T.json") + " --report " + P("r.json"));
   EXPECT_EQ(poor.code, 1) << poor.output;
   EXPECT_NE(poor.output.find("overlap"), std::string::npos) << poor.output;
   EXPECT_EQ(CountFiles(dir_), before);
@@ -135,7 +121,7 @@ TEST_F(RegisterCommand, PoorFitAndUnusableLandmarksExitNonZeroAndWriteNothing) {
   LandmarkSet two = ChestLandmarks(Rigid3::Identity(), 0.0, 1);
   two.items.resize(2);
   WriteLandmarks(P("two.mrk.json"), two);
-  const Run bad =
+  const CliRun bad =
       Pectus("register " + P("moving.ply") + " --to " + P("fixed.ply") + " --moving-landmarks " +
              P("two.mrk.json") + " --fixed-landmarks " + P("fixed.mrk.json") + " --transform " + P("T.json"));
   EXPECT_EQ(bad.code, 3) << bad.output;
@@ -158,8 +144,8 @@ TEST_F(RegisterCommand, CohortWritesEveryTransformAndASummary) {
   }
   for (const std::string mode : {"", " --groupwise"}) {
     const fs::path out = dir_ / ("aligned" + std::to_string(mode.size()));
-    const Run r = Pectus("register --cohort " + scans.string() + " --reference scan1.ply -o " + out.string() +
-                         mode + " --quiet");
+    const CliRun r = Pectus("register --cohort " + scans.string() + " --reference scan1.ply -o " +
+                            out.string() + mode + " --quiet");
     ASSERT_EQ(r.code, 0) << mode << ": " << r.output;
     nlohmann::json summary;
     std::ifstream(out / "summary.json") >> summary;

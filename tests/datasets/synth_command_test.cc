@@ -1,9 +1,7 @@
 // `pectus synth` as a user meets it: the files of each mode, byte-identical output per seed whatever the
 // thread count, exit codes for bad options and a bad table, and nothing left behind by a failed run.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -12,27 +10,14 @@
 #include <string>
 
 #include "datasets/scan_writer.h"
+#include "tests/support/cli_run.h"
 
 namespace pectus::datasets {
 namespace {
 namespace fs = std::filesystem;
 
-struct CliRun {
-  int code = -1;
-  std::string output;
-};
-
-CliRun Pectus(const std::string& args) {
-  const std::string cmd = std::string(PECTUS_EXECUTABLE) + " " + args + " 2>&1";
-  CliRun run;
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  if (pipe == nullptr) return run;
-  std::array<char, 4096> buf{};
-  while (std::fgets(buf.data(), buf.size(), pipe) != nullptr) run.output += buf.data();
-  const int status = ::pclose(pipe);
-  run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return run;
-}
+using testing_support::CliRun;
+using testing_support::Pectus;
 
 std::string Slurp(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);

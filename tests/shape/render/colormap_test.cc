@@ -52,5 +52,18 @@ TEST(Colormap, ColorBarShowsTheMapTopToBottom) {
   EXPECT_NEAR(bottom.g, lo.g, 8);
 }
 
+void ExpectTicks(const std::vector<double>& actual, const std::vector<double>& expected) {
+  ASSERT_EQ(actual.size(), expected.size());
+  for (std::size_t i = 0; i < actual.size(); ++i) EXPECT_NEAR(actual[i], expected[i], 1e-12) << i;
+}
+
+TEST(Colormap, NiceTicksAreRoundAndInsideTheRange) {
+  ExpectTicks(NiceTicks(-16, 16, 6), {-15, -10, -5, 0, 5, 10, 15});
+  ExpectTicks(NiceTicks(0, 1, 6), {0, 0.2, 0.4, 0.6, 0.8, 1});
+  ExpectTicks(NiceTicks(0, 485, 6), {0, 100, 200, 300, 400});
+  ExpectTicks(NiceTicks(3.2, 3.9, 4), {3.2, 3.4, 3.6, 3.8});
+  EXPECT_TRUE(NiceTicks(1, 1, 6).empty());
+}
+
 }  // namespace
 }  // namespace pectus::render

@@ -1,0 +1,30 @@
+// Runs the `pectus` binary built beside the tests, the way a user would, and captures what it printed.
+#pragma once
+
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <string>
+
+namespace pectus::testing_support {
+
+struct CliRun {
+  int code = -1;       // exit status, -1 when the command could not run or was killed
+  std::string output;  // stdout and stderr, interleaved
+};
+
+// `args` is appended to the executable's path and run through the shell.
+inline CliRun Pectus(const std::string& args) {
+  const std::string cmd = std::string(PECTUS_EXECUTABLE) + " " + args + " 2>&1";
+  CliRun run;
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  if (pipe == nullptr) return run;
+  std::array<char, 4096> buf{};
+  while (std::fgets(buf.data(), buf.size(), pipe) != nullptr) run.output += buf.data();
+  const int status = ::pclose(pipe);
+  run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return run;
+}
+
+}  // namespace pectus::testing_support
