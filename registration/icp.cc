@@ -23,6 +23,10 @@ constexpr std::uint32_t kNoMatch = std::numeric_limits<std::uint32_t>::max();
 // Correspondences are summed in blocks of this many, then the blocks in order: the same sums for any
 // number of threads.
 constexpr std::size_t kBlock = 512;
+// Steps 1 and 3 run on several threads only for at least this many sample points: a coarse level's few
+// thousand points take less time than waking the threads, and on a busy machine every fork and join may
+// wait for a time slice.
+constexpr std::int64_t kMinParallelPoints = 16384;
 // Step 1 searches this many times the gate, so that a certificate holds while a point moves a little.
 constexpr double kSearchRadiusOverGate = 1.5;
 // Step 2 estimates the robust scale from at most this many residuals.
@@ -145,7 +149,7 @@ std::int64_t FindPairs(const Problem& pb, const std::vector<std::uint32_t>& samp
   pairs->Resize(sample.size());
   const auto m = static_cast<std::int64_t>(sample.size());
   std::int64_t searches = 0;
-#pragma omp parallel for schedule(static) reduction(+ : searches)
+#pragma omp parallel for schedule(static) reduction(+ : searches) if (m >= kMinParallelPoints)
   for (std::int64_t k = 0; k < m; ++k) {
     const auto s = static_cast<std::size_t>(k);
     const std::uint32_t i = sample[s];
@@ -221,7 +225,8 @@ BlockSum Accumulate(const Problem& pb, const Pairs& pairs, double scale, double 
   const std::size_t m = pairs.r.size();
   const std::size_t blocks = (m + kBlock - 1) / kBlock;
   std::vector<BlockSum> sums(blocks);
-#pragma omp parallel for schedule(static)
+  const bool parallel = static_cast<std::int64_t>(m) >= kMinParallelPoints;
+#pragma omp parallel for schedule(static) if (parallel)
   for (std::int64_t b = 0; b < static_cast<std::int64_t>(blocks); ++b) {
     BlockSum& s = sums[static_cast<std::size_t>(b)];
     const std::size_t end = std::min(m, (static_cast<std::size_t>(b) + 1) * kBlock);

@@ -61,7 +61,8 @@ PairRegistrationResult RegisterPair(const IcpTarget& fixed, const PointCloud& mo
   // Coarse step: landmarks matched by label (Umeyama), or the given pose.
   Similarity3 T = initial;
   if (with_landmarks) {
-    result.landmarks = AlignLandmarks(*moving_landmarks, *fixed_landmarks, options.landmarks);
+    result.landmarks = AlignLandmarks(*moving_landmarks, *fixed_landmarks, options.landmarks,
+                                      options.moving_landmarks_name, options.fixed_landmarks_name);
     T = result.landmarks->T_target_source;
   }
   auto finish = [&]() {

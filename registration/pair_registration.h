@@ -29,6 +29,9 @@ struct PairRegistrationOptions {
   /// the landmark step put them; more means ICP slid the surfaces along each other (scans of different
   /// people, whose landmarks never coincide, are checked this way). 0 = off.
   double max_landmark_shift_mm = 0.0;
+  /// Name the two landmark sets in error messages (their files, say).
+  std::string moving_landmarks_name = "moving landmarks";
+  std::string fixed_landmarks_name = "fixed landmarks";
   /// Normals for scans that have none (the sign does not matter to ICP).
   NormalOptions normals = [] {
     NormalOptions o;

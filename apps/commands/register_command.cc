@@ -2,6 +2,7 @@
 // a reference, or groupwise by generalised Procrustes): landmarks for the coarse step, ICP for the fine.
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
@@ -190,10 +191,17 @@ class RegisterCommand : public Command {
       if (!moving_landmarks_.empty()) {
         moving_lm = ReadLandmarks(moving_landmarks_, landmark_options_);
         fixed_lm = ReadLandmarks(fixed_landmarks_, landmark_options_);
+        options_.moving_landmarks_name = moving_landmarks_;
+        options_.fixed_landmarks_name = fixed_landmarks_;
       }
       if (!initial_.empty()) initial = ReadTransformJson(initial_);
     }
-    if (initial.scale != 1.0) ThrowBadInput(initial_, "the initial pose must be rigid (scale 1)");
+    // A rigid pose written with doubles reads back with a scale of 1 to rounding (cbrt of a determinant).
+    if (!(std::abs(initial.scale - 1.0) <= 1e-9)) {
+      ThrowBadInput(initial_,
+                    "the initial pose must be rigid (scale 1), not " + std::to_string(initial.scale));
+    }
+    initial.scale = 1.0;
     PairRegistrationResult r;
     {
       auto t = report.Stage("register");
