@@ -67,10 +67,12 @@ Training ReadGrids(const std::vector<std::string>& files, Report* report) {
   training.faces = meshes[0].faces;
   for (std::size_t k = 0; k < files.size(); ++k) {
     if (meshes[k].num_vertices() != m) {
-      ThrowBadInput(files[k], "has " + std::to_string(meshes[k].num_vertices()) + " vertices; " + files[0] + " has " +
-                                  std::to_string(m) + " (all grids must come from the same `pectus resample --grid`)");
+      ThrowBadInput(files[k], "has " + std::to_string(meshes[k].num_vertices()) + " vertices; " + files[0] +
+                                  " has " + std::to_string(m) +
+                                  " (all grids must come from the same `pectus resample --grid`)");
     }
-    training.shapes.row(static_cast<Eigen::Index>(k)) = ToShapeVector(meshes[k].vertices.positions).transpose();
+    training.shapes.row(static_cast<Eigen::Index>(k)) =
+        ToShapeVector(meshes[k].vertices.positions).transpose();
     training.names.push_back(fs::path(files[k]).stem().string());
   }
   return training;
@@ -94,7 +96,8 @@ nlohmann::json VarianceJson(const ShapeModel& model, int rows) {
   nlohmann::json modes = nlohmann::json::array();
   const Eigen::VectorXd f = model.ExplainedFraction(), c = model.CumulativeFraction();
   for (int k = 0; k < std::min(rows, model.num_modes()); ++k) {
-    modes.push_back({{"mode", k + 1}, {"eigenvalue_mm2", model.variances[k]}, {"explained", f[k]}, {"cumulative", c[k]}});
+    modes.push_back(
+        {{"mode", k + 1}, {"eigenvalue_mm2", model.variances[k]}, {"explained", f[k]}, {"cumulative", c[k]}});
   }
   return modes;
 }
@@ -119,7 +122,8 @@ class ModelCommand : public Command {
     build_->add_option("grids", files_, "Grid meshes from `pectus resample` (same grid size)");
     build_->add_option("--list", list_, "Text file with one grid path per line (relative to the file)");
     build_->add_option("-o,--output", model_path_, "Model file (.h5, statismo 0.9)")->required();
-    build_->add_option("--modes", build_options_.max_modes, "Keep at most this many modes (0: all)")->default_val(0);
+    build_->add_option("--modes", build_options_.max_modes, "Keep at most this many modes (0: all)")
+        ->default_val(0);
     build_->add_option("--noise", build_options_.noise_variance, "Noise variance written to the model, mm^2")
         ->default_val(0.0);
     build_->add_option("--scores", scores_csv_, "CSV of the subjects' scores (mm) per mode");
@@ -134,13 +138,16 @@ class ModelCommand : public Command {
     modes_->add_option("model", model_in_, "Model file (.h5)")->required();
     modes_->add_option("--mode", mode_list_, "1-based mode, repeatable (default: 1 and 2)");
     modes_->add_option("--sd", sd_, "Standard deviations, k")->default_val(3.0);
-    modes_->add_option("--out-dir", out_dir_, "Folder for mean.ply and mode<j>_<minus|plus><k>sd.ply")->required();
+    modes_->add_option("--out-dir", out_dir_, "Folder for mean.ply and mode<j>_<minus|plus><k>sd.ply")
+        ->required();
     modes_->add_flag("--png", mode_png_, "Also a colour map per mode of the normal displacement at +k sd");
 
-    evaluate_ = app->add_subcommand("evaluate", "Compactness, generalization, specificity vs number of modes");
+    evaluate_ =
+        app->add_subcommand("evaluate", "Compactness, generalization, specificity vs number of modes");
     evaluate_->add_option("grids", files_, "Grid meshes from `pectus resample`");
     evaluate_->add_option("--list", list_, "Text file with one grid path per line");
-    evaluate_->add_option("--max-modes", quality_.max_modes, "Curves up to this many modes (0: N - 2)")->default_val(0);
+    evaluate_->add_option("--max-modes", quality_.max_modes, "Curves up to this many modes (0: N - 2)")
+        ->default_val(0);
     evaluate_->add_option("--samples", quality_.specificity_samples, "Random model shapes for specificity")
         ->default_val(200);
     evaluate_->add_option("--seed", quality_.seed, "Random seed")->default_val(quality_.seed);
@@ -149,7 +156,8 @@ class ModelCommand : public Command {
 
     project_ = app->add_subcommand("project", "Scores and reconstruction error of a new grid in the model");
     project_->add_option("model", model_in_, "Model file (.h5)")->required();
-    project_->add_option("grid", grid_in_, "Grid mesh from `pectus resample` (same grid as the model)")->required();
+    project_->add_option("grid", grid_in_, "Grid mesh from `pectus resample` (same grid as the model)")
+        ->required();
     project_->add_option("--modes", project_modes_, "Use the first k modes (-1: all)")->default_val(-1);
     project_->add_option("--reconstruction", reconstruction_, "The reconstruction as a mesh");
     for (CLI::App* sub : {build_, info_, modes_, evaluate_, project_}) sub->fallthrough();
@@ -224,7 +232,8 @@ class ModelCommand : public Command {
     const Eigen::VectorXd f = model.ExplainedFraction(), c = model.CumulativeFraction();
     for (int k = 0; k < std::min(10, model.num_modes()); ++k) {
       char line[128];
-      std::snprintf(line, sizeof(line), "  %4d  %14.4f  %9.4f  %10.4f\n", k + 1, model.variances[k], f[k], c[k]);
+      std::snprintf(line, sizeof(line), "  %4d  %14.4f  %9.4f  %10.4f\n", k + 1, model.variances[k], f[k],
+                    c[k]);
       out << line;
     }
     std::fputs(out.str().c_str(), stdout);
@@ -246,7 +255,8 @@ class ModelCommand : public Command {
     std::vector<int> modes = mode_list_.empty() ? std::vector<int>{1, 2} : mode_list_;
     for (int j : modes) {
       if (j < 1 || j > model.num_modes()) {
-        ThrowUsage("mode " + std::to_string(j) + " does not exist; the model has " + std::to_string(model.num_modes()));
+        ThrowUsage("mode " + std::to_string(j) + " does not exist; the model has " +
+                   std::to_string(model.num_modes()));
       }
     }
     if (!(sd_ > 0.0)) ThrowUsage("--sd must be > 0");
@@ -264,7 +274,10 @@ class ModelCommand : public Command {
             "mode" + std::to_string(j) + "_" + (sign < 0 ? "minus" : "plus") + std::string(k_text) + "sd.ply";
         WriteMesh(StageOutput(context, *this, dir / name), model.ToMesh(shape));
         const Eigen::VectorXd d = VertexDistances(shape, model.mean);
-        written.push_back({{"mode", j}, {"sd", sign * sd_}, {"file", (dir / name).string()}, {"max_displacement_mm", d.maxCoeff()}});
+        written.push_back({{"mode", j},
+                           {"sd", sign * sd_},
+                           {"file", (dir / name).string()},
+                           {"max_displacement_mm", d.maxCoeff()}});
 #ifdef PECTUS_HAVE_RENDER
         if (mode_png_ && sign > 0) {
           const std::string png = "mode" + std::to_string(j) + "_plus" + std::string(k_text) + "sd.png";
@@ -292,11 +305,12 @@ class ModelCommand : public Command {
       q = EvaluateModelQuality(training.shapes, quality_);
     }
     Eigen::MatrixXd table(q.modes.size(), 7);
-    table << q.modes.cast<double>(), q.compactness, q.compactness_sd, q.generalization_mm, q.generalization_sd,
-        q.specificity_mm, q.specificity_sd;
+    table << q.modes.cast<double>(), q.compactness, q.compactness_sd, q.generalization_mm,
+        q.generalization_sd, q.specificity_mm, q.specificity_sd;
     if (!csv.empty()) {
-      WriteFileAtomically(csv, Csv(table, {"modes", "compactness_mm2", "compactness_sd_mm2", "generalization_mm",
-                                           "generalization_sd_mm", "specificity_mm", "specificity_sd_mm"}));
+      WriteFileAtomically(csv,
+                          Csv(table, {"modes", "compactness_mm2", "compactness_sd_mm2", "generalization_mm",
+                                      "generalization_sd_mm", "specificity_mm", "specificity_sd_mm"}));
     }
 #ifdef PECTUS_HAVE_RENDER
     if (!png.empty()) WriteQualityCurvesPng(png, q);
@@ -322,8 +336,8 @@ class ModelCommand : public Command {
     options.warn_units = false;
     const TriangleMesh grid = ReadMesh(grid_in_, options);
     if (grid.num_vertices() != model.num_points()) {
-      ThrowBadInput(grid_in_, "has " + std::to_string(grid.num_vertices()) + " vertices; the model's grid has " +
-                                  std::to_string(model.num_points()));
+      ThrowBadInput(grid_in_, "has " + std::to_string(grid.num_vertices()) +
+                                  " vertices; the model's grid has " + std::to_string(model.num_points()));
     }
     const ShapeProjection p = ProjectShape(model, ToShapeVector(grid.vertices.positions), project_modes_);
     if (!rec.empty()) WriteMesh(rec, model.ToMesh(p.reconstruction));

@@ -26,7 +26,8 @@ std::string Csv(const std::vector<std::string>& header, const std::vector<std::v
   out << '\n';
   for (std::size_t r = 0; r < rows.size(); ++r) {
     if (!row_names.empty()) out << row_names[r];
-    for (std::size_t c = 0; c < rows[r].size(); ++c) out << (c || !row_names.empty() ? "," : "") << rows[r][c];
+    for (std::size_t c = 0; c < rows[r].size(); ++c)
+      out << (c || !row_names.empty() ? "," : "") << rows[r][c];
     out << '\n';
   }
   return out.str();
@@ -41,18 +42,23 @@ class PipelineCommand : public Command {
   std::string Example() const override {
     return "  pectus synth cohort --subjects 11 --seed 7 --out cohort\n"
            "  pectus pipeline cohort --out results --report results/pipeline.json\n"
-           "  (then open results/report.html; per subject: merge -> reconstruct -> register to the reference\n"
+           "  (then open results/report.html; per subject: merge -> reconstruct -> register to the "
+           "reference\n"
            "   by landmarks then ICP -> resample on the landmark grid; then the model and distance maps.\n"
            "   A subject that fails is listed in the report and the others go on.)";
   }
   void Configure(CLI::App* app) override {
-    app->add_option("cohort", cohort_, "Folder with one sub-folder per subject (sweep_NN.ply + landmarks.mrk.json)")
+    app->add_option("cohort", cohort_,
+                    "Folder with one sub-folder per subject (sweep_NN.ply + landmarks.mrk.json)")
         ->required();
-    app->add_option("-o,--out", out_, "Output folder (report.html, model.h5, figures/, subjects/)")->required();
-    app->add_option("--sweeps", sweep_pattern_, "Sweep file names in a subject folder")->default_val("sweep_*.ply");
+    app->add_option("-o,--out", out_, "Output folder (report.html, model.h5, figures/, subjects/)")
+        ->required();
+    app->add_option("--sweeps", sweep_pattern_, "Sweep file names in a subject folder")
+        ->default_val("sweep_*.ply");
     app->add_option("--landmarks-name", landmarks_name_, "Landmarks file name in a subject folder")
         ->default_val("landmarks.mrk.json");
-    app->add_option("--reference", options_.reference, "Reference subject (default: the first that reconstructs)");
+    app->add_option("--reference", options_.reference,
+                    "Reference subject (default: the first that reconstructs)");
     app->add_option("--grid", grid_, "Resampling grid LATERALxSTERNAL")->default_val("51x101");
     app->add_option("--fit", fit_, "Profile curve: spline or polynomial")->default_val("spline");
     app->add_option("--crop-margin", options_.crop_margin_mm,
@@ -60,12 +66,15 @@ class PipelineCommand : public Command {
         ->default_val(options_.crop_margin_mm);
     app->add_option("--surface-spacing", options_.reconstruct.spacing, "Isosurface step of the surfaces, mm")
         ->default_val(options_.reconstruct.spacing);
-    app->add_option("--merge-spacing", options_.merge.target_spacing_mm, "Merged cloud decimated to this spacing, mm")
+    app->add_option("--merge-spacing", options_.merge.target_spacing_mm,
+                    "Merged cloud decimated to this spacing, mm")
         ->default_val(options_.merge.target_spacing_mm);
-    app->add_option("--samples", options_.quality_options.specificity_samples, "Random shapes for specificity")
+    app->add_option("--samples", options_.quality_options.specificity_samples,
+                    "Random shapes for specificity")
         ->default_val(options_.quality_options.specificity_samples);
     app->add_flag("--no-quality", no_quality_, "Skip compactness, generalization and specificity");
-    app->add_option("--distance-range", report_.distance_range_mm, "Colour scale of the distance maps, +-mm (0: auto)")
+    app->add_option("--distance-range", report_.distance_range_mm,
+                    "Colour scale of the distance maps, +-mm (0: auto)")
         ->default_val(0.0);
     app->add_flag("--no-surfaces", no_surfaces_, "Do not write each subject's registered surface");
   }
@@ -94,9 +103,11 @@ class PipelineCommand : public Command {
     PipelineResult result;
     {
       auto t = context->report.Stage("pipeline");
-      Progress progress("pipeline: subjects through surface and resampling", 2 * static_cast<std::int64_t>(subjects_.size()));
+      Progress progress("pipeline: subjects through surface and resampling",
+                        2 * static_cast<std::int64_t>(subjects_.size()));
       result = RunCohortPipeline(subjects_, options_, [&](const SubjectOutcome& s, const std::string& stage) {
-        if (!s.failed_stage.empty() && (stage == "surface" || s.failed_stage == "register" || s.failed_stage == "resample")) {
+        if (!s.failed_stage.empty() &&
+            (stage == "surface" || s.failed_stage == "register" || s.failed_stage == "resample")) {
           Warn(s.name + " failed at " + s.failed_stage + ": " + s.error);
         }
         progress.Advance();
@@ -109,13 +120,15 @@ class PipelineCommand : public Command {
     auto t = context->report.Stage("write");
     if (result.has_model) {
       const ShapeModel& m = result.model;
-      WriteStatismoModel(StageOutput(context, *this, out / "model.h5"), m,
-                         {{"source", "pectus pipeline"}, {"cohort", cohort_}, {"reference", result.reference}});
+      WriteStatismoModel(
+          StageOutput(context, *this, out / "model.h5"), m,
+          {{"source", "pectus pipeline"}, {"cohort", cohort_}, {"reference", result.reference}});
       WriteMesh(StageOutput(context, *this, out / "mean.ply"), m.ToMesh(m.mean));
       std::vector<std::string> header{"subject"};
       for (int k = 1; k <= m.num_modes(); ++k) header.push_back("mode" + std::to_string(k) + "_mm");
       std::vector<std::vector<double>> rows;
-      for (Eigen::Index r = 0; r < m.scores.rows(); ++r) rows.emplace_back(m.scores.row(r).data(), m.scores.row(r).data() + m.num_modes());
+      for (Eigen::Index r = 0; r < m.scores.rows(); ++r)
+        rows.emplace_back(m.scores.row(r).data(), m.scores.row(r).data() + m.num_modes());
       WriteFileAtomically(StageOutput(context, *this, out / "scores.csv"), Csv(header, rows, m.names));
       rows.clear();
       const Eigen::VectorXd f = m.ExplainedFraction(), c = m.CumulativeFraction();
@@ -132,11 +145,13 @@ class PipelineCommand : public Command {
       }
       WriteFileAtomically(StageOutput(context, *this, out / "quality.csv"),
                           Csv({"modes", "compactness_mm2", "compactness_sd_mm2", "generalization_mm",
-                               "generalization_sd_mm", "specificity_mm", "specificity_sd_mm"}, rows));
+                               "generalization_sd_mm", "specificity_mm", "specificity_sd_mm"},
+                              rows));
     }
     for (const SubjectOutcome& s : result.subjects) {
       const fs::path dir = out / "subjects" / s.name;
-      if (options_.keep_surfaces && s.surface.num_faces() > 0) WriteMesh(StageOutput(context, *this, dir / "surface.ply"), s.surface);
+      if (options_.keep_surfaces && s.surface.num_faces() > 0)
+        WriteMesh(StageOutput(context, *this, dir / "surface.ply"), s.surface);
       if (!s.ok) continue;
       WriteMesh(StageOutput(context, *this, dir / "grid.ply"), s.grid.mesh);
       WriteLandmarks(StageOutput(context, *this, dir / "landmarks.mrk.json"), s.landmarks);
@@ -154,14 +169,16 @@ class PipelineCommand : public Command {
                    {"profile fit", fit_},
                    {"threads", context->threads}};
     for (const ReportFile& file : MakePipelineReport(result, report_)) {
-      WriteFileAtomically(file.path == "report.html" ? html : StageOutput(context, *this, out / file.path), file.bytes);
+      WriteFileAtomically(file.path == "report.html" ? html : StageOutput(context, *this, out / file.path),
+                          file.bytes);
     }
     nlohmann::json summary = PipelineJson(result);
     for (const auto& [key, value] : summary.items()) context->report[key] = value;
     context->report["cohort"] = cohort_;
     context->report["out"] = out_;
     context->report["subjects_total"] = subjects_.size();
-    context->report["grid"] = {{"lateral", options_.resample.grid.lateral}, {"sternal", options_.resample.grid.sternal}};
+    context->report["grid"] = {{"lateral", options_.resample.grid.lateral},
+                               {"sternal", options_.resample.grid.sternal}};
     context->report["profile_fit"] = ToString(options_.resample.fit.kind);
     Info("pipeline: " + result.message + "; report: " + (out / "report.html").string());
   }

@@ -23,7 +23,8 @@ Eigen::Vector3d ParseTriple(const std::string& text, const std::string& option) 
   std::stringstream in(text);
   Eigen::Vector3d v;
   char comma1 = 0, comma2 = 0;
-  if (!(in >> v.x() >> comma1 >> v.y() >> comma2 >> v.z()) || comma1 != ',' || comma2 != ',' || !v.allFinite()) {
+  if (!(in >> v.x() >> comma1 >> v.y() >> comma2 >> v.z()) || comma1 != ',' || comma2 != ',' ||
+      !v.allFinite()) {
     ThrowUsage(option + " '" + text + "' is not three numbers a,b,c");
   }
   return v;
@@ -33,51 +34,67 @@ class ResampleCommand : public Command {
  public:
   std::string Name() const override { return "resample"; }
   std::string Summary() const override {
-    return "Resample a registered chest surface on the landmark-bounded grid (shape vector); validate hole filling";
+    return "Resample a registered chest surface on the landmark-bounded grid (shape vector); validate hole "
+           "filling";
   }
   std::string Example() const override {
-    return "  pectus resample subject01.ply --landmarks subject01.mrk.json -o subject01_grid.ply --vector s01.csv\n"
+    return "  pectus resample subject01.ply --landmarks subject01.mrk.json -o subject01_grid.ply --vector "
+           "s01.csv\n"
            "  pectus resample scan.ply --landmarks scan.mrk.json --validate --hole-radius 15 \\\n"
            "      --error-png holes.png --error-ply holes.ply --report holes.json\n"
-           "  (ROI: notch to xiphoid along the sternum, the first left costal cartilage and its mirror across;\n"
+           "  (ROI: notch to xiphoid along the sternum, the first left costal cartilage and its mirror "
+           "across;\n"
            "   grid vertices row by row from the notch, 51 across by 101 along by default)";
   }
   void Configure(CLI::App* app) override {
     app->add_option("surface", input_, "Registered surface (mesh or point cloud), mm")->required();
-    app->add_option("--landmarks", landmarks_, "Landmarks of the surface (.mrk.json, .fcsv, .csv)")->required();
+    app->add_option("--landmarks", landmarks_, "Landmarks of the surface (.mrk.json, .fcsv, .csv)")
+        ->required();
     app->add_option("-o,--output", output_, "Resampled grid mesh (vertex k = row * lateral + column)");
     app->add_option("--vector", vector_, "Shape vector as CSV: one line x,y,z per grid vertex");
     app->add_option("--grid", grid_, "Grid vertices LATERALxSTERNAL")->default_val("51x101");
     app->add_option("--fit", fit_, "Profile curve: spline (P-spline) or polynomial")->default_val("spline");
     app->add_option("--degree", options_.fit.polynomial_degree, "Polynomial degree")->default_val(8);
-    app->add_option("--knot-spacing", options_.fit.knot_spacing_mm, "Spline knot spacing, mm")->default_val(5.0);
-    app->add_option("--smoothing", options_.fit.smoothing, "Spline roughness penalty weight")->default_val(1e-3);
+    app->add_option("--knot-spacing", options_.fit.knot_spacing_mm, "Spline knot spacing, mm")
+        ->default_val(5.0);
+    app->add_option("--smoothing", options_.fit.smoothing, "Spline roughness penalty weight")
+        ->default_val(1e-3);
     app->add_option("--sections", sections_, "Section planes: rows, columns or both")->default_val("both");
-    app->add_option("--fit-margin", options_.fit_margin_mm, "Profile data used beyond the ROI, mm")->default_val(25.0);
-    app->add_option("--notch-label", roi_.notch_label, "Label of the sternal notch")->default_val(roi_.notch_label);
-    app->add_option("--xiphoid-label", roi_.xiphoid_label, "Label of the xiphoid")->default_val(roi_.xiphoid_label);
+    app->add_option("--fit-margin", options_.fit_margin_mm, "Profile data used beyond the ROI, mm")
+        ->default_val(25.0);
+    app->add_option("--notch-label", roi_.notch_label, "Label of the sternal notch")
+        ->default_val(roi_.notch_label);
+    app->add_option("--xiphoid-label", roi_.xiphoid_label, "Label of the xiphoid")
+        ->default_val(roi_.xiphoid_label);
     app->add_option("--cartilage-label", roi_.cartilage_label, "Label of the first left costal cartilage")
         ->default_val(roi_.cartilage_label);
-    app->add_option("--superior-margin", roi_.superior_margin_mm, "ROI beyond the notch, mm")->default_val(0.0);
-    app->add_option("--inferior-margin", roi_.inferior_margin_mm, "ROI beyond the xiphoid, mm")->default_val(0.0);
+    app->add_option("--superior-margin", roi_.superior_margin_mm, "ROI beyond the notch, mm")
+        ->default_val(0.0);
+    app->add_option("--inferior-margin", roi_.inferior_margin_mm, "ROI beyond the xiphoid, mm")
+        ->default_val(0.0);
     app->add_option("--lateral-margin", roi_.lateral_margin_mm, "ROI beyond the cartilage and its mirror, mm")
         ->default_val(0.0);
-    app->add_option("--anterior", anterior_, "Anterior direction x,y,z: levels the lateral axis (default: the "
-                                             "plane through the three landmarks)");
+    app->add_option("--anterior", anterior_,
+                    "Anterior direction x,y,z: levels the lateral axis (default: the "
+                    "plane through the three landmarks)");
     app->add_option("--input-units", units_, "Unit of the surface and landmark coordinates: mm, cm, m, in")
         ->default_val("mm");
     app->add_flag("--validate", validate_, "Hole-fill validation: remove regions, resample, compare");
-    app->add_option("--hole-radius", hole_radius_, "--validate: radius of the default regions, mm")->default_val(15.0);
+    app->add_option("--hole-radius", hole_radius_, "--validate: radius of the default regions, mm")
+        ->default_val(15.0);
     app->add_option("--hole", holes_, "--validate: a region U,V,R in ROI coordinates (mm), repeatable");
     app->add_option("--error-png", error_png_, "--validate: colour map of the error on the grid");
     app->add_option("--error-ply", error_ply_, "--validate: grid with the error as scalar and colours");
-    app->add_option("--error-range", error_range_, "--validate: colour scale of the error, +-mm")->default_val(1.0);
+    app->add_option("--error-range", error_range_, "--validate: colour scale of the error, +-mm")
+        ->default_val(1.0);
   }
   std::vector<std::filesystem::path> Inputs() const override { return {input_, landmarks_}; }
 
   void Run(Context* context) override {
-    if (!validate_ && output_.empty() && vector_.empty()) ThrowUsage("give -o/--output and/or --vector (or --validate)");
-    if (!validate_ && (!error_png_.empty() || !error_ply_.empty())) ThrowUsage("--error-png/--error-ply need --validate");
+    if (!validate_ && output_.empty() && vector_.empty())
+      ThrowUsage("give -o/--output and/or --vector (or --validate)");
+    if (!validate_ && (!error_png_.empty() || !error_ply_.empty()))
+      ThrowUsage("--error-png/--error-ply need --validate");
     options_.grid = ParseGridSize(grid_);
     options_.fit.kind = ParseProfileFitKind(fit_);
     options_.directions = ParseSectionDirections(sections_);
@@ -107,7 +124,8 @@ class ResampleCommand : public Command {
     const ChestRoi roi = ComputeChestRoi(landmarks, roi_, landmarks_);
     context->report["roi"] = roi.ToJson();
     context->report["grid"] = {{"lateral", options_.grid.lateral}, {"sternal", options_.grid.sternal}};
-    context->report["fit"] = {{"kind", ToString(options_.fit.kind)}, {"sections", ToString(options_.directions)}};
+    context->report["fit"] = {{"kind", ToString(options_.fit.kind)},
+                              {"sections", ToString(options_.directions)}};
 
     // 3. Resample (or validate).
     CrossSectionResult result;
@@ -124,7 +142,8 @@ class ResampleCommand : public Command {
         v = ValidateHoleFill(surface, roi, disks, options_, input_);
       }
       nlohmann::json regions = nlohmann::json::array();
-      for (const RemovedDisk& d : disks) regions.push_back({{"u_mm", d.u}, {"v_mm", d.v}, {"radius_mm", d.radius_mm}});
+      for (const RemovedDisk& d : disks)
+        regions.push_back({{"u_mm", d.u}, {"v_mm", d.v}, {"radius_mm", d.radius_mm}});
       context->report["hole_fill"] = {{"regions", regions},
                                       {"vertices_in_regions", v.vertices_in_disks},
                                       {"max_error_in_regions_mm", v.max_error_in_disks_mm},

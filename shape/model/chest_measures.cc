@@ -68,8 +68,11 @@ std::vector<double> FrontProfile(const Section& s, double u0, double bin, int bi
 
 bool ChestMeasuresOptions::IsValid(std::string* why) const {
   if (levels < 2 || !(bin_mm > 0.0) || !(lateral_reach_mm > 0.0) || !std::isfinite(bin_mm) ||
-      !std::isfinite(lateral_reach_mm)) {
-    if (why != nullptr) *why = "chest measures need >= 2 levels, a bin > 0 mm and a lateral reach > 0 mm";
+      !std::isfinite(lateral_reach_mm) || !(first_level_fraction >= 0.0 && first_level_fraction < 1.0)) {
+    if (why != nullptr) {
+      *why =
+          "chest measures need >= 2 levels, a bin > 0 mm, a lateral reach > 0 mm and a first level in [0, 1)";
+    }
     return false;
   }
   return true;
@@ -89,8 +92,8 @@ nlohmann::json ChestMeasures::ToJson() const {
           {"external_correction_index_pct", num(external_correction_index_pct)}};
 }
 
-ChestMeasures MeasureChest(const TriangleMesh& surface, const ChestRoi& roi, const ChestMeasuresOptions& options,
-                           const std::string& what) {
+ChestMeasures MeasureChest(const TriangleMesh& surface, const ChestRoi& roi,
+                           const ChestMeasuresOptions& options, const std::string& what) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage(why);
   surface.Validate(what);
@@ -107,7 +110,8 @@ ChestMeasures MeasureChest(const TriangleMesh& surface, const ChestRoi& roi, con
   }
   std::vector<std::pair<std::int32_t, std::int32_t>> boundary;
   for (const auto& [k, count] : edge_count) {
-    if (count == 1) boundary.emplace_back(static_cast<std::int32_t>(k >> 32), static_cast<std::int32_t>(k & 0xffffffffu));
+    if (count == 1)
+      boundary.emplace_back(static_cast<std::int32_t>(k >> 32), static_cast<std::int32_t>(k & 0xffffffffu));
   }
 
   const auto bins = static_cast<int>(std::ceil(2.0 * options.lateral_reach_mm / options.bin_mm));
@@ -117,7 +121,8 @@ ChestMeasures MeasureChest(const TriangleMesh& surface, const ChestRoi& roi, con
   Section best_section;
   int levels_measured = 0;
   for (int l = 0; l < options.levels; ++l) {
-    const double level = roi.v_min + roi.height() * static_cast<double>(l) / (options.levels - 1);
+    const double first = roi.v_min + options.first_level_fraction * roi.height();
+    const double level = first + (roi.v_max - first) * static_cast<double>(l) / (options.levels - 1);
     Section s = Cut(surface, uvw, level, boundary);
     const std::vector<double> top = FrontProfile(s, u0, options.bin_mm, bins);
     // The straight edge rests on the highest point on each side of the midline.
@@ -146,7 +151,8 @@ ChestMeasures MeasureChest(const TriangleMesh& surface, const ChestRoi& roi, con
     }
   }
   if (levels_measured == 0) {
-    ThrowBadInput(what, "no transverse section between the notch and the xiphoid reaches both sides of the midline");
+    ThrowBadInput(
+        what, "no transverse section between the notch and the xiphoid reaches both sides of the midline");
   }
   best.depression_depth_mm = std::max(0.0, best.depression_depth_mm);
 
@@ -167,7 +173,8 @@ ChestMeasures MeasureChest(const TriangleMesh& surface, const ChestRoi& roi, con
     best.ap_depth_max_mm = w_max - back;
     if (best.ap_depth_min_mm > 0.0) best.external_haller_index = best.chest_width_mm / best.ap_depth_min_mm;
     if (best.ap_depth_max_mm > 0.0) {
-      best.external_correction_index_pct = 100.0 * (best.ap_depth_max_mm - best.ap_depth_min_mm) / best.ap_depth_max_mm;
+      best.external_correction_index_pct =
+          100.0 * (best.ap_depth_max_mm - best.ap_depth_min_mm) / best.ap_depth_max_mm;
     }
   }
   std::ostringstream msg;

@@ -5,6 +5,7 @@
 #include <exception>
 #include <sstream>
 
+#include "registration/landmark_alignment.h"
 #include "shape/cloud_filter.h"
 #include "shape/core/error.h"
 #include "shape/io/landmark_io.h"
@@ -64,8 +65,9 @@ void BuildSurface(const CohortSubject& in, const PipelineOptions& options, Subje
       s->sweep_files.push_back(f);
     }
     s->sweeps = static_cast<int>(sweeps->size());
-    if (sweeps->empty()) ThrowBadInput(in.name, "no sweep has " + std::to_string(options.min_sweep_points) +
-                                                    " points within the region of interest of its landmarks");
+    if (sweeps->empty())
+      ThrowBadInput(in.name, "no sweep has " + std::to_string(options.min_sweep_points) +
+                                 " points within the region of interest of its landmarks");
   });
   SweepMergeResult merged;
   RunStage(s, "merge", [&] {
@@ -84,11 +86,42 @@ void BuildSurface(const CohortSubject& in, const PipelineOptions& options, Subje
   });
 }
 
+// Moves one subject's grid, surface, landmarks and ROI by T, and composes T into its pose.
+void MoveSubject(const Similarity3& T, SubjectOutcome* s) {
+  TransformInPlace(T, &s->grid.mesh);
+  s->grid.shape_vector = ToShapeVector(s->grid.mesh.vertices.positions);
+  ChestRoi& roi = s->grid.roi;
+  roi.origin = T * roi.origin;
+  roi.lateral = T.rotation * roi.lateral;
+  roi.sternal = T.rotation * roi.sternal;
+  roi.normal = T.rotation * roi.normal;
+  TransformInPlace(T, &s->surface);
+  s->landmarks = Transformed(s->landmarks, T);
+  s->measures.deepest_point = T * s->measures.deepest_point;
+  s->T_reference_subject = Similarity3::FromMatrix(T.Matrix() * s->T_reference_subject.Matrix(), s->name);
+}
+
+// Generalized Procrustes analysis, rigid: each grid moved onto the mean of all, `iterations` times.
+void AlignGridsToTheirMean(const std::vector<int>& good, int iterations, PipelineResult* result) {
+  for (int it = 0; it < iterations; ++it) {
+    Points3 mean = Points3::Zero(result->subjects[good[0]].grid.mesh.num_vertices(), 3);
+    for (int i : good) mean += result->subjects[i].grid.mesh.vertices.positions;
+    mean /= static_cast<double>(good.size());
+    for (int i : good) {
+      SubjectOutcome& s = result->subjects[i];
+      MoveSubject(UmeyamaAlignment(s.grid.mesh.vertices.positions, mean, {}, false, 0.0, s.name + " grid"),
+                  &s);
+    }
+  }
+}
+
 void AddSeconds(std::vector<std::pair<std::string, double>>* total, const SubjectOutcome& s) {
   for (const auto& [stage, t] : s.seconds) {
     auto it = std::find_if(total->begin(), total->end(), [&](const auto& e) { return e.first == stage; });
-    if (it == total->end()) total->emplace_back(stage, t);
-    else it->second += t;
+    if (it == total->end())
+      total->emplace_back(stage, t);
+    else
+      it->second += t;
   }
 }
 
@@ -98,8 +131,8 @@ PointCloud CropToRoi(const PointCloud& cloud, const ChestRoi& roi, double margin
   const Points3 uvw = roi.ToRoi(cloud.positions);
   std::vector<std::uint32_t> rows;
   for (Eigen::Index k = 0; k < uvw.rows(); ++k) {
-    if (uvw(k, 0) >= roi.u_min - margin_mm && uvw(k, 0) <= roi.u_max + margin_mm && uvw(k, 1) >= roi.v_min - margin_mm &&
-        uvw(k, 1) <= roi.v_max + margin_mm) {
+    if (uvw(k, 0) >= roi.u_min - margin_mm && uvw(k, 0) <= roi.u_max + margin_mm &&
+        uvw(k, 1) >= roi.v_min - margin_mm && uvw(k, 1) <= roi.v_max + margin_mm) {
       rows.push_back(static_cast<std::uint32_t>(k));
     }
   }
@@ -108,8 +141,8 @@ PointCloud CropToRoi(const PointCloud& cloud, const ChestRoi& roi, double margin
 
 void RegisterToReference(const IcpTarget& reference_surface, const LandmarkSet& reference_landmarks,
                          const PipelineOptions& options, SubjectOutcome* s) {
-  const PairRegistrationResult r =
-      RegisterPair(reference_surface, s->surface.vertices, &reference_landmarks, &s->landmarks, {}, options.registration);
+  const PairRegistrationResult r = RegisterPair(reference_surface, s->surface.vertices, &reference_landmarks,
+                                                &s->landmarks, {}, options.registration);
   const double landmark_fit_rms = r.landmarks->rms_mm;
   s->icp_rms_mm = r.icp ? r.icp->rms_mm : 0.0;
   s->icp_accepted = r.success && r.landmark_rms_mm <= landmark_fit_rms + options.max_landmark_shift_mm;
@@ -138,7 +171,8 @@ std::vector<CohortSubject> FindCohortSubjects(const fs::path& folder, const std:
     CohortSubject s;
     s.name = dir.path().filename().string();
     for (const fs::directory_entry& f : fs::directory_iterator(dir.path(), ec)) {
-      if (f.is_regular_file() && Matches(f.path().filename().string(), sweep_pattern)) s.sweeps.push_back(f.path());
+      if (f.is_regular_file() && Matches(f.path().filename().string(), sweep_pattern))
+        s.sweeps.push_back(f.path());
     }
     if (s.sweeps.empty()) continue;
     std::sort(s.sweeps.begin(), s.sweeps.end());
@@ -158,8 +192,13 @@ bool PipelineOptions::IsValid(std::string* why) const {
       !resample.IsValid(why) || !model.IsValid(why)) {
     return false;
   }
-  if (!(crop_margin_mm >= 0.0) || min_sweep_points < 10 || !(max_landmark_shift_mm >= 0.0)) {
-    if (why != nullptr) *why = "the crop margin and the landmark shift must be >= 0 mm and a sweep needs at least 10 points";
+  if (!(crop_margin_mm >= 0.0) || min_sweep_points < 10 || !(max_landmark_shift_mm >= 0.0) ||
+      procrustes_iterations < 0) {
+    if (why != nullptr) {
+      *why =
+          "the crop margin and the landmark shift must be >= 0 mm, a sweep needs at least 10 points and the "
+          "Procrustes iterations must be >= 0";
+    }
     return false;
   }
   return !quality || quality_options.IsValid(why);
@@ -191,9 +230,12 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
   // 4. The reference: the named subject, or the first whose surface was made.
   int ref = -1;
   for (int i = 0; i < n && ref < 0; ++i) {
-    if (options.reference.empty() ? result.subjects[i].failed_stage.empty() : inputs[i].name == options.reference) ref = i;
+    if (options.reference.empty() ? result.subjects[i].failed_stage.empty()
+                                  : inputs[i].name == options.reference)
+      ref = i;
   }
-  if (ref < 0 && !options.reference.empty()) ThrowUsage("pipeline: no subject is named '" + options.reference + "'");
+  if (ref < 0 && !options.reference.empty())
+    ThrowUsage("pipeline: no subject is named '" + options.reference + "'");
   if (ref < 0 || !result.subjects[ref].failed_stage.empty()) {
     ThrowFailure(ref < 0 ? "no subject's surface could be made; nothing to register to"
                          : "the reference subject failed: " + result.subjects[ref].error,
@@ -242,7 +284,9 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
   result.succeeded = static_cast<int>(good.size());
   Clock::time_point start = Clock::now();
   if (good.size() >= 2) {
-    Eigen::MatrixXd shapes(static_cast<Eigen::Index>(good.size()), result.subjects[good[0]].grid.shape_vector.size());
+    AlignGridsToTheirMean(good, options.procrustes_iterations, &result);
+    Eigen::MatrixXd shapes(static_cast<Eigen::Index>(good.size()),
+                           result.subjects[good[0]].grid.shape_vector.size());
     for (std::size_t k = 0; k < good.size(); ++k) {
       shapes.row(static_cast<Eigen::Index>(k)) = result.subjects[good[k]].grid.shape_vector.transpose();
     }
@@ -275,7 +319,8 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
       s.scores = result.model.scores.row(static_cast<Eigen::Index>(k)).transpose();
     }
     try {
-      result.mean_measures = MeasureChest(mean, ComputeChestRoi(mean_landmarks, options.roi, "mean landmarks"));
+      result.mean_measures =
+          MeasureChest(mean, ComputeChestRoi(mean_landmarks, options.roi, "mean landmarks"));
     } catch (const Error& e) {
       result.mean_measures.message = e.what();
     }
@@ -283,7 +328,8 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
   }
   for (const SubjectOutcome& s : result.subjects) AddSeconds(&result.seconds, s);
   std::ostringstream msg;
-  msg << result.succeeded << " of " << n << " subjects made it to the model (reference " << result.reference << ")";
+  msg << result.succeeded << " of " << n << " subjects made it to the model (reference " << result.reference
+      << ")";
   if (result.has_model) msg << "; " << result.model.num_modes() << " modes";
   result.message = msg.str();
   return result;

@@ -25,9 +25,9 @@ namespace pectus {
 
 /// One subject's raw data.
 struct CohortSubject {
-  std::string name;                             ///< the folder's name
-  std::vector<std::filesystem::path> sweeps;    ///< PLY (or any point format) files, scanner frame, mm
-  std::filesystem::path landmarks;              ///< .mrk.json (or .fcsv/.csv) in the same frame
+  std::string name;                           ///< the folder's name
+  std::vector<std::filesystem::path> sweeps;  ///< PLY (or any point format) files, scanner frame, mm
+  std::filesystem::path landmarks;            ///< .mrk.json (or .fcsv/.csv) in the same frame
 };
 
 /// The subjects of a cohort folder: every sub-folder holding files named `sweep_pattern` (a prefix and
@@ -48,16 +48,16 @@ struct PipelineOptions {
   int min_sweep_points = 1000;
   SweepMergeOptions merge = [] {
     SweepMergeOptions o;
-    o.target_spacing_mm = 2.0;                // the surface needs no more; keeps the RBF fit fast
-    o.pairwise.auto_level_points = {2000};    // sweeps start within the tracker's error of each other
+    o.target_spacing_mm = 2.0;              // the surface needs no more; keeps the RBF fit fast
+    o.pairwise.auto_level_points = {2000};  // sweeps start within the tracker's error of each other
     o.pairwise.auto_max_iterations = 20;
     o.global_rounds = 6;
     return o;
   }();
   ReconstructOptions reconstruct = [] {
     ReconstructOptions o;
-    o.spacing = 2.0;    // isosurface step (mm)
-    o.check = false;    // the CGAL manifold check costs as much as the rest; `pectus reconstruct` has it
+    o.spacing = 2.0;  // isosurface step (mm)
+    o.check = false;  // the CGAL manifold check costs as much as the rest; `pectus reconstruct` has it
     return o;
   }();
   /// Landmarks then ICP, to the reference subject. Two chests differ by millimetres (a depression by
@@ -77,15 +77,20 @@ struct PipelineOptions {
   /// reference's by at most this much (mm) from the landmark fit; otherwise the landmark pose is kept
   /// and the subject is flagged (SubjectOutcome::icp_accepted).
   double max_landmark_shift_mm = 5.0;
-  ChestRoiOptions roi;                   ///< landmarks and margins that bound the grid
-  CrossSectionOptions resample;          ///< grid size (51 x 101) and profile fit
+  ChestRoiOptions roi;           ///< landmarks and margins that bound the grid
+  CrossSectionOptions resample;  ///< grid size (51 x 101) and profile fit
+  /// Before the model, the resampled grids are aligned rigidly to their mean (generalized Procrustes
+  /// analysis, `procrustes_iterations` rounds; 0: off). The registration to one reference subject leaves
+  /// each grid a pose that is not shape (ICP between two different chests may slide by millimetres); the
+  /// surfaces, landmarks and T_reference_subject follow their grid.
+  int procrustes_iterations = 5;
   ShapeModelOptions model;
-  bool quality = true;                   ///< compute compactness, generalization, specificity (N >= 3)
+  bool quality = true;  ///< compute compactness, generalization, specificity (N >= 3)
   ModelQualityOptions quality_options;
   DistanceKind distance = DistanceKind::kSignedSurface;  ///< each subject's grid to the mean grid
-  bool measures = true;                  ///< depression depth of each registered surface
-  std::string reference;                 ///< the reference subject's name; empty: the first that reconstructs
-  bool keep_surfaces = true;             ///< keep each registered surface in the result (for output files)
+  bool measures = true;                                  ///< depression depth of each registered surface
+  std::string reference;      ///< the reference subject's name; empty: the first that reconstructs
+  bool keep_surfaces = true;  ///< keep each registered surface in the result (for output files)
 
   /// False, with the reason, for invalid options of any stage.
   bool IsValid(std::string* why) const;
@@ -94,26 +99,26 @@ struct PipelineOptions {
 /// What happened to one subject.
 struct SubjectOutcome {
   std::string name;
-  bool ok = false;                     ///< went through every stage
-  std::string failed_stage;            ///< "read", "merge", "reconstruct", "register", "resample" when not ok
-  std::string error;                   ///< why it failed
-  int sweeps = 0;                      ///< sweeps merged (after dropping those outside the ROI)
+  bool ok = false;           ///< went through every stage
+  std::string failed_stage;  ///< "read", "merge", "reconstruct", "register", "resample" when not ok
+  std::string error;         ///< why it failed
+  int sweeps = 0;            ///< sweeps merged (after dropping those outside the ROI)
   /// The sweeps merged; the merged surface is in the frame of the first (the merge's anchor).
   std::vector<std::filesystem::path> sweep_files;
   std::int64_t points_in = 0, points_merged = 0;
-  double merge_rms_mm = 0.0;           ///< joint pose adjustment residual
-  std::int64_t faces = 0;              ///< of the reconstructed surface
-  double fit_accuracy_mm = 0.0;        ///< RBF fitting accuracy (dissertation Eq. 11)
-  Similarity3 T_reference_subject;     ///< subject scan frame to the reference's
+  double merge_rms_mm = 0.0;        ///< joint pose adjustment residual
+  std::int64_t faces = 0;           ///< of the reconstructed surface
+  double fit_accuracy_mm = 0.0;     ///< RBF fitting accuracy (dissertation Eq. 11)
+  Similarity3 T_reference_subject;  ///< subject scan frame to the reference's
   double landmark_rms_mm = 0.0, icp_rms_mm = 0.0;
-  bool icp_accepted = false;           ///< the ICP refinement was kept (else the landmark pose)
-  std::string registration_message;    ///< what the fine step found, and why it was not kept
-  TriangleMesh surface;                ///< the reconstructed surface in the reference frame (keep_surfaces)
-  LandmarkSet landmarks;               ///< in the reference frame
-  CrossSectionResult grid;             ///< the resampled grid (shape vector) in the reference frame
-  ChestMeasures measures;              ///< when options.measures (depth 0 and a message if it failed)
-  DistanceMapResult to_mean;           ///< distances of the grid vertices to the mean shape, mm
-  Eigen::VectorXd scores;              ///< model scores (mm)
+  bool icp_accepted = false;         ///< the ICP refinement was kept (else the landmark pose)
+  std::string registration_message;  ///< what the fine step found, and why it was not kept
+  TriangleMesh surface;              ///< the reconstructed surface in the reference frame (keep_surfaces)
+  LandmarkSet landmarks;             ///< in the reference frame
+  CrossSectionResult grid;           ///< the resampled grid (shape vector) in the reference frame
+  ChestMeasures measures;            ///< when options.measures (depth 0 and a message if it failed)
+  DistanceMapResult to_mean;         ///< distances of the grid vertices to the mean shape, mm
+  Eigen::VectorXd scores;            ///< model scores (mm)
   std::vector<std::pair<std::string, double>> seconds;  ///< wall time per stage
 };
 
@@ -122,11 +127,11 @@ struct PipelineResult {
   std::vector<SubjectOutcome> subjects;  ///< in input order, failed ones included
   std::string reference;                 ///< the reference subject's name
   int succeeded = 0;
-  bool has_model = false;                ///< at least 2 subjects made it
-  ShapeModel model;                      ///< names = the succeeded subjects
+  bool has_model = false;  ///< at least 2 subjects made it
+  ShapeModel model;        ///< names = the succeeded subjects
   bool has_quality = false;
   ModelQualityCurves quality;
-  ChestMeasures mean_measures;           ///< of the mean shape (its grid)
+  ChestMeasures mean_measures;                          ///< of the mean shape (its grid)
   std::vector<std::pair<std::string, double>> seconds;  ///< wall time per stage, summed over subjects
   std::string message;
 };
@@ -147,7 +152,7 @@ using PipelineObserver = std::function<void(const SubjectOutcome& subject, const
 
 /// Runs the pipeline. Throws Error(kUsage) for invalid options or an unknown reference name, and
 /// Error(kFailure) if no subject reconstructs (nothing to register to); a failing subject never throws.
-PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& subjects, const PipelineOptions& options = {},
-                                 const PipelineObserver& observer = {});
+PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& subjects,
+                                 const PipelineOptions& options = {}, const PipelineObserver& observer = {});
 
 }  // namespace pectus

@@ -23,7 +23,8 @@ void KeepFrontEnvelope(double bin, double depth, Profile* p) {
   const auto bins = static_cast<std::size_t>((t1 - t0) / bin) + 1;
   std::vector<double> top(bins, -std::numeric_limits<double>::infinity());
   auto bin_of = [&](double t) { return std::min(bins - 1, static_cast<std::size_t>((t - t0) / bin)); };
-  for (std::size_t k = 0; k < p->t.size(); ++k) top[bin_of(p->t[k])] = std::max(top[bin_of(p->t[k])], p->y[k]);
+  for (std::size_t k = 0; k < p->t.size(); ++k)
+    top[bin_of(p->t[k])] = std::max(top[bin_of(p->t[k])], p->y[k]);
   std::size_t kept = 0;
   for (std::size_t k = 0; k < p->t.size(); ++k) {
     if (p->y[k] >= top[bin_of(p->t[k])] - depth) {
@@ -38,7 +39,8 @@ void KeepFrontEnvelope(double bin, double depth, Profile* p) {
 
 // Cuts a triangle (ROI coordinates) with the plane coordinate[axis] == level; appends the crossing points
 // (coordinate[other], w) whose abscissa lies in [lo, hi].
-void CutTriangle(const Eigen::Vector3d* p, int axis, int other, double level, double lo, double hi, Profile* out) {
+void CutTriangle(const Eigen::Vector3d* p, int axis, int other, double level, double lo, double hi,
+                 Profile* out) {
   for (int e = 0; e < 3; ++e) {
     const Eigen::Vector3d& a = p[e];
     const Eigen::Vector3d& b = p[(e + 1) % 3];
@@ -67,6 +69,42 @@ std::pair<int, int> IndexRange(const Eigen::VectorXd& positions, double lo, doub
   return {first, last};
 }
 
+// How irregular each family of profiles is: the mean squared third and fourth derivatives of its curves
+// (mm^-4, mm^-6) at the grid positions on data, by differences `h` (mm) apart. A cubic P-spline with a
+// third-order penalty continues a curve past the data with an error of about |d3w| g^3 / 6 at a distance g,
+// and bridges a hole from data at distances a below and b above with about |d4w| (a b)^2 / 24.
+struct Roughness {
+  double d3 = 0.0, d4 = 0.0;
+};
+Roughness FamilyRoughness(const std::vector<ProfileCurve>& curves, const Eigen::VectorXd& t, double h) {
+  Roughness r;
+  Eigen::Index count = 0;
+  for (const ProfileCurve& c : curves) {
+    if (!c.valid()) continue;
+    for (Eigen::Index a = 0; a < t.size(); ++a) {
+      const double x = t[a];
+      if (c.DistanceToData(x - 2.0 * h) > h || c.DistanceToData(x + 2.0 * h) > h) continue;
+      const double m2 = c(x - 2.0 * h), m1 = c(x - h), z = c(x), p1 = c(x + h), p2 = c(x + 2.0 * h);
+      const double d3 = (p2 - 2.0 * p1 + 2.0 * m1 - m2) / (2.0 * h * h * h);
+      const double d4 = (p2 - 4.0 * p1 + 6.0 * z - 4.0 * m1 + m2) / (h * h * h * h);
+      r.d3 += d3 * d3;
+      r.d4 += d4 * d4;
+      ++count;
+    }
+  }
+  if (count > 0) r.d3 /= static_cast<double>(count), r.d4 /= static_cast<double>(count);
+  return r;
+}
+
+// Expected squared error (mm^2) of curve `c` at t beyond its fit residual (see FamilyRoughness).
+double BridgingErrorSquared(const ProfileCurve& c, double t, const Roughness& r) {
+  double below = 0.0, above = 0.0;
+  c.DistancesToDataOnEachSide(t, &below, &above);
+  if (std::isfinite(below) && std::isfinite(above)) return r.d4 * std::pow(below * above, 4) / 576.0;
+  const double g = std::min(below, above);
+  return r.d3 * std::pow(g, 6) / 36.0;
+}
+
 }  // namespace
 
 SectionDirections ParseSectionDirections(const std::string& text) {
@@ -92,7 +130,8 @@ bool CrossSectionOptions::IsValid(std::string* why) const {
   };
   if (!grid.IsValid(why) || !fit.IsValid(why)) return false;
   if (!(fit_margin_mm >= 0.0) || !std::isfinite(fit_margin_mm)) return fail("fit margin must be >= 0 mm");
-  if (!(slab_half_width_mm > 0.0) || !std::isfinite(slab_half_width_mm)) return fail("slab half-width must be > 0 mm");
+  if (!(slab_half_width_mm > 0.0) || !std::isfinite(slab_half_width_mm))
+    return fail("slab half-width must be > 0 mm");
   if (!(envelope_bin_mm > 0.0) || !(envelope_depth_mm > 0.0) || !std::isfinite(envelope_bin_mm) ||
       !std::isfinite(envelope_depth_mm)) {
     return fail("front envelope bin and depth must be > 0 mm");
@@ -154,13 +193,16 @@ CrossSectionResult ResampleCrossSections(const TriangleMesh& surface, const Ches
 
   // 3. A curve through each profile's front envelope.
   std::vector<ProfileCurve> row_curves(rows.size()), column_curves(columns.size());
-  auto fit_all = [&](std::vector<Profile>& profiles, std::vector<ProfileCurve>& curves, double lo, double hi) {
+  auto fit_all = [&](std::vector<Profile>& profiles, std::vector<ProfileCurve>& curves, double lo,
+                     double hi) {
 #pragma omp parallel for schedule(dynamic)
     for (std::size_t k = 0; k < profiles.size(); ++k) {
       KeepFrontEnvelope(options.envelope_bin_mm, options.envelope_depth_mm, &profiles[k]);
       if (static_cast<int>(profiles[k].t.size()) < options.min_profile_points) continue;
-      const Eigen::Map<const Eigen::VectorXd> t(profiles[k].t.data(), static_cast<Eigen::Index>(profiles[k].t.size()));
-      const Eigen::Map<const Eigen::VectorXd> y(profiles[k].y.data(), static_cast<Eigen::Index>(profiles[k].y.size()));
+      const Eigen::Map<const Eigen::VectorXd> t(profiles[k].t.data(),
+                                                static_cast<Eigen::Index>(profiles[k].t.size()));
+      const Eigen::Map<const Eigen::VectorXd> y(profiles[k].y.data(),
+                                                static_cast<Eigen::Index>(profiles[k].y.size()));
       curves[k] = FitProfile(t, y, lo, hi, options.fit);
     }
   };
@@ -182,10 +224,19 @@ CrossSectionResult ResampleCrossSections(const TriangleMesh& surface, const Ches
       }
     }
   }
-  result.fit_rms_mm = result.profile_points > 0 ? std::sqrt(sum_sq / static_cast<double>(result.profile_points)) : 0.0;
+  result.fit_rms_mm =
+      result.profile_points > 0 ? std::sqrt(sum_sq / static_cast<double>(result.profile_points)) : 0.0;
 
-  // 4. Sample the curves at the grid; where both a row and a column pass through a vertex, blend them
-  //    with weights 1 / (1 mm + distance to the profile's data)^2, so that the better supported wins.
+  // 4. Sample the curves at the grid; where both a row and a column pass through a vertex, blend them by
+  //    the inverse of each one's expected squared error there: the fit's own noise plus the error of
+  //    bridging the hole or continuing past the data (BridgingErrorSquared, with the derivatives typical of
+  //    its family). So a vertex on data in one direction takes that direction, and inside a hole the
+  //    direction along which the chest bends less regularly (a groove along the sternum seen across it)
+  //    gives way.
+  const double h = options.fit.knot_spacing_mm;
+  const Roughness row_roughness = use_rows ? FamilyRoughness(row_curves, u, h) : Roughness();
+  const Roughness column_roughness = use_columns ? FamilyRoughness(column_curves, v, h) : Roughness();
+  const double noise_mm2 = std::max(1e-4, result.fit_rms_mm * result.fit_rms_mm);
   const Eigen::Index m = grid.num_vertices();
   Eigen::VectorXd depth = Eigen::VectorXd::Zero(m), gap = Eigen::VectorXd::Zero(m);
   std::vector<bool> known(static_cast<std::size_t>(m), false);
@@ -193,16 +244,17 @@ CrossSectionResult ResampleCrossSections(const TriangleMesh& surface, const Ches
     for (int j = 0; j < grid.lateral; ++j) {
       const Eigen::Index k = grid.Index(i, j);
       double sum_w = 0.0, sum_wd = 0.0, best_gap = std::numeric_limits<double>::infinity();
-      auto add = [&](const ProfileCurve& c, double t) {
+      auto add = [&](const ProfileCurve& c, double t, const Roughness& roughness) {
         if (!c.valid()) return;
         const double g = c.DistanceToData(t);
-        const double w = 1.0 / ((1.0 + g) * (1.0 + g));
+        // (1 mm + g)^2 keeps the nearer data ahead where both families are equally regular.
+        const double w = 1.0 / ((noise_mm2 + BridgingErrorSquared(c, t, roughness)) * (1.0 + g) * (1.0 + g));
         sum_w += w;
         sum_wd += w * c(t);
         best_gap = std::min(best_gap, g);
       };
-      if (use_rows) add(row_curves[i], u[j]);
-      if (use_columns) add(column_curves[j], v[i]);
+      if (use_rows) add(row_curves[i], u[j], row_roughness);
+      if (use_columns) add(column_curves[j], v[i], column_roughness);
       if (sum_w == 0.0) continue;
       depth[k] = sum_wd / sum_w;
       gap[k] = best_gap;
@@ -226,9 +278,10 @@ CrossSectionResult ResampleCrossSections(const TriangleMesh& surface, const Ches
           if (known[index(a)]) t.push_back(t_all[a]), y.push_back(depth[index(a)]), known_at.push_back(a);
         }
         if (static_cast<int>(t.size()) == along || static_cast<int>(t.size()) < min_known) continue;
-        const ProfileCurve c = FitProfile(Eigen::Map<const Eigen::VectorXd>(t.data(), static_cast<Eigen::Index>(t.size())),
-                                          Eigen::Map<const Eigen::VectorXd>(y.data(), static_cast<Eigen::Index>(y.size())),
-                                          t_all[0], t_all[along - 1], options.fit);
+        const ProfileCurve c =
+            FitProfile(Eigen::Map<const Eigen::VectorXd>(t.data(), static_cast<Eigen::Index>(t.size())),
+                       Eigen::Map<const Eigen::VectorXd>(y.data(), static_cast<Eigen::Index>(y.size())),
+                       t_all[0], t_all[along - 1], options.fit);
         if (!c.valid()) continue;
         for (int a = 0; a < along; ++a) {
           const Eigen::Index k = index(a);
@@ -251,10 +304,12 @@ CrossSectionResult ResampleCrossSections(const TriangleMesh& surface, const Ches
     if (!known[k] && missing++ == 0) first_missing = k;
   }
   if (missing > 0) {
-    const auto i = static_cast<int>(first_missing / grid.lateral), j = static_cast<int>(first_missing % grid.lateral);
+    const auto i = static_cast<int>(first_missing / grid.lateral),
+               j = static_cast<int>(first_missing % grid.lateral);
     ThrowBadInput(what, std::to_string(missing) + " of " + std::to_string(m) +
-                            " grid vertices have no fitted section near them (first: row " + std::to_string(i) +
-                            ", column " + std::to_string(j) + "); the surface does not reach that part of the ROI");
+                            " grid vertices have no fitted section near them (first: row " +
+                            std::to_string(i) + ", column " + std::to_string(j) +
+                            "); the surface does not reach that part of the ROI");
   }
   const double spacing = std::max(roi.width() / (grid.lateral - 1), roi.height() / (grid.sternal - 1));
   const Eigen::Index supported = (gap.array() <= 2.0 * spacing).count();
@@ -262,7 +317,8 @@ CrossSectionResult ResampleCrossSections(const TriangleMesh& surface, const Ches
   // 6. Grid vertices back in the surface's frame.
   Points3 grid_uvw(m, 3);
   for (int i = 0; i < grid.sternal; ++i) {
-    for (int j = 0; j < grid.lateral; ++j) grid_uvw.row(grid.Index(i, j)) << u[j], v[i], depth[grid.Index(i, j)];
+    for (int j = 0; j < grid.lateral; ++j)
+      grid_uvw.row(grid.Index(i, j)) << u[j], v[i], depth[grid.Index(i, j)];
   }
   result.mesh.vertices.positions = roi.FromRoi(grid_uvw);
   result.mesh.vertices.scalars["depth_mm"] = depth;

@@ -28,8 +28,8 @@ std::string ToString(SectionDirections directions);
 
 /// How a surface is resampled.
 struct CrossSectionOptions {
-  GridSize grid;                                          ///< 51 x 101 vertices by default
-  ProfileFitOptions fit;                                  ///< P-spline by default
+  GridSize grid;          ///< 51 x 101 vertices by default
+  ProfileFitOptions fit;  ///< P-spline by default
   SectionDirections directions = SectionDirections::kBoth;
   /// Profile points up to this far beyond the ROI rectangle take part in the fits (>= 0, mm).
   double fit_margin_mm = 25.0;
@@ -55,14 +55,14 @@ struct CrossSectionResult {
   /// vertex to the nearest profile data point along the profile that supports it best: 0 on data,
   /// > 0 in holes and beyond the data).
   TriangleMesh mesh;
-  Eigen::VectorXd shape_vector;  ///< ToShapeVector(mesh.vertices.positions), 3m numbers, mm
-  int profiles_fitted = 0;       ///< section profiles with a curve
-  int profiles_unfitted = 0;     ///< section profiles with too few points
+  Eigen::VectorXd shape_vector;     ///< ToShapeVector(mesh.vertices.positions), 3m numbers, mm
+  int profiles_fitted = 0;          ///< section profiles with a curve
+  int profiles_unfitted = 0;        ///< section profiles with too few points
   Eigen::Index profile_points = 0;  ///< points in all fitted profiles
-  double fit_rms_mm = 0.0;       ///< RMS residual of all profile fits, mm
-  double max_data_gap_mm = 0.0;  ///< largest "data_gap_mm" over the grid
+  double fit_rms_mm = 0.0;          ///< RMS residual of all profile fits, mm
+  double max_data_gap_mm = 0.0;     ///< largest "data_gap_mm" over the grid
   double supported_fraction = 0.0;  ///< fraction of grid vertices with data_gap_mm <= 2 grid spacings
-  std::string message;           ///< one line summary
+  std::string message;              ///< one line summary
 };
 
 /// Resamples `surface` (a triangle mesh, or a point cloud when it has no faces; mm, in the frame of

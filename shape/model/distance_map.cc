@@ -15,8 +15,8 @@ namespace {
 
 // Closest point on triangle (a, b, c) to p (Ericson, Real-Time Collision Detection, 5.1.5). `feature`:
 // 0-2 vertex a/b/c, 3-5 edge ab/bc/ca, 6 the face.
-Eigen::Vector3d ClosestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                  const Eigen::Vector3d& c, int* feature) {
+Eigen::Vector3d ClosestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                                  const Eigen::Vector3d& b, const Eigen::Vector3d& c, int* feature) {
   const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
   const double d1 = ab.dot(ap), d2 = ac.dot(ap);
   if (d1 <= 0 && d2 <= 0) return *feature = 0, a;
@@ -91,9 +91,9 @@ DistanceKind ParseDistanceKind(const std::string& text) {
 std::string ToString(DistanceKind kind) { return kind == DistanceKind::kNearestPoint ? "nearest" : "signed"; }
 
 nlohmann::json DistanceStats::ToJson() const {
-  return {{"count", count},       {"min_mm", min},          {"max_mm", max},          {"max_abs_mm", max_abs},
-          {"mean_mm", mean},      {"mean_abs_mm", mean_abs}, {"rms_mm", rms},         {"p50_abs_mm", p50},
-          {"p90_abs_mm", p90},    {"p95_abs_mm", p95},      {"p99_abs_mm", p99}};
+  return {{"count", count},    {"min_mm", min},           {"max_mm", max},    {"max_abs_mm", max_abs},
+          {"mean_mm", mean},   {"mean_abs_mm", mean_abs}, {"rms_mm", rms},    {"p50_abs_mm", p50},
+          {"p90_abs_mm", p90}, {"p95_abs_mm", p95},       {"p99_abs_mm", p99}};
 }
 
 DistanceStats SummarizeDistances(const Eigen::VectorXd& d) {
@@ -158,7 +158,8 @@ DistanceMapResult ComputeDistanceMap(const Points3& points, const TriangleMesh& 
       }
     }
     Points3 used_points(static_cast<Eigen::Index>(used.size()), 3);
-    for (std::size_t k = 0; k < used.size(); ++k) used_points.row(static_cast<Eigen::Index>(k)) = x.row(used[k]);
+    for (std::size_t k = 0; k < used.size(); ++k)
+      used_points.row(static_cast<Eigen::Index>(k)) = x.row(used[k]);
     const KdTree3 face_tree(used_points);
     const PseudoNormals normals(reference);
 #pragma omp parallel for schedule(dynamic, 256)
@@ -176,9 +177,9 @@ DistanceMapResult ComputeDistanceMap(const Points3& points, const TriangleMesh& 
       for (const auto& [v, unused] : near) {
         for (std::int32_t f : faces_of[v]) {
           int feature = 6;
-          const Eigen::Vector3d q =
-              ClosestOnTriangle(p, x.row(reference.faces(f, 0)).transpose(), x.row(reference.faces(f, 1)).transpose(),
-                                x.row(reference.faces(f, 2)).transpose(), &feature);
+          const Eigen::Vector3d q = ClosestOnTriangle(p, x.row(reference.faces(f, 0)).transpose(),
+                                                      x.row(reference.faces(f, 1)).transpose(),
+                                                      x.row(reference.faces(f, 2)).transpose(), &feature);
           const double d = (p - q).squaredNorm();
           if (d < best) {
             best = d;

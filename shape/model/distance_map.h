@@ -12,9 +12,9 @@ namespace pectus {
 
 /// Which distance a map holds.
 enum class DistanceKind {
-  kNearestPoint,    ///< |p - q|, q the nearest vertex of the reference (>= 0)
-  kSignedSurface,   ///< distance to the nearest point of the reference's triangles, signed: positive on
-                    ///< the side its normals point to (outside / anterior), negative behind it
+  kNearestPoint,   ///< |p - q|, q the nearest vertex of the reference (>= 0)
+  kSignedSurface,  ///< distance to the nearest point of the reference's triangles, signed: positive on
+                   ///< the side its normals point to (outside / anterior), negative behind it
 };
 
 /// "nearest" or "signed"; throws Error(kUsage) otherwise.
@@ -36,10 +36,10 @@ DistanceStats SummarizeDistances(const Eigen::VectorXd& distances);
 
 /// A distance map: one distance per query point.
 struct DistanceMapResult {
-  Eigen::VectorXd distances;   ///< #points, mm
-  Points3 closest;             ///< #points by 3: the closest reference point of each query point, mm
+  Eigen::VectorXd distances;  ///< #points, mm
+  Points3 closest;            ///< #points by 3: the closest reference point of each query point, mm
   DistanceStats stats;
-  std::string message;         ///< one line: kind, count, max |d|, RMS
+  std::string message;  ///< one line: kind, count, max |d|, RMS
 };
 
 /// Distances from each row of `points` (#n by 3, mm) to `reference`. kSignedSurface needs faces (throws

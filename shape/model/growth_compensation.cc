@@ -17,8 +17,8 @@ bool GrowthCompensationOptions::IsValid(std::string* why) const {
 }
 
 GrowthCompensationResult CompensateGrowth(const LandmarkSet& pre, const LandmarkSet& post,
-                                          const GrowthCompensationOptions& options, const std::string& pre_name,
-                                          const std::string& post_name) {
+                                          const GrowthCompensationOptions& options,
+                                          const std::string& pre_name, const std::string& post_name) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage(why);
   GrowthCompensationResult result;

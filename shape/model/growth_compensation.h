@@ -23,11 +23,11 @@ struct GrowthCompensationOptions {
 
 /// What the compensation found.
 struct GrowthCompensationResult {
-  Similarity3 T_post_pre;            ///< x_post = s R x_pre + t
-  double scale = 1.0;                ///< s
-  bool estimated = false;            ///< true if s came from the landmarks
-  double rms_mm = 0.0;               ///< landmark residual RMS after the transform, mm
-  std::vector<std::string> labels;   ///< landmarks used
+  Similarity3 T_post_pre;           ///< x_post = s R x_pre + t
+  double scale = 1.0;               ///< s
+  bool estimated = false;           ///< true if s came from the landmarks
+  double rms_mm = 0.0;              ///< landmark residual RMS after the transform, mm
+  std::vector<std::string> labels;  ///< landmarks used
   std::string message;
 };
 

@@ -23,7 +23,8 @@ std::vector<RemovedDisk> DefaultRemovedDisks(const ChestRoi& roi, double radius_
           {roi.u_max, roi.v_max, radius_mm}};
 }
 
-TriangleMesh RemoveDisks(const TriangleMesh& surface, const ChestRoi& roi, const std::vector<RemovedDisk>& disks) {
+TriangleMesh RemoveDisks(const TriangleMesh& surface, const ChestRoi& roi,
+                         const std::vector<RemovedDisk>& disks) {
   const Points3 uvw = roi.ToRoi(surface.vertices.positions);
   const Eigen::Index n = surface.num_vertices();
   std::vector<bool> removed(static_cast<std::size_t>(n));
@@ -32,7 +33,8 @@ TriangleMesh RemoveDisks(const TriangleMesh& surface, const ChestRoi& roi, const
   std::vector<Eigen::Index> kept_faces;
   if (surface.num_faces() > 0) {
     for (Eigen::Index f = 0; f < surface.num_faces(); ++f) {
-      if (removed[surface.faces(f, 0)] || removed[surface.faces(f, 1)] || removed[surface.faces(f, 2)]) continue;
+      if (removed[surface.faces(f, 0)] || removed[surface.faces(f, 1)] || removed[surface.faces(f, 2)])
+        continue;
       kept_faces.push_back(f);
       for (int c = 0; c < 3; ++c) keep[surface.faces(f, c)] = true;
     }
@@ -64,7 +66,8 @@ TriangleMesh RemoveDisks(const TriangleMesh& surface, const ChestRoi& roi, const
   }
   out.faces.resize(static_cast<Eigen::Index>(kept_faces.size()), 3);
   for (std::size_t f = 0; f < kept_faces.size(); ++f) {
-    for (int c = 0; c < 3; ++c) out.faces(static_cast<Eigen::Index>(f), c) = new_index[surface.faces(kept_faces[f], c)];
+    for (int c = 0; c < 3; ++c)
+      out.faces(static_cast<Eigen::Index>(f), c) = new_index[surface.faces(kept_faces[f], c)];
   }
   return out;
 }
@@ -103,7 +106,8 @@ HoleFillResult ValidateHoleFill(const TriangleMesh& surface, const ChestRoi& roi
   result.rms_error_in_disks_mm =
       result.vertices_in_disks > 0 ? std::sqrt(sum_in / static_cast<double>(result.vertices_in_disks)) : 0.0;
   result.max_error_mm = result.error_mm.cwiseAbs().maxCoeff();
-  result.rms_error_mm = std::sqrt(result.error_mm.squaredNorm() / static_cast<double>(result.error_mm.size()));
+  result.rms_error_mm =
+      std::sqrt(result.error_mm.squaredNorm() / static_cast<double>(result.error_mm.size()));
   std::ostringstream msg;
   msg << disks.size() << " regions removed (" << result.vertices_in_disks << " grid vertices): max error "
       << result.max_error_in_disks_mm << " mm, RMS " << result.rms_error_in_disks_mm << " mm inside; max "

@@ -18,7 +18,8 @@ using render::Image;
 // Unit vector of `v` with its component along `axis` removed; zero if nothing is left.
 Eigen::Vector3d Perpendicular(const Eigen::Vector3d& v, const Eigen::Vector3d& axis) {
   const Eigen::Vector3d p = v - v.dot(axis) * axis;
-  return p.norm() > 1e-6 * std::max(1.0, v.norm()) ? Eigen::Vector3d(p.normalized()) : Eigen::Vector3d::Zero();
+  return p.norm() > 1e-6 * std::max(1.0, v.norm()) ? Eigen::Vector3d(p.normalized())
+                                                   : Eigen::Vector3d::Zero();
 }
 
 // The long axis of the points across the view (a chest grid is longer along the sternum), pointing from
@@ -39,32 +40,39 @@ Eigen::Vector3d MeanNormal(const TriangleMesh& mesh) {
   Eigen::Vector3d n = Eigen::Vector3d::Zero();
   const Points3& x = mesh.vertices.positions;
   for (Eigen::Index f = 0; f < mesh.num_faces(); ++f) {
-    const Eigen::Vector3d a = x.row(mesh.faces(f, 0)), b = x.row(mesh.faces(f, 1)), c = x.row(mesh.faces(f, 2));
+    const Eigen::Vector3d a = x.row(mesh.faces(f, 0)), b = x.row(mesh.faces(f, 1)),
+                          c = x.row(mesh.faces(f, 2));
     n += (b - a).cross(c - a);
   }
   return n.norm() > 0.0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::UnitZ();
 }
 
-std::vector<double> ToStd(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
+std::vector<double> ToStd(const Eigen::VectorXd& v) {
+  return std::vector<double>(v.data(), v.data() + v.size());
+}
 
 }  // namespace
 
 Colors3 ColorsForValues(const Eigen::VectorXd& values, double lo, double hi) {
-  const render::Colormap map = lo < 0.0 && hi > 0.0 ? render::Colormap::kDiverging : render::Colormap::kViridis;
+  const render::Colormap map =
+      lo < 0.0 && hi > 0.0 ? render::Colormap::kDiverging : render::Colormap::kViridis;
   return render::MapColors(values, lo, hi, map);
 }
 
-Image SurfaceMapImage(const TriangleMesh& mesh, const Eigen::VectorXd& values, const Eigen::Vector3d& anterior,
-                      const SurfaceMapFigure& figure) {
+Image SurfaceMapImage(const TriangleMesh& mesh, const Eigen::VectorXd& values,
+                      const Eigen::Vector3d& anterior, const SurfaceMapFigure& figure) {
   if (values.size() != mesh.num_vertices()) {
     ThrowUsage("a surface map needs one value per vertex: " + std::to_string(values.size()) + " values for " +
                std::to_string(mesh.num_vertices()) + " vertices");
   }
-  const Eigen::Vector3d front = anterior.norm() > 0.0 ? Eigen::Vector3d(anterior.normalized()) : MeanNormal(mesh);
+  const Eigen::Vector3d front =
+      anterior.norm() > 0.0 ? Eigen::Vector3d(anterior.normalized()) : MeanNormal(mesh);
   render::View view = render::View::Front(figure.size, figure.size);
   view.direction = -front;
   Eigen::Vector3d up = Perpendicular(figure.up, front);
-  if (up.isZero()) up = mesh.num_vertices() > 2 ? NotchUpAxis(mesh.vertices.positions, front) : Perpendicular(Eigen::Vector3d::UnitY(), front);
+  if (up.isZero())
+    up = mesh.num_vertices() > 2 ? NotchUpAxis(mesh.vertices.positions, front)
+                                 : Perpendicular(Eigen::Vector3d::UnitY(), front);
   if (up.isZero()) up = Perpendicular(Eigen::Vector3d::UnitX(), front);
   view.up = up;
   const Colors3 colours = ColorsForValues(values, figure.min, figure.max);
@@ -76,8 +84,9 @@ Image SurfaceMapImage(const TriangleMesh& mesh, const Eigen::VectorXd& values, c
   return figure.title.empty() ? both : render::WithTitle(both, figure.title);
 }
 
-void WriteSurfaceMapPng(const std::filesystem::path& path, const TriangleMesh& mesh, const Eigen::VectorXd& values,
-                        const Eigen::Vector3d& anterior, const SurfaceMapFigure& figure) {
+void WriteSurfaceMapPng(const std::filesystem::path& path, const TriangleMesh& mesh,
+                        const Eigen::VectorXd& values, const Eigen::Vector3d& anterior,
+                        const SurfaceMapFigure& figure) {
   render::WritePng(SurfaceMapImage(mesh, values, anterior, figure), path);
 }
 
@@ -89,8 +98,8 @@ Image HistogramImage(const Eigen::VectorXd& values, const std::string& label, do
   return render::PlotHistogram(ToStd(values), 40, o, lo, hi);
 }
 
-void WriteHistogramPng(const std::filesystem::path& path, const Eigen::VectorXd& values, const std::string& label,
-                       double lo, double hi) {
+void WriteHistogramPng(const std::filesystem::path& path, const Eigen::VectorXd& values,
+                       const std::string& label, double lo, double hi) {
   render::WritePng(HistogramImage(values, label, lo, hi), path);
 }
 
@@ -105,13 +114,13 @@ Image VarianceExplainedImage(const ShapeModel& model) {
   for (int j = 0; j < k; ++j) {
     labels.push_back(std::to_string(j + 1));
     bars.push_back(100.0 * f[j]);
-    cumulative.x.push_back(j);
+    cumulative.x.push_back(j + 1);  // bar j + 1 stands at x = j + 1
     cumulative.y.push_back(100.0 * c[j]);
   }
   render::PlotOptions o;
-  o.title = "variance explained per mode (bars) and cumulative, %";
+  o.title = "variance explained: per mode (bars), cumulative (line)";
   o.x_label = "mode";
-  o.y_label = "% of total variance";
+  o.y_label = "%";
   o.y_min = 0.0;
   o.y_max = 100.0;
   return render::PlotBars(labels, bars, o, {cumulative});
@@ -125,7 +134,8 @@ Points3 AreaWeightedNormals(const TriangleMesh& mesh) {
   const Points3& x = mesh.vertices.positions;
   Points3 n = Points3::Zero(x.rows(), 3);
   for (Eigen::Index f = 0; f < mesh.num_faces(); ++f) {
-    const Eigen::RowVector3d a = x.row(mesh.faces(f, 0)), b = x.row(mesh.faces(f, 1)), c = x.row(mesh.faces(f, 2));
+    const Eigen::RowVector3d a = x.row(mesh.faces(f, 0)), b = x.row(mesh.faces(f, 1)),
+                             c = x.row(mesh.faces(f, 2));
     const Eigen::RowVector3d fn = (b - a).cross(c - a);
     for (int v = 0; v < 3; ++v) n.row(mesh.faces(f, v)) += fn;
   }
@@ -137,14 +147,16 @@ Points3 AreaWeightedNormals(const TriangleMesh& mesh) {
 }
 
 Eigen::VectorXd NormalDisplacement(const TriangleMesh& mesh, const Points3& moved) {
-  if (moved.rows() != mesh.num_vertices()) ThrowUsage("normal displacement needs the same number of vertices");
+  if (moved.rows() != mesh.num_vertices())
+    ThrowUsage("normal displacement needs the same number of vertices");
   const Points3 n = AreaWeightedNormals(mesh);
   return ((moved - mesh.vertices.positions).array() * n.array()).rowwise().sum();
 }
 
 Image ModeDisplacementImage(const ShapeModel& model, int mode, double sd) {
   if (mode < 1 || mode > model.num_modes()) {
-    ThrowUsage("mode " + std::to_string(mode) + " does not exist; the model has " + std::to_string(model.num_modes()));
+    ThrowUsage("mode " + std::to_string(mode) + " does not exist; the model has " +
+               std::to_string(model.num_modes()));
   }
   const TriangleMesh mean = model.ToMesh(model.mean);
   Eigen::VectorXd b = Eigen::VectorXd::Zero(mode);
@@ -153,15 +165,16 @@ Image ModeDisplacementImage(const ShapeModel& model, int mode, double sd) {
   const double range = std::max(1e-6, d.cwiseAbs().maxCoeff());
   SurfaceMapFigure figure;
   char title[160];
-  std::snprintf(title, sizeof(title), "mode %d at %+g sd: displacement along the mean's normals (%.1f%% of variance)",
-                mode, sd, 100.0 * model.ExplainedFraction()[mode - 1]);
+  std::snprintf(title, sizeof(title), "mode %d, %+g sd (%.1f%%): along normals", mode, sd,
+                100.0 * model.ExplainedFraction()[mode - 1]);
   figure.title = title;
   figure.min = -range;
   figure.max = range;
   return SurfaceMapImage(mean, d, Eigen::Vector3d::Zero(), figure);
 }
 
-void WriteModeDisplacementPng(const std::filesystem::path& path, const ShapeModel& model, int mode, double sd) {
+void WriteModeDisplacementPng(const std::filesystem::path& path, const ShapeModel& model, int mode,
+                              double sd) {
   render::WritePng(ModeDisplacementImage(model, mode, sd), path);
 }
 
@@ -180,10 +193,11 @@ Image QualityCurvesImage(const ModelQualityCurves& q) {
     o.height = 420;
     return render::PlotLines({main, upper, lower}, o);
   };
-  return render::HStack({panel(q.compactness, q.compactness_sd, "compactness C(M)", "mm^2", {31, 119, 180}),
-                         panel(q.generalization_mm, q.generalization_sd, "generalization G(M)", "mm", {44, 160, 44}),
-                         panel(q.specificity_mm, q.specificity_sd, "specificity S(M)", "mm", {214, 39, 40})},
-                        10);
+  return render::HStack(
+      {panel(q.compactness, q.compactness_sd, "compactness C(M)", "mm^2", {31, 119, 180}),
+       panel(q.generalization_mm, q.generalization_sd, "generalization G(M)", "mm", {44, 160, 44}),
+       panel(q.specificity_mm, q.specificity_sd, "specificity S(M)", "mm", {214, 39, 40})},
+      10);
 }
 
 void WriteQualityCurvesPng(const std::filesystem::path& path, const ModelQualityCurves& curves) {

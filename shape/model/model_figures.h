@@ -22,26 +22,28 @@ Colors3 ColorsForValues(const Eigen::VectorXd& values, double lo, double hi);
 /// A colour map on a surface, seen from the front, with a colour bar. Two figures with the same min and
 /// max share one scale.
 struct SurfaceMapFigure {
-  std::string title;                         ///< above the picture
-  std::string label = "mm";                  ///< colour bar label
-  double min = -1.0;                         ///< colour scale (values outside are clamped)
+  std::string title;         ///< above the picture
+  std::string label = "mm";  ///< colour bar label
+  double min = -1.0;         ///< colour scale (values outside are clamped)
   double max = 1.0;
-  Eigen::Vector3d up = Eigen::Vector3d::Zero();  ///< shown upward; zero: the notch-up axis guessed from the mesh
-  int size = 640;                            ///< picture height in pixels (the colour bar matches)
+  Eigen::Vector3d up =
+      Eigen::Vector3d::Zero();  ///< shown upward; zero: the notch-up axis guessed from the mesh
+  int size = 640;               ///< picture height in pixels (the colour bar matches)
 };
 
 /// The picture: `mesh` coloured by `values` (#vertices) seen from `anterior` (the direction the front of
 /// the chest faces; zero: the mesh's mean normal). Throws Error(kUsage) if the sizes disagree.
-render::Image SurfaceMapImage(const TriangleMesh& mesh, const Eigen::VectorXd& values, const Eigen::Vector3d& anterior,
-                              const SurfaceMapFigure& figure);
+render::Image SurfaceMapImage(const TriangleMesh& mesh, const Eigen::VectorXd& values,
+                              const Eigen::Vector3d& anterior, const SurfaceMapFigure& figure);
 /// SurfaceMapImage written as a PNG.
-void WriteSurfaceMapPng(const std::filesystem::path& path, const TriangleMesh& mesh, const Eigen::VectorXd& values,
-                        const Eigen::Vector3d& anterior, const SurfaceMapFigure& figure);
+void WriteSurfaceMapPng(const std::filesystem::path& path, const TriangleMesh& mesh,
+                        const Eigen::VectorXd& values, const Eigen::Vector3d& anterior,
+                        const SurfaceMapFigure& figure);
 
 /// A histogram of `values` (mm) over [lo, hi] in 40 bins.
 render::Image HistogramImage(const Eigen::VectorXd& values, const std::string& label, double lo, double hi);
-void WriteHistogramPng(const std::filesystem::path& path, const Eigen::VectorXd& values, const std::string& label,
-                       double lo, double hi);
+void WriteHistogramPng(const std::filesystem::path& path, const Eigen::VectorXd& values,
+                       const std::string& label, double lo, double hi);
 
 /// Bars of the variance explained by each mode (up to 20) with the cumulative curve over them, in %.
 render::Image VarianceExplainedImage(const ShapeModel& model);
@@ -50,7 +52,8 @@ void WriteVarianceExplainedPng(const std::filesystem::path& path, const ShapeMod
 /// Mode `mode` (1-based) at +sd standard deviations: the displacement from the mean along the mean's
 /// normals (mm) as a colour map on the mean shape, symmetric scale.
 render::Image ModeDisplacementImage(const ShapeModel& model, int mode, double sd);
-void WriteModeDisplacementPng(const std::filesystem::path& path, const ShapeModel& model, int mode, double sd);
+void WriteModeDisplacementPng(const std::filesystem::path& path, const ShapeModel& model, int mode,
+                              double sd);
 
 /// Compactness, generalization and specificity against the number of modes, side by side, each with
 /// +-1 standard error dashed.

@@ -58,8 +58,8 @@ void Generalization(const Eigen::MatrixXd& shapes, int max_modes, const ShapeMod
   }
 }
 
-double Specificity(const ShapeModel& model, const Eigen::MatrixXd& shapes, const Eigen::MatrixXd& coefficients_sd,
-                   int modes, double* sd_mm) {
+double Specificity(const ShapeModel& model, const Eigen::MatrixXd& shapes,
+                   const Eigen::MatrixXd& coefficients_sd, int modes, double* sd_mm) {
   const Eigen::Index samples = coefficients_sd.rows();
   const int m = std::min({modes, model.num_modes(), static_cast<int>(coefficients_sd.cols())});
   Eigen::VectorXd nearest(samples);
@@ -67,13 +67,14 @@ double Specificity(const ShapeModel& model, const Eigen::MatrixXd& shapes, const
   for (Eigen::Index j = 0; j < samples; ++j) {
     const Eigen::VectorXd y = model.Instance(coefficients_sd.row(j).head(m).transpose());
     double best = std::numeric_limits<double>::infinity();
-    for (Eigen::Index r = 0; r < shapes.rows(); ++r) best = std::min(best, MeanVertexDistance(y, shapes.row(r).transpose()));
+    for (Eigen::Index r = 0; r < shapes.rows(); ++r)
+      best = std::min(best, MeanVertexDistance(y, shapes.row(r).transpose()));
     nearest[j] = best;
   }
   const double mean = nearest.mean();
   if (sd_mm != nullptr) {
-    *sd_mm = samples > 1 ? std::sqrt((nearest.array() - mean).square().sum() / static_cast<double>(samples - 1) /
-                                     static_cast<double>(samples - 1))
+    *sd_mm = samples > 1 ? std::sqrt((nearest.array() - mean).square().sum() /
+                                     static_cast<double>(samples - 1) / static_cast<double>(samples - 1))
                          : 0.0;
   }
   return mean;
@@ -106,7 +107,8 @@ ModelQualityCurves EvaluateModelQuality(const Eigen::MatrixXd& shapes, const Mod
   }
   q.specificity_mm.resize(max_modes + 1);
   q.specificity_sd.resize(max_modes + 1);
-  for (int m = 0; m <= max_modes; ++m) q.specificity_mm[m] = Specificity(model, shapes, b, m, &q.specificity_sd[m]);
+  for (int m = 0; m <= max_modes; ++m)
+    q.specificity_mm[m] = Specificity(model, shapes, b, m, &q.specificity_sd[m]);
   return q;
 }
 

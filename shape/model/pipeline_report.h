@@ -17,10 +17,10 @@ struct PipelineReportOptions {
   /// Colour scale of the distance maps, +-mm (0: the largest 99th percentile of |d| over the subjects,
   /// rounded up to a whole mm), so that every subject is shown on the same scale.
   double distance_range_mm = 0.0;
-  int modes = 3;           ///< modes pictured (at +-mode_sd standard deviations)
-  double mode_sd = 2.0;    ///< > 0
-  int picture_px = 420;    ///< height of the surface pictures
-  nlohmann::json run;      ///< shown as "run" facts: the command, the folders, wall time (any JSON object)
+  int modes = 3;         ///< modes pictured (at +-mode_sd standard deviations)
+  double mode_sd = 2.0;  ///< > 0
+  int picture_px = 420;  ///< height of the surface pictures
+  nlohmann::json run;    ///< shown as "run" facts: the command, the folders, wall time (any JSON object)
 };
 
 /// One file of the report, relative to the output folder ("report.html", "figures/mean.png").
@@ -31,7 +31,8 @@ struct ReportFile {
 
 /// The report's files: report.html and the PNGs it shows under figures/. Never throws for a cohort in
 /// which subjects failed: they are listed with their stage and message.
-std::vector<ReportFile> MakePipelineReport(const PipelineResult& result, const PipelineReportOptions& options = {});
+std::vector<ReportFile> MakePipelineReport(const PipelineResult& result,
+                                           const PipelineReportOptions& options = {});
 
 /// The per-subject and per-model figures as JSON (for --report): one object per subject with its stage
 /// results, and the model's variance table.

@@ -86,6 +86,14 @@ double ProfileCurve::DistanceToData(double t) const {
   return d;
 }
 
+void ProfileCurve::DistancesToDataOnEachSide(double t, double* below, double* above) const {
+  *below = *above = std::numeric_limits<double>::infinity();
+  auto it = std::lower_bound(sorted_t_.begin(), sorted_t_.end(), t);
+  if (it != sorted_t_.end()) *above = *it - t;
+  if (it != sorted_t_.begin()) *below = t - *(it - 1);
+  if (it != sorted_t_.end() && *it == t) *below = 0.0;
+}
+
 ProfileCurve FitProfile(const Eigen::VectorXd& t, const Eigen::VectorXd& y, double t_min, double t_max,
                         const ProfileFitOptions& options) {
   std::string why;
@@ -120,8 +128,8 @@ ProfileCurve FitProfile(const Eigen::VectorXd& t, const Eigen::VectorXd& y, doub
     if (distinct < (options.smoothing > 0.0 ? options.penalty_order : 4)) return curve;
     // P-spline (Eilers & Marx 1996): (B'B / n + smoothing * D'D / nb) a = B'y / n, D = differences of
     // order q.
-    const auto intervals =
-        std::max<Eigen::Index>(1, static_cast<Eigen::Index>(std::ceil((curve.hi_ - curve.lo_) / options.knot_spacing_mm)));
+    const auto intervals = std::max<Eigen::Index>(
+        1, static_cast<Eigen::Index>(std::ceil((curve.hi_ - curve.lo_) / options.knot_spacing_mm)));
     curve.step_ = (curve.hi_ - curve.lo_) / static_cast<double>(intervals);
     const Eigen::Index nb = intervals + 3;
     Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(nb, nb);
@@ -129,7 +137,8 @@ ProfileCurve FitProfile(const Eigen::VectorXd& t, const Eigen::VectorXd& y, doub
     double b[4];
     for (Eigen::Index k = 0; k < n; ++k) {
       const double x = (t[k] - curve.lo_) / curve.step_;
-      const Eigen::Index c = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::floor(x)), 0, intervals - 1);
+      const Eigen::Index c =
+          std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::floor(x)), 0, intervals - 1);
       CubicBSpline(x - static_cast<double>(c), b);
       for (int r = 0; r < 4; ++r) {
         rhs[c + r] += b[r] * y[k] / static_cast<double>(n);

@@ -31,7 +31,7 @@ struct ProfileFitOptions {
   /// kSmoothingSpline: order q of the difference penalty, 2 or 3. Where there are no data the penalty
   /// continues the curve as a polynomial of degree q - 1 (Eilers & Marx 1996, Sec. 8): q = 2 goes on
   /// linearly beyond the data, q = 3 keeps the curvature, which follows a chest's transverse curve over
-  /// a hole or past the edge of a scan much better (measured in docs/shape_model.md).
+  /// a hole or past the edge of a scan much better (measured in docs/model.md).
   int penalty_order = 3;
 
   /// False, with the reason, for a value out of range.
@@ -50,6 +50,9 @@ class ProfileCurve {
   /// Distance (mm) from t to the nearest data abscissa: 0 inside dense data, the half-width of a hole
   /// at its centre, the extrapolation distance beyond the data.
   double DistanceToData(double t) const;
+  /// Distances (mm) from t to the nearest data abscissa at or below it and at or above it; infinity on
+  /// a side without data (t beyond the data).
+  void DistancesToDataOnEachSide(double t, double* below, double* above) const;
   /// RMS of the residuals at the data points, mm.
   double rms_residual() const { return rms_; }
   /// Number of data points fitted.

@@ -41,11 +41,12 @@ Points3 ChestRoi::FromRoi(const Points3& uvw) const {
 
 nlohmann::json ChestRoi::ToJson() const {
   auto v = [](const Eigen::Vector3d& a) { return nlohmann::json::array({a.x(), a.y(), a.z()}); };
-  return {{"origin", v(origin)},     {"lateral", v(lateral)},          {"sternal", v(sternal)},
-          {"normal", v(normal)},     {"u_range_mm", {u_min, u_max}},   {"v_range_mm", {v_min, v_max}}};
+  return {{"origin", v(origin)}, {"lateral", v(lateral)},        {"sternal", v(sternal)},
+          {"normal", v(normal)}, {"u_range_mm", {u_min, u_max}}, {"v_range_mm", {v_min, v_max}}};
 }
 
-ChestRoi ComputeChestRoi(const LandmarkSet& landmarks, const ChestRoiOptions& options, const std::string& what) {
+ChestRoi ComputeChestRoi(const LandmarkSet& landmarks, const ChestRoiOptions& options,
+                         const std::string& what) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage(why);
   landmarks.Validate(what);

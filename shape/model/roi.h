@@ -13,8 +13,8 @@ namespace pectus {
 
 /// Landmarks and margins that bound the region of interest.
 struct ChestRoiOptions {
-  std::string notch_label = "sternal_notch";                  ///< bounds the ROI at the top
-  std::string xiphoid_label = "xiphoid";                      ///< bounds the ROI at the bottom
+  std::string notch_label = "sternal_notch";                ///< bounds the ROI at the top
+  std::string xiphoid_label = "xiphoid";                    ///< bounds the ROI at the bottom
   std::string cartilage_label = "costal_cartilage_1_left";  ///< with its mirror, bounds the sides
   double superior_margin_mm = 0.0;  ///< ROI extends this far above the notch (>= 0, mm)
   double inferior_margin_mm = 0.0;  ///< ... below the xiphoid
@@ -35,12 +35,12 @@ struct ChestRoiOptions {
 /// cartilage, the subject's left), v along the sternal line (0 at the notch, positive toward the
 /// xiphoid) and w the depth (positive anterior, out of the chest). All in mm.
 struct ChestRoi {
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero();     ///< the sternal notch, mm
-  Eigen::Vector3d lateral = Eigen::Vector3d::UnitX();   ///< unit; toward the cartilage
-  Eigen::Vector3d sternal = Eigen::Vector3d::UnitY();   ///< unit; notch to xiphoid
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();    ///< unit; sternal x lateral, anterior
-  double u_min = 0.0, u_max = 0.0;  ///< lateral extent of the rectangle, mm
-  double v_min = 0.0, v_max = 0.0;  ///< sternal extent of the rectangle, mm
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();    ///< the sternal notch, mm
+  Eigen::Vector3d lateral = Eigen::Vector3d::UnitX();  ///< unit; toward the cartilage
+  Eigen::Vector3d sternal = Eigen::Vector3d::UnitY();  ///< unit; notch to xiphoid
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();   ///< unit; sternal x lateral, anterior
+  double u_min = 0.0, u_max = 0.0;                     ///< lateral extent of the rectangle, mm
+  double v_min = 0.0, v_max = 0.0;                     ///< sternal extent of the rectangle, mm
 
   /// ROI coordinates (u, v, w) of #n by 3 points (mm).
   Points3 ToRoi(const Points3& points) const;

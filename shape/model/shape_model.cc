@@ -14,8 +14,10 @@ bool ShapeModelOptions::IsValid(std::string* why) const {
     return false;
   };
   if (max_modes < 0) return fail("the number of modes must be >= 0 (0: all)");
-  if (!(relative_tolerance >= 0.0 && relative_tolerance < 1.0)) return fail("relative tolerance must be in [0, 1)");
-  if (!(noise_variance >= 0.0) || !std::isfinite(noise_variance)) return fail("noise variance must be >= 0 mm^2");
+  if (!(relative_tolerance >= 0.0 && relative_tolerance < 1.0))
+    return fail("relative tolerance must be in [0, 1)");
+  if (!(noise_variance >= 0.0) || !std::isfinite(noise_variance))
+    return fail("noise variance must be >= 0 mm^2");
   return true;
 }
 
@@ -50,15 +52,17 @@ void ShapeModel::Validate(const std::string& what) const {
   const Eigen::Index d = mean.size(), k = variances.size();
   if (d == 0 || d % 3 != 0) ThrowBadInput(what, "the mean has " + std::to_string(d) + " numbers, not 3m > 0");
   if (basis.rows() != d || basis.cols() != k) {
-    ThrowBadInput(what, "the basis is " + std::to_string(basis.rows()) + " x " + std::to_string(basis.cols()) +
-                            ", expected " + std::to_string(d) + " x " + std::to_string(k));
+    ThrowBadInput(what, "the basis is " + std::to_string(basis.rows()) + " x " +
+                            std::to_string(basis.cols()) + ", expected " + std::to_string(d) + " x " +
+                            std::to_string(k));
   }
   if (scores.size() > 0 && scores.cols() != k) {
-    ThrowBadInput(what, "the scores have " + std::to_string(scores.cols()) + " columns for " + std::to_string(k) +
-                            " modes");
+    ThrowBadInput(what, "the scores have " + std::to_string(scores.cols()) + " columns for " +
+                            std::to_string(k) + " modes");
   }
   if (!names.empty() && scores.size() > 0 && static_cast<Eigen::Index>(names.size()) != scores.rows()) {
-    ThrowBadInput(what, std::to_string(names.size()) + " names for " + std::to_string(scores.rows()) + " subjects");
+    ThrowBadInput(what,
+                  std::to_string(names.size()) + " names for " + std::to_string(scores.rows()) + " subjects");
   }
   if (!mean.allFinite() || !basis.allFinite() || !variances.allFinite() || !scores.allFinite() ||
       !std::isfinite(noise_variance) || !std::isfinite(total_variance)) {
@@ -70,12 +74,14 @@ void ShapeModel::Validate(const std::string& what) const {
   }
 }
 
-ShapeModel BuildShapeModel(const Eigen::MatrixXd& shapes, const ShapeModelOptions& options, const std::string& what) {
+ShapeModel BuildShapeModel(const Eigen::MatrixXd& shapes, const ShapeModelOptions& options,
+                           const std::string& what) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage(why);
   const Eigen::Index n = shapes.rows(), d = shapes.cols();
   if (n < 2) ThrowBadInput(what, "a shape model needs at least 2 shapes; got " + std::to_string(n));
-  if (d == 0 || d % 3 != 0) ThrowBadInput(what, "shape vectors have " + std::to_string(d) + " numbers, not 3m > 0");
+  if (d == 0 || d % 3 != 0)
+    ThrowBadInput(what, "shape vectors have " + std::to_string(d) + " numbers, not 3m > 0");
   if (!shapes.allFinite()) ThrowBadInput(what, "a shape vector holds a non-finite number");
 
   ShapeModel model;
@@ -89,7 +95,8 @@ ShapeModel BuildShapeModel(const Eigen::MatrixXd& shapes, const ShapeModelOption
   Eigen::MatrixXd G = Eigen::MatrixXd::Zero(n, n);
   G.selfadjointView<Eigen::Lower>().rankUpdate(X);
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(G);
-  if (eig.info() != Eigen::Success) ThrowFailure("the eigen decomposition of the Gram matrix failed for " + what);
+  if (eig.info() != Eigen::Success)
+    ThrowFailure("the eigen decomposition of the Gram matrix failed for " + what);
   // Eigenvalues ascending: reverse to descending.
   const Eigen::VectorXd s2 = eig.eigenvalues().reverse();
   const Eigen::MatrixXd V = eig.eigenvectors().rowwise().reverse();

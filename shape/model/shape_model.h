@@ -25,13 +25,13 @@ struct ShapeModelOptions {
 
 /// A linear statistical shape model: x = mean + basis * alpha, alpha_i ~ N(0, variances_i).
 struct ShapeModel {
-  Eigen::VectorXd mean;          ///< 3m numbers (x1, y1, z1, ...), mm
-  Eigen::MatrixXd basis;         ///< 3m by k, orthonormal columns (the eigenvectors e_c of Eq. 14)
-  Eigen::VectorXd variances;     ///< k eigenvalues lambda = s^2 / (N - 1), descending, mm^2
-  double total_variance = 0.0;   ///< trace of the sample covariance (all modes, kept or not), mm^2
-  double noise_variance = 0.0;   ///< mm^2
-  Eigen::MatrixXd scores;        ///< N by k: basis' (x_n - mean) of the training shapes, mm (Eq. 14's z_n)
-  Faces3 faces;                  ///< triangles over the m vertices (empty for a point model)
+  Eigen::VectorXd mean;            ///< 3m numbers (x1, y1, z1, ...), mm
+  Eigen::MatrixXd basis;           ///< 3m by k, orthonormal columns (the eigenvectors e_c of Eq. 14)
+  Eigen::VectorXd variances;       ///< k eigenvalues lambda = s^2 / (N - 1), descending, mm^2
+  double total_variance = 0.0;     ///< trace of the sample covariance (all modes, kept or not), mm^2
+  double noise_variance = 0.0;     ///< mm^2
+  Eigen::MatrixXd scores;          ///< N by k: basis' (x_n - mean) of the training shapes, mm (Eq. 14's z_n)
+  Faces3 faces;                    ///< triangles over the m vertices (empty for a point model)
   std::vector<std::string> names;  ///< N training subject names (may be empty)
 
   Eigen::Index num_points() const { return mean.size() / 3; }

@@ -47,8 +47,10 @@ struct File {
     if (g < 0) Fail("create group " + path);
     return g;
   }
-  void Array(hid_t loc, const std::string& path, hid_t type, const std::vector<hsize_t>& dims, const void* data) const {
-    Id space(dims.empty() ? H5Screate(H5S_SCALAR) : H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr),
+  void Array(hid_t loc, const std::string& path, hid_t type, const std::vector<hsize_t>& dims,
+             const void* data) const {
+    Id space(dims.empty() ? H5Screate(H5S_SCALAR)
+                          : H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr),
              H5Sclose);
     Id set(H5Dcreate2(loc, path.c_str(), type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose);
     if (!space.ok() || !set.ok() || H5Dwrite(set.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) {
@@ -65,7 +67,8 @@ struct File {
     H5Tset_size(type.get(), text.size() + 1);
     Id space(H5Screate(H5S_SCALAR), H5Sclose);
     Id attr(H5Acreate2(loc, attribute.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
-    if (!attr.ok() || H5Awrite(attr.get(), type.get(), text.c_str()) < 0) Fail("write attribute " + attribute);
+    if (!attr.ok() || H5Awrite(attr.get(), type.get(), text.c_str()) < 0)
+      Fail("write attribute " + attribute);
   }
 
   bool Exists(hid_t loc, const std::string& path) const {
@@ -88,7 +91,8 @@ struct File {
   }
   // Reads a numeric dataset converted to `memory_type`; `dims` gets its shape.
   template <class T>
-  std::vector<T> Read(hid_t loc, const std::string& path, hid_t memory_type, std::vector<hsize_t>* dims) const {
+  std::vector<T> Read(hid_t loc, const std::string& path, hid_t memory_type,
+                      std::vector<hsize_t>* dims) const {
     if (!Exists(loc, path)) Bad("has no dataset /" + path);
     Id set(H5Dopen2(loc, path.c_str(), H5P_DEFAULT), H5Dclose);
     if (!set.ok()) Bad("cannot open /" + path);
@@ -109,14 +113,20 @@ struct File {
     Id set(H5Dopen2(loc, path.c_str(), H5P_DEFAULT), H5Dclose);
     Id type(H5Dget_type(set.get()), H5Tclose);
     if (!set.ok() || H5Tget_class(type.get()) != H5T_STRING) Bad("/" + path + " is not a string");
-    return ReadText(type.get(), [&](hid_t mem, void* buf) { return H5Dread(set.get(), mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf); }, path);
+    return ReadText(
+        type.get(),
+        [&](hid_t mem, void* buf) { return H5Dread(set.get(), mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf); },
+        path);
   }
   std::string ReadStringAttribute(hid_t loc, const std::string& attribute, const std::string& where) const {
     if (H5Aexists(loc, attribute.c_str()) <= 0) Bad(where + " has no attribute '" + attribute + "'");
     Id attr(H5Aopen(loc, attribute.c_str(), H5P_DEFAULT), H5Aclose);
     Id type(H5Aget_type(attr.get()), H5Tclose);
-    if (!attr.ok() || H5Tget_class(type.get()) != H5T_STRING) Bad(where + " attribute '" + attribute + "' is not a string");
-    return ReadText(type.get(), [&](hid_t mem, void* buf) { return H5Aread(attr.get(), mem, buf); }, where + "@" + attribute);
+    if (!attr.ok() || H5Tget_class(type.get()) != H5T_STRING)
+      Bad(where + " attribute '" + attribute + "' is not a string");
+    return ReadText(
+        type.get(), [&](hid_t mem, void* buf) { return H5Aread(attr.get(), mem, buf); },
+        where + "@" + attribute);
   }
   template <class ReadFn>
   std::string ReadText(hid_t file_type, ReadFn read, const std::string& what) const {
@@ -147,9 +157,11 @@ std::string Now() {
 
 }  // namespace
 
-void WriteStatismoModel(const std::filesystem::path& path, const ShapeModel& model, const nlohmann::json& info) {
+void WriteStatismoModel(const std::filesystem::path& path, const ShapeModel& model,
+                        const nlohmann::json& info) {
   model.Validate(path.string());
-  if (model.num_modes() == 0) ThrowUsage("a model without modes cannot be written as a statismo file: " + path.string());
+  if (model.num_modes() == 0)
+    ThrowUsage("a model without modes cannot be written as a statismo file: " + path.string());
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors become pectus::Error, not prints
   const File f{path.string()};
   const std::filesystem::path temp =
@@ -184,7 +196,8 @@ void WriteStatismoModel(const std::filesystem::path& path, const ShapeModel& mod
       f.Array(g.get(), "points", H5T_NATIVE_FLOAT, {3, m}, points.data());
       if (model.faces.rows() > 0) {
         const RowMajorI cells = model.faces.transpose();
-        f.Array(g.get(), "cells", H5T_NATIVE_INT32, {3, static_cast<hsize_t>(model.faces.rows())}, cells.data());
+        f.Array(g.get(), "cells", H5T_NATIVE_INT32, {3, static_cast<hsize_t>(model.faces.rows())},
+                cells.data());
       }
       Id data(f.Group(g.get(), "pointData"), H5Gclose);
     }
@@ -204,7 +217,8 @@ void WriteStatismoModel(const std::filesystem::path& path, const ShapeModel& mod
       f.String(g.get(), "build-time", Now());
       if (model.scores.size() > 0) {
         const RowMajorF scores = model.scores.transpose().cast<float>();
-        f.Array(g.get(), "scores", H5T_NATIVE_FLOAT, {k, static_cast<hsize_t>(model.scores.rows())}, scores.data());
+        f.Array(g.get(), "scores", H5T_NATIVE_FLOAT, {k, static_cast<hsize_t>(model.scores.rows())},
+                scores.data());
       } else {
         const float zero = 0.0f;
         f.Array(g.get(), "scores", H5T_NATIVE_FLOAT, {1, 1}, &zero);
@@ -213,7 +227,8 @@ void WriteStatismoModel(const std::filesystem::path& path, const ShapeModel& mod
       f.String(b.get(), "builderName", "pectus PCA (Gram matrix)");
       f.String(b.get(), "buildTime", Now());
       Id data(f.Group(b.get(), "dataInfo"), H5Gclose);
-      for (std::size_t n = 0; n < model.names.size(); ++n) f.String(data.get(), "URI_" + std::to_string(n), model.names[n]);
+      for (std::size_t n = 0; n < model.names.size(); ++n)
+        f.String(data.get(), "URI_" + std::to_string(n), model.names[n]);
       Id parameters(f.Group(b.get(), "parameters"), H5Gclose);
       f.String(parameters.get(), "NoiseVariance", std::to_string(model.noise_variance));
     }
@@ -246,12 +261,14 @@ ShapeModel ReadStatismoModel(const std::filesystem::path& path, nlohmann::json* 
     minor = f.Read<std::int32_t>(root, "version/minorVersion", H5T_NATIVE_INT32, &dims).at(0);
   }
   if (!(major == 0 && (minor == 8 || minor == 9)) && major != 1) {
-    f.Bad("statismo version " + std::to_string(major) + "." + std::to_string(minor) + " is not supported (0.8, 0.9, 1.x)");
+    f.Bad("statismo version " + std::to_string(major) + "." + std::to_string(minor) +
+          " is not supported (0.8, 0.9, 1.x)");
   }
 
   ShapeModel model;
   const std::vector<double> mean = f.Read<double>(root, "model/mean", H5T_NATIVE_DOUBLE, &dims);
-  if (dims.size() != 1 || mean.empty() || mean.size() % 3 != 0) f.Bad("/model/mean must be a vector of 3m numbers");
+  if (dims.size() != 1 || mean.empty() || mean.size() % 3 != 0)
+    f.Bad("/model/mean must be a vector of 3m numbers");
   const auto d = static_cast<Eigen::Index>(mean.size());
   model.mean = Eigen::Map<const Eigen::VectorXd>(mean.data(), d);
   const std::vector<double> variances = f.Read<double>(root, "model/pcaVariance", H5T_NATIVE_DOUBLE, &dims);
@@ -259,7 +276,8 @@ ShapeModel ReadStatismoModel(const std::filesystem::path& path, nlohmann::json* 
   const auto k = static_cast<Eigen::Index>(variances.size());
   model.variances = Eigen::Map<const Eigen::VectorXd>(variances.data(), k);
   const std::vector<double> basis = f.Read<double>(root, "model/pcaBasis", H5T_NATIVE_DOUBLE, &dims);
-  if (dims.size() != 2 || static_cast<Eigen::Index>(dims[0]) != d || static_cast<Eigen::Index>(dims[1]) != k) {
+  if (dims.size() != 2 || static_cast<Eigen::Index>(dims[0]) != d ||
+      static_cast<Eigen::Index>(dims[1]) != k) {
     f.Bad("/model/pcaBasis must be " + std::to_string(d) + " x " + std::to_string(k) + " (3m x modes)");
   }
   model.basis = Eigen::Map<const RowMajorD>(basis.data(), d, k);
@@ -273,16 +291,19 @@ ShapeModel ReadStatismoModel(const std::filesystem::path& path, nlohmann::json* 
   // Topology from the representer (the points themselves are the reference, not needed here).
   if (!f.Exists(root, "representer")) f.Bad("has no /representer group");
   if (f.Exists(root, "representer/cells")) {
-    const std::vector<std::int32_t> cells = f.Read<std::int32_t>(root, "representer/cells", H5T_NATIVE_INT32, &dims);
+    const std::vector<std::int32_t> cells =
+        f.Read<std::int32_t>(root, "representer/cells", H5T_NATIVE_INT32, &dims);
     if (dims.size() != 2 || dims[0] != 3) f.Bad("/representer/cells must be 3 x #triangles");
-    model.faces = Eigen::Map<const RowMajorI>(cells.data(), 3, static_cast<Eigen::Index>(dims[1])).transpose();
+    model.faces =
+        Eigen::Map<const RowMajorI>(cells.data(), 3, static_cast<Eigen::Index>(dims[1])).transpose();
   }
 
   // Scores (k x N) and names.
   if (f.Exists(root, "modelinfo/scores")) {
     const std::vector<double> scores = f.Read<double>(root, "modelinfo/scores", H5T_NATIVE_DOUBLE, &dims);
     if (dims.size() == 2 && static_cast<Eigen::Index>(dims[0]) == k && k > 0) {
-      model.scores = Eigen::Map<const RowMajorD>(scores.data(), k, static_cast<Eigen::Index>(dims[1])).transpose();
+      model.scores =
+          Eigen::Map<const RowMajorD>(scores.data(), k, static_cast<Eigen::Index>(dims[1])).transpose();
     }
   }
   for (std::size_t n = 0; n < static_cast<std::size_t>(model.scores.rows()); ++n) {

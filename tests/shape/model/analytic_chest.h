@@ -14,9 +14,9 @@ namespace pectus::testing {
 /// z = f(x, s) in the chest's own frame, the pectus frame (x to the subject's left, y up, z anterior; mm),
 /// with s = -y the distance down the sternum: the point (x, -s, f(x, s)).
 struct AnalyticChest {
-  double radius = 160.0;      // transverse curvature radius
-  double slope = 0.03;        // forward lean along the sternum
-  double dent_depth = 15.0;   // Gaussian depression
+  double radius = 160.0;     // transverse curvature radius
+  double slope = 0.03;       // forward lean along the sternum
+  double dent_depth = 15.0;  // Gaussian depression
   double dent_sigma = 25.0;
   double dent_y = 110.0;
   Similarity3 T_world_chest;  // where the chest sits in the test's "scanner" frame
@@ -83,7 +83,8 @@ struct AnalyticChest {
 /// A chest placed at an arbitrary pose: rotated about a tilted axis and moved far from the origin.
 inline AnalyticChest PlacedChest() {
   AnalyticChest c;
-  c.T_world_chest.rotation = Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.3, -1.0, 0.5).normalized()).toRotationMatrix();
+  c.T_world_chest.rotation =
+      Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.3, -1.0, 0.5).normalized()).toRotationMatrix();
   c.T_world_chest.translation = Eigen::Vector3d(1200.0, -350.0, 80.0);
   return c;
 }

@@ -26,7 +26,9 @@ ChestRoi AlignedRoi(double z0) {
 }
 
 // A Gaussian depression 15 mm deep, 110 mm below the notch (y = -110).
-double Dent(double x, double y) { return 15.0 * std::exp(-(x * x + (y + 110.0) * (y + 110.0)) / (2.0 * 25.0 * 25.0)); }
+double Dent(double x, double y) {
+  return 15.0 * std::exp(-(x * x + (y + 110.0) * (y + 110.0)) / (2.0 * 25.0 * 25.0));
+}
 
 TEST(ChestMeasures, StraightEdgeDepthOfAGaussianDent) {
   // Frontal surface z = -x^2 / 320 - dent, x in [-120, 120], y in [-200, 20].
@@ -73,7 +75,8 @@ TEST(ChestMeasures, ExternalIndicesOfAClosedTorso) {
   TriangleMesh m;
   m.vertices.positions.resize(nt * ny, 3);
   for (int j = 0; j < ny; ++j) {
-    for (int i = 0; i < nt; ++i) m.vertices.positions.row(j * nt + i) = point(2 * kPi * i / nt, -200.0 + 2.0 * j).transpose();
+    for (int i = 0; i < nt; ++i)
+      m.vertices.positions.row(j * nt + i) = point(2 * kPi * i / nt, -200.0 + 2.0 * j).transpose();
   }
   m.faces.resize(2 * nt * (ny - 1), 3);
   int k = 0;

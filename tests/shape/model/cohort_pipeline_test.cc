@@ -7,9 +7,11 @@
 
 #include <filesystem>
 
+#include "registration/landmark_alignment.h"
 #include "shape/core/error.h"
 #include "shape/io/mesh_io.h"
 #include "shape/io/stanford_conf.h"
+#include "shape/model/shape_grid.h"
 
 namespace pectus {
 namespace {
@@ -87,6 +89,14 @@ TEST(CohortPipeline, GridsLieOnTheTrueSurfacesAndTheDepressionStandsOut) {
   EXPECT_LT(r.subjects[0].measures.depression_depth_mm, 5.0);
   ASSERT_TRUE(r.has_quality);
   EXPECT_EQ(r.quality.modes.size(), 2);  // M = 0, 1 for N = 3
+  // The grids were aligned to their mean (rigid Procrustes): none can be moved closer to the mean.
+  for (const SubjectOutcome& s : r.subjects) {
+    const Similarity3 T = UmeyamaAlignment(s.grid.mesh.vertices.positions, FromShapeVector(r.model.mean), {},
+                                           false, 0.0, s.name);
+    const Eigen::Vector3d c = s.grid.mesh.vertices.positions.colwise().mean().transpose();
+    EXPECT_LT((T * c - c).norm(), 0.01) << s.name << ": the grid's centroid moves (mm)";
+    EXPECT_LT(Eigen::AngleAxisd(T.rotation).angle() * 180.0 / M_PI, 0.01) << s.name;
+  }
 }
 
 TEST(CohortPipeline, ASubjectWithoutLandmarksFailsAndTheOthersGoOn) {
@@ -99,11 +109,12 @@ TEST(CohortPipeline, ASubjectWithoutLandmarksFailsAndTheOthersGoOn) {
   EXPECT_NE(r.subjects[1].error.find("missing.mrk.json"), std::string::npos);
   EXPECT_TRUE(r.has_model);
   EXPECT_EQ(r.model.names, (std::vector<std::string>{"subject_000", "subject_002"}));
-  EXPECT_THROW(RunCohortPipeline(s, [] {
-                 PipelineOptions o = FixtureOptions();
-                 o.reference = "nobody";
-                 return o;
-               }()),
+  EXPECT_THROW(RunCohortPipeline(s,
+                                 [] {
+                                   PipelineOptions o = FixtureOptions();
+                                   o.reference = "nobody";
+                                   return o;
+                                 }()),
                Error);
 }
 

@@ -17,7 +17,8 @@ TriangleMesh Plane(double height, int n = 21, double size = 100.0) {
   TriangleMesh m;
   m.vertices.positions.resize(n * n, 3);
   for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) m.vertices.positions.row(j * n + i) << size * i / (n - 1), size * j / (n - 1), height;
+    for (int i = 0; i < n; ++i)
+      m.vertices.positions.row(j * n + i) << size * i / (n - 1), size * j / (n - 1), height;
   }
   m.faces.resize(2 * (n - 1) * (n - 1), 3);
   int f = 0;
@@ -72,7 +73,7 @@ TEST(DistanceMap, PlaneAgainstAShiftedPlaneIsTheShift) {
   const DistanceMapResult a = ComputeDistanceMap(above.vertices.positions, reference);
   const DistanceMapResult b = ComputeDistanceMap(below.vertices.positions, reference);
   for (Eigen::Index k = 0; k < a.distances.size(); ++k) {
-    EXPECT_NEAR(a.distances[k], 2.5, 1e-12);   // in front of the reference (its normals point +z): positive
+    EXPECT_NEAR(a.distances[k], 2.5, 1e-12);    // in front of the reference (its normals point +z): positive
     EXPECT_NEAR(b.distances[k], -1.25, 1e-12);  // behind it: negative
   }
   EXPECT_NEAR(a.stats.rms, 2.5, 1e-12);
@@ -105,7 +106,8 @@ TEST(DistanceMap, SignedSurfaceDistanceIsExactOnASphereEverywhere) {
     EXPECT_NEAR(std::abs(r.distances[k]), std::abs(radial), 0.2) << k;
     // The closest point is on the surface: brute force agrees.
     double brute = std::numeric_limits<double>::infinity();
-    for (Eigen::Index v = 0; v < sphere.num_vertices(); ++v) brute = std::min(brute, (sphere.vertices.positions.row(v) - q.row(k)).norm());
+    for (Eigen::Index v = 0; v < sphere.num_vertices(); ++v)
+      brute = std::min(brute, (sphere.vertices.positions.row(v) - q.row(k)).norm());
     EXPECT_LE(std::abs(r.distances[k]), brute + 1e-9);
   }
 }
@@ -132,8 +134,8 @@ TEST(DistanceMap, StatisticsOfKnownValues) {
   EXPECT_DOUBLE_EQ(s.mean, -0.4);
   EXPECT_DOUBLE_EQ(s.mean_abs, 1.6);
   EXPECT_DOUBLE_EQ(s.rms, std::sqrt(22.0 / 5.0));
-  EXPECT_DOUBLE_EQ(s.p50, 1.0);   // |d| sorted: 0 1 1 2 4
-  EXPECT_DOUBLE_EQ(s.p90, 3.2);   // 2 + 0.6 (4 - 2)
+  EXPECT_DOUBLE_EQ(s.p50, 1.0);  // |d| sorted: 0 1 1 2 4
+  EXPECT_DOUBLE_EQ(s.p90, 3.2);  // 2 + 0.6 (4 - 2)
   EXPECT_EQ(s.ToJson()["max_abs_mm"], 4.0);
   EXPECT_EQ(ParseDistanceKind("nearest"), DistanceKind::kNearestPoint);
   EXPECT_THROW(ParseDistanceKind("hausdorff"), Error);

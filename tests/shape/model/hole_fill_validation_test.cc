@@ -21,7 +21,8 @@ TEST(HoleFill, ThirtyMillimetreHolesInsideAndAtTheBorderAreFilledWithinHalfAMill
   EXPECT_LT(r.max_error_in_disks_mm, 0.5);
   EXPECT_LT(r.max_error_mm, 0.5);
   // And against the truth.
-  const Eigen::VectorXd u = GridLateralPositions(roi, r.holed.grid), v = GridSternalPositions(roi, r.holed.grid);
+  const Eigen::VectorXd u = GridLateralPositions(roi, r.holed.grid),
+                        v = GridSternalPositions(roi, r.holed.grid);
   const Eigen::VectorXd& w = r.holed.mesh.vertices.scalars.at("depth_mm");
   double worst = 0.0;
   for (int i = 0; i < r.holed.grid.sternal; ++i) {

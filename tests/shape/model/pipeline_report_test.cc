@@ -34,12 +34,14 @@ TEST(PipelineReport, ShowsEveryFigureEveryNumberAndTheFailure) {
   TriangleMesh plane;
   plane.vertices.positions.resize(g.num_vertices(), 3);
   for (int i = 0; i < g.sternal; ++i) {
-    for (int j = 0; j < g.lateral; ++j) plane.vertices.positions.row(g.Index(i, j)) << -50.0 + 100.0 * j / 9, -200.0 * i / 19, 0.0;
+    for (int j = 0; j < g.lateral; ++j)
+      plane.vertices.positions.row(g.Index(i, j)) << -50.0 + 100.0 * j / 9, -200.0 * i / 19, 0.0;
   }
   // The grid's faces point along -y x x = +z, the ROI normal here.
   plane.faces = GridFaces(g);
   PipelineResult r;
-  for (double offset : {-1.5, 0.5, 1.0}) r.subjects.push_back(PlaneSubject("s" + std::to_string(r.subjects.size()), offset, plane));
+  for (double offset : {-1.5, 0.5, 1.0})
+    r.subjects.push_back(PlaneSubject("s" + std::to_string(r.subjects.size()), offset, plane));
   SubjectOutcome failed;
   failed.name = "broken";
   failed.failed_stage = "merge";

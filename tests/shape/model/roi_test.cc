@@ -13,7 +13,7 @@ namespace {
 LandmarkSet LpsLandmarks() {
   LandmarkSet s;
   s.items.push_back({"sternal_notch", {10.0, -100.0, 50.0}, ""});
-  s.items.push_back({"xiphoid", {10.0, -90.0, -130.0}, ""});       // 180 mm down, 10 mm back
+  s.items.push_back({"xiphoid", {10.0, -90.0, -130.0}, ""});  // 180 mm down, 10 mm back
   s.items.push_back({"costal_cartilage_1_left", {55.0, -95.0, 35.0}, ""});
   return s;
 }
@@ -26,8 +26,8 @@ TEST(ChestRoi, AxesFollowTheLandmarksAndTheNormalIsAnterior) {
   EXPECT_NEAR(roi.lateral.dot(roi.sternal), 0.0, 1e-12);
   EXPECT_NEAR(roi.normal.dot(roi.sternal), 0.0, 1e-12);
   EXPECT_NEAR(roi.normal.dot(roi.lateral), 0.0, 1e-12);
-  EXPECT_GT(roi.lateral.x(), 0.9);    // toward the subject's left (+x in LPS)
-  EXPECT_LT(roi.normal.y(), -0.9);    // anterior is -y in LPS
+  EXPECT_GT(roi.lateral.x(), 0.9);  // toward the subject's left (+x in LPS)
+  EXPECT_LT(roi.normal.y(), -0.9);  // anterior is -y in LPS
   EXPECT_NEAR(roi.v_min, 0.0, 1e-12);
   EXPECT_NEAR(roi.v_max, std::hypot(10.0, 180.0), 1e-9);
   // The cartilage lies in the ROI plane at u = its distance from the sternal line.
@@ -42,7 +42,8 @@ TEST(ChestRoi, RoundTripOfRoiCoordinates) {
   Points3 p(3, 3);
   p << 1, 2, 3, -40, 800, 12, 0.5, -0.25, 1e3;
   EXPECT_TRUE(roi.FromRoi(roi.ToRoi(p)).isApprox(p, 1e-12));
-  EXPECT_TRUE(roi.FromRoi(1.0, 2.0, 3.0).isApprox(roi.FromRoi(Points3(Eigen::RowVector3d(1, 2, 3))).row(0).transpose()));
+  EXPECT_TRUE(roi.FromRoi(1.0, 2.0, 3.0)
+                  .isApprox(roi.FromRoi(Points3(Eigen::RowVector3d(1, 2, 3))).row(0).transpose()));
 }
 
 TEST(ChestRoi, MarginsWidenTheRectangle) {
@@ -113,7 +114,8 @@ TEST(ShapeGrid, FacesPointAlongTheRoiNormal) {
   const Faces3 f = GridFaces(g);
   ASSERT_EQ(f.rows(), 2 * 4 * 6);
   for (Eigen::Index k = 0; k < f.rows(); ++k) {
-    const Eigen::Vector3d n = (x.row(f(k, 1)) - x.row(f(k, 0))).cross(x.row(f(k, 2)) - x.row(f(k, 0))).transpose();
+    const Eigen::Vector3d n =
+        (x.row(f(k, 1)) - x.row(f(k, 0))).cross(x.row(f(k, 2)) - x.row(f(k, 0))).transpose();
     EXPECT_GT(n.normalized().dot(roi.normal), 0.999) << "face " << k;
   }
   // Shape vectors are (x1, y1, z1, ...).

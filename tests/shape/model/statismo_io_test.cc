@@ -23,7 +23,8 @@ ShapeModel SmallModel() {
   std::normal_distribution<double> n(0.0, 2.0);
   Eigen::MatrixXd shapes(5, 3 * g.num_vertices());
   for (Eigen::Index r = 0; r < shapes.rows(); ++r) {
-    for (Eigen::Index c = 0; c < shapes.cols(); ++c) shapes(r, c) = 10.0 * static_cast<double>(c % 5) + n(rng);
+    for (Eigen::Index c = 0; c < shapes.cols(); ++c)
+      shapes(r, c) = 10.0 * static_cast<double>(c % 5) + n(rng);
   }
   ShapeModelOptions o;
   o.noise_variance = 0.25;
