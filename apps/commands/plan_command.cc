@@ -38,7 +38,8 @@ BarPlacement ParseBarPosition(const std::string& text, double force_n, const std
   }
   while (used < number.size() && number[used] == ' ') ++used;
   if (used != number.size() || number.empty() || !std::isfinite(value)) {
-    ThrowUsage(option + " '" + text + "' is not a number (a fraction such as 0.85, or millimetres such as 140mm)");
+    ThrowUsage(option + " '" + text +
+               "' is not a number (a fraction such as 0.85, or millimetres such as 140mm)");
   }
   if (!mm && (value < 0 || value > 1)) {
     ThrowUsage(option + " " + text + " is not a fraction of the sternal length in [0, 1]; write " + text +
@@ -48,61 +49,89 @@ BarPlacement ParseBarPosition(const std::string& text, double force_n, const std
 }
 
 nlohmann::json MeasurementsJson(const PectusPlannerPatient& p, const PectusPlannerMeasurements& m) {
-  return {{"ct", {{"width_mm", p.width_mm / p.magnification}, {"depth_mm", p.depth_mm / p.magnification},
-                  {"sternal_length_mm", p.sternal_length_mm}, {"depression_mm", p.depression_mm / p.magnification},
-                  {"haller_index", p.ct_haller_index}}},
-          {"model", {{"width_mm", m.width_mm}, {"depth_mm", m.depth_mm}, {"sternal_length_mm", m.sternal_length_mm},
-                     {"depression_mm", m.depression_mm}, {"torsion_deg", m.torsion_deg},
-                     {"inner_width_mm", m.inner_width_mm}, {"sternum_to_spine_mm", m.sternum_to_spine_mm},
-                     {"haller_index", m.haller_index}}},
-          {"fit", {{"converged", m.fit_converged != 0}, {"iterations", m.fit_iterations},
-                   {"largest_residual_mm", m.fit_residual_mm}}},
-          {"mesh", {{"nodes", m.nodes}, {"quadratic_tets", m.tets}, {"free_dofs", m.free_dofs},
-                    {"assembly_and_factorisation_s", m.factorization_seconds}}}};
+  return {{"ct",
+           {{"width_mm", p.width_mm / p.magnification},
+            {"depth_mm", p.depth_mm / p.magnification},
+            {"sternal_length_mm", p.sternal_length_mm},
+            {"depression_mm", p.depression_mm / p.magnification},
+            {"haller_index", p.ct_haller_index}}},
+          {"model",
+           {{"width_mm", m.width_mm},
+            {"depth_mm", m.depth_mm},
+            {"sternal_length_mm", m.sternal_length_mm},
+            {"depression_mm", m.depression_mm},
+            {"torsion_deg", m.torsion_deg},
+            {"inner_width_mm", m.inner_width_mm},
+            {"sternum_to_spine_mm", m.sternum_to_spine_mm},
+            {"haller_index", m.haller_index}}},
+          {"fit",
+           {{"converged", m.fit_converged != 0},
+            {"iterations", m.fit_iterations},
+            {"largest_residual_mm", m.fit_residual_mm}}},
+          {"mesh",
+           {{"nodes", m.nodes},
+            {"quadratic_tets", m.tets},
+            {"free_dofs", m.free_dofs},
+            {"assembly_and_factorisation_s", m.factorization_seconds}}}};
 }
 
 class PlanCommand : public Command {
  public:
   std::string Name() const override { return "plan"; }
   std::string Summary() const override {
-    return "Nuss procedure plan: patient ribcage from CT measurements, FE bar push, scores against the average chest";
+    return "Nuss procedure plan: patient ribcage from CT measurements, FE bar push, scores against the "
+           "average chest";
   }
   std::string Example() const override {
     return "  pectus plan --patient-table nuss_ct_parameters.csv --patient 57 --model average.h5 \\\n"
            "      --bar-position 0.85 --force 1700 --out plan57/ --report r.json\n"
-           "    (scenario B is 20 mm nearer the notch unless --compare-position is given; the best placement is\n"
+           "    (scenario B is 20 mm nearer the notch unless --compare-position is given; the best placement "
+           "is\n"
            "     searched unless --no-search; open plan57/report.html)\n"
            "  pectus plan --patient-table nuss_ct_parameters.csv --dataset fem_dataset.h5 --report d.json\n"
            "    (all patients x 3 bar positions x 8 forces, the dissertation's FE dataset; docs/planner.md)";
   }
   void Configure(CLI::App* app) override {
-    app->add_option("--patient-table", table_, "CSV of CT measurements (patient, width_mm, sternal_length_mm, "
-                                               "depth_mm, depression_mm[, haller_index, magnification, torsion_deg])")
+    app->add_option("--patient-table", table_,
+                    "CSV of CT measurements (patient, width_mm, sternal_length_mm, "
+                    "depth_mm, depression_mm[, haller_index, magnification, torsion_deg])")
         ->required();
     app->add_option("--patient", patient_, "The patient to plan (an id of the table)");
     app->add_option("--model", model_, "The average chest: a statismo shape model from `pectus model build`");
-    app->add_option("--model-landmarks", model_landmarks_, "Landmarks of the average chest (sternal_notch, xiphoid, "
-                                                           "manubrium_centre), if the model file has none");
-    app->add_option("--bar-position", position_, "Where the bar meets the sternum: fraction of the sternal length "
-                                                 "from the notch (0.85) or millimetres (140mm)")
+    app->add_option("--model-landmarks", model_landmarks_,
+                    "Landmarks of the average chest (sternal_notch, xiphoid, "
+                    "manubrium_centre), if the model file has none");
+    app->add_option("--bar-position", position_,
+                    "Where the bar meets the sternum: fraction of the sternal length "
+                    "from the notch (0.85) or millimetres (140mm)")
         ->default_val("0.85");
-    app->add_option("--force", force_n_, "The bar's push, N")->default_val(1700.0)->check(CLI::PositiveNumber);
-    app->add_option("--compare-position", compare_, "Scenario B's bar position (default: 20 mm nearer the notch)");
+    app->add_option("--force", force_n_, "The bar's push, N")
+        ->default_val(1700.0)
+        ->check(CLI::PositiveNumber);
+    app->add_option("--compare-position", compare_,
+                    "Scenario B's bar position (default: 20 mm nearer the notch)");
     app->add_option("--out", out_, "Folder for the plan: meshes (PLY), pictures (PNG), report.html");
     app->add_flag("!--no-search", search_, "Skip the search for the best bar position and force");
     app->add_option("--search-positions", search_options_.positions, "Bar positions in the search grid")
         ->default_val(10);
     app->add_option("--search-forces", search_options_.forces, "Forces in the search grid")->default_val(31);
-    app->add_option("--search-max-force", search_options_.force_max_n, "Largest force searched, N")->default_val(3000);
+    app->add_option("--search-max-force", search_options_.force_max_n, "Largest force searched, N")
+        ->default_val(3000);
+    app->add_option("--search-refinements", search_options_.golden_iterations,
+                    "Golden-section steps refining the best grid cell (each shrinks it by 0.618)")
+        ->default_val(16);
     app->add_option("--registration", registration_, "similarity (default) or rigid landmark registration")
         ->default_val("similarity")
         ->check(CLI::IsMember({"similarity", "rigid"}));
-    app->add_option("--cartilage-modulus", cartilage_mpa_, "Young's modulus of the costal cartilage, MPa (default "
-                                                           "20, dissertation Table 1)");
+    app->add_option("--cartilage-modulus", cartilage_mpa_,
+                    "Young's modulus of the costal cartilage, MPa (default "
+                    "20, dissertation Table 1)");
     app->add_option("--cell-mm", cell_mm_, "Mesh: cell length along ribs and cartilages, mm (default 6)");
-    app->add_option("--soft-tissue-mm", soft_tissue_mm_, "Skin: soft-tissue thickness over the bones, mm (default 15)");
+    app->add_option("--soft-tissue-mm", soft_tissue_mm_,
+                    "Skin: soft-tissue thickness over the bones, mm (default 15)");
     app->add_option("--dataset", dataset_, "Write the FE dataset of every patient of the table (HDF5)");
-    app->add_option("--plugin", plugin_path_, "The planner plugin (default: beside pectus, or PECTUS_PLANNER_PLUGIN)");
+    app->add_option("--plugin", plugin_path_,
+                    "The planner plugin (default: beside pectus, or PECTUS_PLANNER_PLUGIN)");
   }
   std::vector<fs::path> Inputs() const override {
     std::vector<fs::path> in{table_};
@@ -112,12 +141,14 @@ class PlanCommand : public Command {
   }
 
   void Run(Context* context) override {
-    if (patient_.empty() && dataset_.empty()) ThrowUsage("give --patient (a plan) or --dataset (all patients)");
+    if (patient_.empty() && dataset_.empty())
+      ThrowUsage("give --patient (a plan) or --dataset (all patients)");
     if (!patient_.empty() && (model_.empty() || out_.empty())) {
       ThrowUsage("a plan needs --model (the average chest) and --out (the plan's folder)");
     }
     const PlannerPlugin plugin = PlannerPlugin::Find(plugin_path_);
-    context->report["plugin"] = {{"path", plugin.path().string()}, {"description", plugin.description()},
+    context->report["plugin"] = {{"path", plugin.path().string()},
+                                 {"description", plugin.description()},
                                  {"interface_version", plugin.api().version}};
     options_ = PluginDefaultOptions(plugin);
     if (cartilage_mpa_ > 0) options_.cartilage_youngs_modulus_mpa = cartilage_mpa_;
@@ -139,16 +170,17 @@ class PlanCommand : public Command {
           (void)done;
         });
     progress.reset();
-    context->report["dataset"] = {{"path", dataset_},         {"patients", s.patients},
-                                  {"load_cases", s.load_cases}, {"results", s.results},
-                                  {"surface_nodes", s.surface_nodes}, {"seconds", s.seconds}};
+    context->report["dataset"] = {
+        {"path", dataset_},     {"patients", s.patients},           {"load_cases", s.load_cases},
+        {"results", s.results}, {"surface_nodes", s.surface_nodes}, {"seconds", s.seconds}};
     Info("FE dataset: " + std::to_string(s.patients) + " patients x " + std::to_string(s.load_cases) +
          " load cases = " + std::to_string(s.results) + " results in " + dataset_);
   }
 
   void Plan(const PlannerPlugin& plugin, Context* context);
 
-  std::string table_, patient_, model_, model_landmarks_, position_ = "0.85", compare_, out_, dataset_, plugin_path_;
+  std::string table_, patient_, model_, model_landmarks_, position_ = "0.85", compare_, out_, dataset_,
+                                                          plugin_path_;
   std::string registration_ = "similarity";
   double force_n_ = 1700, cartilage_mpa_ = 0, cell_mm_ = 0, soft_tissue_mm_ = -1;
   bool search_ = true;
@@ -181,15 +213,16 @@ void PlanCommand::Plan(const PlannerPlugin& plugin, Context* context) {
   }
   report["patient"] = patient.id;
   report["ribcage"] = MeasurementsJson(patient, planner->measurements());
-  report["average_chest"] = {{"model", model_}, {"vertices", average.mesh.num_vertices()},
-                             {"landmarks", average.landmark_source}};
+  report["average_chest"] = {
+      {"model", model_}, {"vertices", average.mesh.num_vertices()}, {"landmarks", average.landmark_source}};
   // Step 3: the plan (force to lift, scenarios, search), then its files.
   const NussPlan plan = MakeNussPlan(*planner, average, options, &report);
   const nlohmann::json figures = plan.ToJson();
   for (const auto& [key, value] : figures.items()) report[key] = value;
   auto t = report.Stage("write");
-  const auto written = WriteNussPlan(plan, *planner, average, plugin.description(), out_,
-                                     [&](const fs::path& target) { return StageOutput(context, *this, target); });
+  const auto written =
+      WriteNussPlan(plan, *planner, average, plugin.description(), out_,
+                    [&](const fs::path& target) { return StageOutput(context, *this, target); });
   for (const fs::path& file : written) report["outputs"].push_back(file.string());
   // A linear model far outside its range says so: a lift of many times the depression.
   const double depression = planner->measurements().depression_mm;
@@ -197,12 +230,13 @@ void PlanCommand::Plan(const PlannerPlugin& plugin, Context* context) {
     const double lift = s.solved.figures.sternum_lift_mm;
     if (depression > 1.0 && lift > 2.0 * depression) {
       char text[400];
-      std::snprintf(text, sizeof(text),
-                    "scenario %s (%s) lifts the sternum by %.0f mm, %.1f times its depression of %.1f mm: the "
-                    "linear model is far outside its range (the force to lift by the depression there is %.0f N; "
-                    "docs/planner.md, 'Force to lift')",
-                    s.name.c_str(), s.solved.bar.Name().c_str(), lift, lift / depression, depression,
-                    depression / lift * s.solved.bar.force_n);
+      std::snprintf(
+          text, sizeof(text),
+          "scenario %s (%s) lifts the sternum by %.0f mm, %.1f times its depression of %.1f mm: the "
+          "linear model is far outside its range (the force to lift by the depression there is %.0f N; "
+          "docs/planner.md, 'Force to lift')",
+          s.name.c_str(), s.solved.bar.Name().c_str(), lift, lift / depression, depression,
+          depression / lift * s.solved.bar.force_n);
       Warn(text);
     }
   }

@@ -33,9 +33,9 @@ extern "C" {
 /** Status codes: the numbers of pectus::ErrorKind and of the command line's exit codes. */
 enum PectusPlannerCode {
   PECTUS_PLANNER_OK = 0,
-  PECTUS_PLANNER_FAILURE = 1,   /**< a computation or a write did not succeed */
-  PECTUS_PLANNER_USAGE = 2,     /**< the caller asked for something impossible (bad option) */
-  PECTUS_PLANNER_BAD_INPUT = 3  /**< a file or value is wrong (malformed table, measurement out of range) */
+  PECTUS_PLANNER_FAILURE = 1,  /**< a computation or a write did not succeed */
+  PECTUS_PLANNER_USAGE = 2,    /**< the caller asked for something impossible (bad option) */
+  PECTUS_PLANNER_BAD_INPUT = 3 /**< a file or value is wrong (malformed table, measurement out of range) */
 };
 
 /** What a call did: `code` (PectusPlannerCode) and, unless OK, a message ("FILE:LINE: what is wrong"). */
@@ -47,57 +47,57 @@ typedef struct PectusPlannerStatus {
 /** A patient's CT measurements (dissertation §4.1.1, Figure 24). Lengths in mm on the image; divided
  *  by `magnification` for true size. */
 typedef struct PectusPlannerPatient {
-  char id[64];                 /**< patient identifier, NUL-terminated (e.g. "57") */
-  double magnification;        /**< of the CT images; must be given, 1 if none */
-  double width_mm;             /**< ribcage width on the slice of deepest depression */
-  double depth_mm;             /**< ribcage depth on that slice */
-  double sternal_length_mm;    /**< used when slice_spacing_mm is 0 */
-  double first_sternum_slice;  /**< with last_sternum_slice and slice_spacing_mm (> 0): the sternal length */
+  char id[64];                /**< patient identifier, NUL-terminated (e.g. "57") */
+  double magnification;       /**< of the CT images; must be given, 1 if none */
+  double width_mm;            /**< ribcage width on the slice of deepest depression */
+  double depth_mm;            /**< ribcage depth on that slice */
+  double sternal_length_mm;   /**< used when slice_spacing_mm is 0 */
+  double first_sternum_slice; /**< with last_sternum_slice and slice_spacing_mm (> 0): the sternal length */
   double last_sternum_slice;
   double slice_spacing_mm;
-  double depression_mm;        /**< sternal depression, 0 to 60 */
-  double torsion_deg;          /**< sternal torsion, -45 to 45 (positive: the right edge deeper) */
-  double ct_haller_index;      /**< as measured on the CT, 0 if unknown (reported, not used) */
+  double depression_mm;   /**< sternal depression, 0 to 60 */
+  double torsion_deg;     /**< sternal torsion, -45 to 45 (positive: the right edge deeper) */
+  double ct_haller_index; /**< as measured on the CT, 0 if unknown (reported, not used) */
 } PectusPlannerPatient;
 
 /** Materials, mesh and skin settings. Fill with default_options() first, then change what you need. */
 typedef struct PectusPlannerOptions {
-  double sternum_youngs_modulus_mpa;    /**< default 11500 (dissertation Table 1) */
-  double sternum_poisson_ratio;         /**< default 0.3 */
-  double rib_youngs_modulus_mpa;        /**< default 5000 */
-  double rib_poisson_ratio;             /**< default 0.3 */
-  double cartilage_youngs_modulus_mpa;  /**< default 20: the one to set per patient (stiffer with age) */
-  double cartilage_poisson_ratio;       /**< default 0.4 */
-  double contact_width_mm;              /**< cranio-caudal width of the bar's contact patch, default 12 */
-  double rib_cell_length_mm;            /**< mesh: cell length along ribs and cartilages, default 6 */
-  int32_t sternum_cells_along;          /**< mesh: cells along the sternum, default 34 */
-  double soft_tissue_mm;                /**< skin: soft-tissue thickness over the bones, default 15 */
-  int32_t skin_rows;                    /**< skin grid rows (top to bottom), default 64 */
-  int32_t skin_columns;                 /**< skin grid columns (right to left), default 96 */
+  double sternum_youngs_modulus_mpa;   /**< default 11500 (dissertation Table 1) */
+  double sternum_poisson_ratio;        /**< default 0.3 */
+  double rib_youngs_modulus_mpa;       /**< default 5000 */
+  double rib_poisson_ratio;            /**< default 0.3 */
+  double cartilage_youngs_modulus_mpa; /**< default 20: the one to set per patient (stiffer with age) */
+  double cartilage_poisson_ratio;      /**< default 0.4 */
+  double contact_width_mm;             /**< cranio-caudal width of the bar's contact patch, default 12 */
+  double rib_cell_length_mm;           /**< mesh: cell length along ribs and cartilages, default 6 */
+  int32_t sternum_cells_along;         /**< mesh: cells along the sternum, default 34 */
+  double soft_tissue_mm;               /**< skin: soft-tissue thickness over the bones, default 15 */
+  int32_t skin_rows;                   /**< skin grid rows (top to bottom), default 64 */
+  int32_t skin_columns;                /**< skin grid columns (right to left), default 96 */
 } PectusPlannerOptions;
 
 /** What the generated ribcage measures, the way the CT was measured; and the fit that made it. */
 typedef struct PectusPlannerMeasurements {
   double width_mm, depth_mm, sternal_length_mm, depression_mm, torsion_deg;
-  double inner_width_mm;       /**< between the inner surfaces of the ribs on the slice */
-  double sternum_to_spine_mm;  /**< posterior sternum to anterior vertebral body on the slice */
-  double haller_index;         /**< inner_width_mm / sternum_to_spine_mm */
-  double slice_z_mm;           /**< height of the slice of deepest depression */
-  double fit_residual_mm;      /**< largest difference between a target and what the ribcage measures */
-  int32_t fit_converged;       /**< 1 if every residual is within the fit's tolerance */
+  double inner_width_mm;      /**< between the inner surfaces of the ribs on the slice */
+  double sternum_to_spine_mm; /**< posterior sternum to anterior vertebral body on the slice */
+  double haller_index;        /**< inner_width_mm / sternum_to_spine_mm */
+  double slice_z_mm;          /**< height of the slice of deepest depression */
+  double fit_residual_mm;     /**< largest difference between a target and what the ribcage measures */
+  int32_t fit_converged;      /**< 1 if every residual is within the fit's tolerance */
   int32_t fit_iterations;
-  int64_t nodes, tets;         /**< of the quadratic tetrahedral mesh */
+  int64_t nodes, tets; /**< of the quadratic tetrahedral mesh */
   int64_t free_dofs;
-  double factorization_seconds;  /**< assembly and Cholesky factorisation, s (wall) */
+  double factorization_seconds; /**< assembly and Cholesky factorisation, s (wall) */
 } PectusPlannerMeasurements;
 
 /** A triangle mesh owned by the planner. */
 typedef struct PectusPlannerMesh {
   int64_t num_vertices;
-  const double* vertices;      /**< num_vertices by 3, mm */
+  const double* vertices; /**< num_vertices by 3, mm */
   int64_t num_faces;
-  const int32_t* faces;        /**< num_faces by 3 vertex indices, outward */
-  const int32_t* face_labels;  /**< num_faces labels (bone: 0 sternum, 1 rib, 2 cartilage), or NULL */
+  const int32_t* faces;       /**< num_faces by 3 vertex indices, outward */
+  const int32_t* face_labels; /**< num_faces labels (bone: 0 sternum, 1 rib, 2 cartilage), or NULL */
 } PectusPlannerMesh;
 
 /** A named point. Labels: "sternal_notch", "manubrium_centre", "sternal_angle", "xiphoid" (the
@@ -105,37 +105,37 @@ typedef struct PectusPlannerMesh {
 
 /** Which landmarks landmarks() gives. */
 enum PectusPlannerLandmarkSet {
-  PECTUS_PLANNER_BONE_LANDMARKS = 0,      /**< on the ribcage (anterior midline of the sternum) */
-  PECTUS_PLANNER_SKIN_LANDMARKS = 1,      /**< projected forward onto the undeformed skin */
+  PECTUS_PLANNER_BONE_LANDMARKS = 0, /**< on the ribcage (anterior midline of the sternum) */
+  PECTUS_PLANNER_SKIN_LANDMARKS = 1, /**< projected forward onto the undeformed skin */
   /** The skin landmarks of the skin without the deformity (skin_surface(..., 1, ...)): the frame to
    *  register every predicted chest in, since the bar moves the real ones. */
   PECTUS_PLANNER_REFERENCE_LANDMARKS = 2
 };
 typedef struct PectusPlannerLandmark {
   char label[48];
-  double position[3];  /**< mm */
+  double position[3]; /**< mm */
 } PectusPlannerLandmark;
 
 /** Where the bar pushes and how hard. */
 typedef struct PectusPlannerBar {
-  double position;         /**< along the sternum from the notch: fraction of the sternal length, or mm */
-  int32_t position_in_mm;  /**< 1 if `position` is in mm */
-  double force_n;          /**< > 0 */
+  double position;        /**< along the sternum from the notch: fraction of the sternal length, or mm */
+  int32_t position_in_mm; /**< 1 if `position` is in mm */
+  double force_n;         /**< > 0 */
 } PectusPlannerBar;
 
 /** Figures of one solved load case. */
 typedef struct PectusPlannerCaseResult {
-  double sternum_lift_mm;       /**< anterior displacement of the sternum at the slice of deepest depression */
-  double max_displacement_mm;   /**< over the whole ribcage */
-  double bar_level_z_mm;        /**< height at which the bar meets the sternum */
+  double sternum_lift_mm;     /**< anterior displacement of the sternum at the slice of deepest depression */
+  double max_displacement_mm; /**< over the whole ribcage */
+  double bar_level_z_mm;      /**< height at which the bar meets the sternum */
   double contact_area_mm2;
   int64_t contact_faces;
 } PectusPlannerCaseResult;
 
 /** Force to lift the sternum by the patient's depression with the bar at one position. */
 typedef struct PectusPlannerForceToLift {
-  double lift_per_newton_mm;  /**< sternal lift under 1 N */
-  double force_n;             /**< depression / lift_per_newton_mm */
+  double lift_per_newton_mm; /**< sternal lift under 1 N */
+  double force_n;            /**< depression / lift_per_newton_mm */
 } PectusPlannerForceToLift;
 
 /** Called as work advances (done of total); may be NULL. */
@@ -167,12 +167,13 @@ typedef struct PectusPlannerInterface {
   /** Builds the patient's ribcage, fits it to the measurements, meshes it with quadratic tetrahedra,
    *  assembles and factorises the stiffness once, and builds the skin. On success *out is a planner to
    *  pass to destroy(). `options` may be NULL (defaults). */
-  int32_t (*create)(const PectusPlannerPatient* patient, const PectusPlannerOptions* options, PectusPlanner** out,
-                    PectusPlannerStatus* status);
+  int32_t (*create)(const PectusPlannerPatient* patient, const PectusPlannerOptions* options,
+                    PectusPlanner** out, PectusPlannerStatus* status);
   /** Frees a planner (NULL is allowed). */
   void (*destroy)(PectusPlanner* planner);
 
-  int32_t (*measurements)(const PectusPlanner* planner, PectusPlannerMeasurements* out, PectusPlannerStatus* status);
+  int32_t (*measurements)(const PectusPlanner* planner, PectusPlannerMeasurements* out,
+                          PectusPlannerStatus* status);
   /** The bone surface (corner nodes of the mesh boundary; labels: material region per face). */
   int32_t (*bone_surface)(const PectusPlanner* planner, PectusPlannerMesh* out, PectusPlannerStatus* status);
   /** The skin over the chest wall, a rows by columns grid: as measured (`without_deformity` 0), or as the
@@ -181,8 +182,8 @@ typedef struct PectusPlannerInterface {
                           PectusPlannerStatus* status);
   /** The landmarks of `set` (PectusPlannerLandmarkSet). Writes at most `capacity` into `out` and the
    *  number there are into *count. */
-  int32_t (*landmarks)(const PectusPlanner* planner, int32_t set, PectusPlannerLandmark* out, int32_t capacity,
-                       int32_t* count, PectusPlannerStatus* status);
+  int32_t (*landmarks)(const PectusPlanner* planner, int32_t set, PectusPlannerLandmark* out,
+                       int32_t capacity, int32_t* count, PectusPlannerStatus* status);
 
   /** Solves `count` load cases on the one factorisation. Each output may be NULL; otherwise it holds
    *  count blocks, one per case in order:
@@ -190,9 +191,9 @@ typedef struct PectusPlannerInterface {
    *   skin_positions  count x skin vertices x 3: deformed skin vertices, mm
    *   skin_landmarks  count x landmark count x 3: skin landmarks of the deformed skin, mm
    *   results         count figures. */
-  int32_t (*solve)(const PectusPlanner* planner, const PectusPlannerBar* bars, int64_t count, double* bone_positions,
-                   double* skin_positions, double* skin_landmarks, PectusPlannerCaseResult* results,
-                   PectusPlannerStatus* status);
+  int32_t (*solve)(const PectusPlanner* planner, const PectusPlannerBar* bars, int64_t count,
+                   double* bone_positions, double* skin_positions, double* skin_landmarks,
+                   PectusPlannerCaseResult* results, PectusPlannerStatus* status);
 
   /** Force to lift the sternum by the patient's depression at each of `count` bar positions
    *  (bars[i].force_n is ignored). */
@@ -202,8 +203,9 @@ typedef struct PectusPlannerInterface {
   /** The dissertation's dataset: every patient of `table_path` x 3 bar positions (0.65, 0.75, 0.85 of the
    *  sternal length) x 8 forces (50, 70, 100, 200, 400, 800, 1500, 2000 N), surface-node displacements
    *  written as one HDF5 file at `output_path` (replaced only when complete). */
-  int32_t (*write_dataset)(const char* table_path, const char* output_path, const PectusPlannerOptions* options,
-                           PectusPlannerProgressFn progress, void* progress_user, PectusPlannerDatasetSummary* out,
+  int32_t (*write_dataset)(const char* table_path, const char* output_path,
+                           const PectusPlannerOptions* options, PectusPlannerProgressFn progress,
+                           void* progress_user, PectusPlannerDatasetSummary* out,
                            PectusPlannerStatus* status);
 } PectusPlannerInterface;
 

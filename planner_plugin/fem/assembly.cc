@@ -25,13 +25,15 @@ DofPartition::DofPartition(Eigen::Index num_nodes, std::vector<std::int32_t> pre
   std::sort(prescribed_dofs.begin(), prescribed_dofs.end());
   prescribed_dofs.erase(std::unique(prescribed_dofs.begin(), prescribed_dofs.end()), prescribed_dofs.end());
   if (!prescribed_dofs.empty() && (prescribed_dofs.front() < 0 || prescribed_dofs.back() >= n)) {
-    ThrowBadInput("boundary conditions", "a prescribed degree of freedom lies outside [0, " + std::to_string(n) +
-                                             ") for " + std::to_string(num_nodes) + " nodes");
+    ThrowBadInput("boundary conditions", "a prescribed degree of freedom lies outside [0, " +
+                                             std::to_string(n) + ") for " + std::to_string(num_nodes) +
+                                             " nodes");
   }
   prescribed = std::move(prescribed_dofs);
   free_index.assign(static_cast<std::size_t>(n), -1);
   prescribed_index.assign(static_cast<std::size_t>(n), -1);
-  for (std::size_t k = 0; k < prescribed.size(); ++k) prescribed_index[prescribed[k]] = static_cast<std::int32_t>(k);
+  for (std::size_t k = 0; k < prescribed.size(); ++k)
+    prescribed_index[prescribed[k]] = static_cast<std::int32_t>(k);
   for (std::int32_t d = 0; d < n; ++d) {
     if (prescribed_index[d] < 0) {
       free_index[d] = static_cast<std::int32_t>(free.size());
@@ -43,7 +45,8 @@ DofPartition::DofPartition(Eigen::Index num_nodes, std::vector<std::int32_t> pre
 namespace {
 
 // Sorted neighbour lists (including the node itself) of the node graph of the mesh, as CSR.
-void NodeAdjacency(const TetMesh& mesh, std::vector<std::int64_t>* offsets, std::vector<std::int32_t>* neighbours) {
+void NodeAdjacency(const TetMesh& mesh, std::vector<std::int64_t>* offsets,
+                   std::vector<std::int32_t>* neighbours) {
   const Eigen::Index n = mesh.num_nodes();
   std::vector<std::vector<std::int32_t>> lists(static_cast<std::size_t>(n));
   for (Eigen::Index t = 0; t < mesh.num_tets(); ++t) {
@@ -164,9 +167,8 @@ AssembledStiffness AssembleStiffness(const TetMesh& mesh, const std::vector<Isot
   }
 
   AssembledStiffness out;
-  out.K_ff_lower = Eigen::Map<const Eigen::SparseMatrix<double>>(num_free, num_free,
-                                                                   static_cast<Eigen::Index>(inner.size()),
-                                                                   outer.data(), inner.data(), values.data());
+  out.K_ff_lower = Eigen::Map<const Eigen::SparseMatrix<double>>(
+      num_free, num_free, static_cast<Eigen::Index>(inner.size()), outer.data(), inner.data(), values.data());
   const auto num_prescribed = static_cast<Eigen::Index>(partition.prescribed.size());
   std::vector<Triplet> all;
   for (auto& part : fp_parts) all.insert(all.end(), part.begin(), part.end());

@@ -20,9 +20,9 @@ std::vector<std::int32_t> AllDofsOf(const std::vector<std::int32_t>& nodes);
 
 /// How the degrees of freedom split into free (solved for) and prescribed (given) ones.
 struct DofPartition {
-  std::vector<std::int32_t> free;         ///< ascending global dofs that are solved for
-  std::vector<std::int32_t> prescribed;   ///< ascending global dofs whose displacement is given
-  std::vector<std::int32_t> free_index;   ///< per global dof: index into `free`, or -1
+  std::vector<std::int32_t> free;              ///< ascending global dofs that are solved for
+  std::vector<std::int32_t> prescribed;        ///< ascending global dofs whose displacement is given
+  std::vector<std::int32_t> free_index;        ///< per global dof: index into `free`, or -1
   std::vector<std::int32_t> prescribed_index;  ///< per global dof: index into `prescribed`, or -1
 
   /// Throws Error(kBadInput) if a prescribed dof is out of range [0, 3 #nodes).

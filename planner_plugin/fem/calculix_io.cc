@@ -20,8 +20,8 @@ void WriteCalculixInput(const std::filesystem::path& path, const TetMesh& mesh,
   char buf[256];
   s << "** pectus planner: static linear elasticity, C3D10, mm N MPa\n*NODE, NSET=NALL\n";
   for (Eigen::Index i = 0; i < mesh.num_nodes(); ++i) {
-    std::snprintf(buf, sizeof(buf), "%lld, %.12E, %.12E, %.12E\n", static_cast<long long>(i + 1), mesh.nodes(i, 0),
-                  mesh.nodes(i, 1), mesh.nodes(i, 2));
+    std::snprintf(buf, sizeof(buf), "%lld, %.12E, %.12E, %.12E\n", static_cast<long long>(i + 1),
+                  mesh.nodes(i, 0), mesh.nodes(i, 1), mesh.nodes(i, 2));
     s << buf;
   }
   for (std::size_t r = 0; r < materials.size(); ++r) {
@@ -42,7 +42,8 @@ void WriteCalculixInput(const std::filesystem::path& path, const TetMesh& mesh,
   s << "*STEP\n*STATIC\n";
   if (!prescribed_dofs.empty()) s << "*BOUNDARY\n";
   for (std::size_t k = 0; k < prescribed_dofs.size(); ++k) {
-    const double value = load.prescribed_values.size() == 0 ? 0.0 : load.prescribed_values(static_cast<Eigen::Index>(k));
+    const double value =
+        load.prescribed_values.size() == 0 ? 0.0 : load.prescribed_values(static_cast<Eigen::Index>(k));
     const int node = prescribed_dofs[k] / 3 + 1, dof = prescribed_dofs[k] % 3 + 1;
     std::snprintf(buf, sizeof(buf), "%d, %d, %d, %.12E\n", node, dof, dof, value);
     s << buf;
@@ -90,8 +91,8 @@ Points3 ReadCalculixDisplacements(const std::filesystem::path& path, Eigen::Inde
       ThrowBadInput(path.string(), "expected 'node ux uy uz'", line_number);
     }
     if (node < 1 || node > num_nodes) {
-      ThrowBadInput(path.string(), "node " + std::to_string(node) + " outside 1.." + std::to_string(num_nodes),
-                    line_number);
+      ThrowBadInput(path.string(),
+                    "node " + std::to_string(node) + " outside 1.." + std::to_string(num_nodes), line_number);
     }
     u.row(node - 1) << x, y, z;
     ++read;

@@ -20,7 +20,9 @@ int AppendBlockTetrahedra(const HexBlock& block, const Points3& nodes, std::vect
   // adding one unit step per axis, so its volume is parity * det[e_s, e_u, e_v] / 6 for a parallelepiped.
   static constexpr int kOrders[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
   static constexpr int kParity[6] = {1, -1, -1, 1, 1, -1};
-  auto position = [&](int s, int u, int v) -> Eigen::Vector3d { return nodes.row(block.node(s, u, v)).transpose(); };
+  auto position = [&](int s, int u, int v) -> Eigen::Vector3d {
+    return nodes.row(block.node(s, u, v)).transpose();
+  };
   double handedness = 0.0;
   for (int s = 0; s < block.ns; ++s) {
     for (int u = 0; u < block.nu; ++u) {
@@ -30,7 +32,8 @@ int AppendBlockTetrahedra(const HexBlock& block, const Points3& nodes, std::vect
           continue;
         }
         const Eigen::Vector3d p = position(s, u, v);
-        handedness += (position(s + 1, u, v) - p).cross(position(s, u + 1, v) - p).dot(position(s, u, v + 1) - p);
+        handedness +=
+            (position(s + 1, u, v) - p).cross(position(s, u + 1, v) - p).dot(position(s, u, v + 1) - p);
       }
     }
   }
@@ -65,7 +68,8 @@ int AppendBlockTetrahedra(const HexBlock& block, const Points3& nodes, std::vect
   return folded;
 }
 
-void MakeBoxTetrahedra(int nx, int ny, int nz, const Eigen::Vector3d& size, Points3* nodes, Tet4Connectivity* tets) {
+void MakeBoxTetrahedra(int nx, int ny, int nz, const Eigen::Vector3d& size, Points3* nodes,
+                       Tet4Connectivity* tets) {
   HexBlock block;
   block.Resize(nx, ny, nz, 0);
   nodes->resize(static_cast<Eigen::Index>(nx + 1) * (ny + 1) * (nz + 1), 3);

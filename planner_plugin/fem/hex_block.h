@@ -18,12 +18,18 @@ struct HexBlock {
   std::vector<std::int32_t> node_ids;  ///< (ns+1)(nu+1)(nv+1) global node ids
   std::vector<int> cell_regions;       ///< ns nu nv region indices, cell (s, u, v) at (s nu + u) nv + v
 
-  std::int32_t& node(int s, int u, int v) { return node_ids[(static_cast<std::size_t>(s) * (nu + 1) + u) * (nv + 1) + v]; }
+  std::int32_t& node(int s, int u, int v) {
+    return node_ids[(static_cast<std::size_t>(s) * (nu + 1) + u) * (nv + 1) + v];
+  }
   std::int32_t node(int s, int u, int v) const {
     return node_ids[(static_cast<std::size_t>(s) * (nu + 1) + u) * (nv + 1) + v];
   }
-  int& cell_region(int s, int u, int v) { return cell_regions[(static_cast<std::size_t>(s) * nu + u) * nv + v]; }
-  int cell_region(int s, int u, int v) const { return cell_regions[(static_cast<std::size_t>(s) * nu + u) * nv + v]; }
+  int& cell_region(int s, int u, int v) {
+    return cell_regions[(static_cast<std::size_t>(s) * nu + u) * nv + v];
+  }
+  int cell_region(int s, int u, int v) const {
+    return cell_regions[(static_cast<std::size_t>(s) * nu + u) * nv + v];
+  }
   /// Allocates node_ids (all -1) and cell_regions (all `region`).
   void Resize(int cells_s, int cells_u, int cells_v, int region);
 };
@@ -40,12 +46,13 @@ struct HexBlock {
 /// @param[in,out] regions  their region indices appended
 /// @return the number of folded-over (or flat) tetrahedra; 0 for a valid block
 int AppendBlockTetrahedra(const HexBlock& block, const Points3& nodes, std::vector<Eigen::Vector4i>* tets,
-                           std::vector<int>* regions);
+                          std::vector<int>* regions);
 
 /// A box [0, size_x] x [0, size_y] x [0, size_z] of nx ny nz hexahedra split as above, one region.
 /// @param[out] nodes  (nx+1)(ny+1)(nz+1) by 3 positions, mm; node (i, j, k) is (i (ny+1) + j) (nz+1) + k
 /// @param[out] tets   6 nx ny nz positively oriented tetrahedra
-void MakeBoxTetrahedra(int nx, int ny, int nz, const Eigen::Vector3d& size, Points3* nodes, Tet4Connectivity* tets);
+void MakeBoxTetrahedra(int nx, int ny, int nz, const Eigen::Vector3d& size, Points3* nodes,
+                       Tet4Connectivity* tets);
 
 /// Packs appended tetrahedra into a Tet4Connectivity.
 Tet4Connectivity ToConnectivity(const std::vector<Eigen::Vector4i>& tets);

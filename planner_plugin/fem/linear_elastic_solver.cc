@@ -9,12 +9,13 @@ namespace pectus::planner {
 
 std::string LinearElasticSummary::BriefReport() const {
   char line[320];
-  std::snprintf(line, sizeof(line),
-                "%lld nodes, %lld tets, %lld free dofs, %lld prescribed; assembly %.2f s, %s: analysis %.2f s, "
-                "factorisation %.2f s, nnz(L) %.3g",
-                static_cast<long long>(nodes), static_cast<long long>(tets), static_cast<long long>(free_dofs),
-                static_cast<long long>(prescribed_dofs), assembly_seconds, factorization.method.c_str(),
-                factorization.analyse_seconds, factorization.factorize_seconds, factorization.nonzeros_factor);
+  std::snprintf(
+      line, sizeof(line),
+      "%lld nodes, %lld tets, %lld free dofs, %lld prescribed; assembly %.2f s, %s: analysis %.2f s, "
+      "factorisation %.2f s, nnz(L) %.3g",
+      static_cast<long long>(nodes), static_cast<long long>(tets), static_cast<long long>(free_dofs),
+      static_cast<long long>(prescribed_dofs), assembly_seconds, factorization.method.c_str(),
+      factorization.analyse_seconds, factorization.factorize_seconds, factorization.nonzeros_factor);
   return line;
 }
 
@@ -44,8 +45,9 @@ std::vector<Points3> LinearElasticSolver::Solve(const std::vector<LoadCase>& cas
     const LoadCase& load = cases[c];
     const auto col = static_cast<Eigen::Index>(c);
     if (load.nodal_forces.size() != n) {
-      ThrowBadInput("load case '" + load.name + "'", std::to_string(load.nodal_forces.size()) +
-                                                         " force components for " + std::to_string(n) + " dofs");
+      ThrowBadInput(
+          "load case '" + load.name + "'",
+          std::to_string(load.nodal_forces.size()) + " force components for " + std::to_string(n) + " dofs");
     }
     if (load.prescribed_values.size() != 0 && load.prescribed_values.size() != num_prescribed) {
       ThrowBadInput("load case '" + load.name + "'", std::to_string(load.prescribed_values.size()) +

@@ -18,9 +18,11 @@ namespace pectus::planner {
 
 /// One load case: nodal forces and the values of the prescribed displacements.
 struct LoadCase {
-  std::string name;                   ///< e.g. "position 0.85, 1700 N"
-  Eigen::VectorXd nodal_forces;       ///< 3 #nodes forces (x, y, z per node), N; forces on prescribed dofs are ignored
-  Eigen::VectorXd prescribed_values;  ///< empty (all zero), or one displacement per prescribed dof (ascending dof order), mm
+  std::string name;  ///< e.g. "position 0.85, 1700 N"
+  Eigen::VectorXd
+      nodal_forces;  ///< 3 #nodes forces (x, y, z per node), N; forces on prescribed dofs are ignored
+  Eigen::VectorXd prescribed_values;  ///< empty (all zero), or one displacement per prescribed dof (ascending
+                                      ///< dof order), mm
 };
 
 /// Summary of the set-up (assembly and factorisation).

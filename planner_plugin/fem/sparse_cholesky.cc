@@ -23,8 +23,8 @@ SparseCholesky::~SparseCholesky() = default;
 
 void SparseCholesky::Factorize(const Eigen::SparseMatrix<double>& A_lower) {
   if (A_lower.rows() != A_lower.cols() || A_lower.rows() == 0) {
-    ThrowFailure("sparse Cholesky: the matrix must be square and non-empty, got " + std::to_string(A_lower.rows()) +
-                 " by " + std::to_string(A_lower.cols()));
+    ThrowFailure("sparse Cholesky: the matrix must be square and non-empty, got " +
+                 std::to_string(A_lower.rows()) + " by " + std::to_string(A_lower.cols()));
   }
   using Clock = std::chrono::steady_clock;
   auto& solver = impl_->solver;
@@ -37,9 +37,10 @@ void SparseCholesky::Factorize(const Eigen::SparseMatrix<double>& A_lower) {
   ++factorizations_;
   const cholmod_common& common = solver.cholmod();
   if (solver.info() != Eigen::Success) {
-    ThrowFailure("sparse Cholesky: the stiffness matrix is not positive definite (CHOLMOD status " +
-                 std::to_string(common.status) +
-                 "): is every part of the structure held by a boundary condition, and are all materials valid?");
+    ThrowFailure(
+        "sparse Cholesky: the stiffness matrix is not positive definite (CHOLMOD status " +
+        std::to_string(common.status) +
+        "): is every part of the structure held by a boundary condition, and are all materials valid?");
   }
   summary_.rows = A_lower.rows();
   summary_.nonzeros_lower = A_lower.nonZeros();

@@ -14,8 +14,8 @@ void Tri6(double r, double s, Eigen::Matrix<double, 6, 1>* N, Eigen::Matrix<doub
   const double l0 = 1.0 - r - s, l1 = r, l2 = s;
   *N << l0 * (2 * l0 - 1), l1 * (2 * l1 - 1), l2 * (2 * l2 - 1), 4 * l0 * l1, 4 * l1 * l2, 4 * l2 * l0;
   // d/dr and d/ds with dl0 = (-1, -1), dl1 = (1, 0), dl2 = (0, 1).
-  *dN << -(4 * l0 - 1), -(4 * l0 - 1), (4 * l1 - 1), 0, 0, (4 * l2 - 1), 4 * (l0 - l1), -4 * l1, 4 * l2, 4 * l1,
-      -4 * l2, 4 * (l0 - l2);
+  *dN << -(4 * l0 - 1), -(4 * l0 - 1), (4 * l1 - 1), 0, 0, (4 * l2 - 1), 4 * (l0 - l1), -4 * l1, 4 * l2,
+      4 * l1, -4 * l2, 4 * (l0 - l2);
 }
 
 // Integrates N_a dA over one face: the 6 weights w_a with f_a = w_a t.
@@ -36,16 +36,22 @@ Eigen::Matrix<double, 6, 1> FaceWeights(const Points3& nodes, const Eigen::Matri
 // Dunavant's 7-point rule on the reference triangle (degree 5): (r, s) and weights summing to 1/2.
 constexpr double kA1 = 0.059715871789770, kB1 = 0.470142064105115;
 constexpr double kA2 = 0.797426985353087, kB2 = 0.101286507323456;
-constexpr double kPoints7[7][2] = {{1.0 / 3.0, 1.0 / 3.0}, {kB1, kB1}, {kA1, kB1}, {kB1, kA1},
-                                   {kB2, kB2}, {kA2, kB2}, {kB2, kA2}};
+constexpr double kPoints7[7][2] = {
+    {1.0 / 3.0, 1.0 / 3.0}, {kB1, kB1}, {kA1, kB1}, {kB1, kA1}, {kB2, kB2}, {kA2, kB2}, {kB2, kA2}};
 constexpr double kWeights7[7] = {0.5 * 0.225,
-                                 0.5 * 0.132394152788506, 0.5 * 0.132394152788506, 0.5 * 0.132394152788506,
-                                 0.5 * 0.125939180544827, 0.5 * 0.125939180544827, 0.5 * 0.125939180544827};
+                                 0.5 * 0.132394152788506,
+                                 0.5 * 0.132394152788506,
+                                 0.5 * 0.132394152788506,
+                                 0.5 * 0.125939180544827,
+                                 0.5 * 0.125939180544827,
+                                 0.5 * 0.125939180544827};
 
 }  // namespace
 
-double AddProfiledTraction(const Points3& nodes, const Tri6Connectivity& faces, const Eigen::Vector3d& traction,
-                           const std::function<double(const Eigen::Vector3d&)>& phi, Eigen::VectorXd* forces) {
+double AddProfiledTraction(const Points3& nodes, const Tri6Connectivity& faces,
+                           const Eigen::Vector3d& traction,
+                           const std::function<double(const Eigen::Vector3d&)>& phi,
+                           Eigen::VectorXd* forces) {
   double integral = 0.0;
   Eigen::Matrix<double, 6, 1> N;
   Eigen::Matrix<double, 6, 2> dN;
@@ -84,7 +90,8 @@ void AddForceOverPatch(const Points3& nodes, const Tri6Connectivity& patch, cons
                        Eigen::VectorXd* forces) {
   const double area = FacesArea(nodes, patch);
   if (patch.rows() == 0 || !(area > 0.0)) {
-    ThrowBadInput("contact patch", "the patch has no faces or zero area, so the force cannot be spread over it");
+    ThrowBadInput("contact patch",
+                  "the patch has no faces or zero area, so the force cannot be spread over it");
   }
   AddUniformTraction(nodes, patch, force_n / area, forces);
 }

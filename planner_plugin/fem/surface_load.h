@@ -35,7 +35,8 @@ void AddForceOverPatch(const Points3& nodes, const Tri6Connectivity& patch, cons
 /// @param[in]     traction traction vector at phi = 1, N/mm²
 /// @param[in]     phi      the profile, a function of position (mm)
 /// @param[in,out] forces   3 #nodes nodal forces, N (nullptr: only the integral)
-double AddProfiledTraction(const Points3& nodes, const Tri6Connectivity& faces, const Eigen::Vector3d& traction,
+double AddProfiledTraction(const Points3& nodes, const Tri6Connectivity& faces,
+                           const Eigen::Vector3d& traction,
                            const std::function<double(const Eigen::Vector3d&)>& phi, Eigen::VectorXd* forces);
 
 }  // namespace pectus::planner

@@ -15,7 +15,8 @@ constexpr int kFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
 // Local mid-edge node (4..9) of the edge between corners i and j.
 int MidNode(int i, int j) {
   for (int e = 0; e < 6; ++e) {
-    if ((kTet10Edges[e][0] == i && kTet10Edges[e][1] == j) || (kTet10Edges[e][0] == j && kTet10Edges[e][1] == i)) {
+    if ((kTet10Edges[e][0] == i && kTet10Edges[e][1] == j) ||
+        (kTet10Edges[e][0] == j && kTet10Edges[e][1] == i)) {
       return 4 + e;
     }
   }
@@ -43,16 +44,16 @@ void TetMesh::Validate(const std::string& what) const {
   for (Eigen::Index t = 0; t < num_tets(); ++t) {
     for (int k = 0; k < 10; ++k) {
       if (tets(t, k) < 0 || tets(t, k) >= n) {
-        ThrowBadInput(what, "tetrahedron " + std::to_string(t) + " refers to node " + std::to_string(tets(t, k)) +
-                                " of " + std::to_string(n));
+        ThrowBadInput(what, "tetrahedron " + std::to_string(t) + " refers to node " +
+                                std::to_string(tets(t, k)) + " of " + std::to_string(n));
       }
     }
     if (regions(t) < 0) ThrowBadInput(what, "tetrahedron " + std::to_string(t) + " has a negative region");
-    const double v =
-        SignedVolume(Row(nodes, tets(t, 0)), Row(nodes, tets(t, 1)), Row(nodes, tets(t, 2)), Row(nodes, tets(t, 3)));
+    const double v = SignedVolume(Row(nodes, tets(t, 0)), Row(nodes, tets(t, 1)), Row(nodes, tets(t, 2)),
+                                  Row(nodes, tets(t, 3)));
     if (!(v > 0.0)) {
-      ThrowBadInput(what, "tetrahedron " + std::to_string(t) + " has non-positive volume " + std::to_string(v) +
-                              " mm^3 (inverted or flat)");
+      ThrowBadInput(what, "tetrahedron " + std::to_string(t) + " has non-positive volume " +
+                              std::to_string(v) + " mm^3 (inverted or flat)");
     }
   }
 }
@@ -192,7 +193,8 @@ Eigen::VectorXd RadiusRatios(const TetMesh& mesh) {
     const Eigen::Vector3d b = Row(mesh.nodes, mesh.tets(t, 2)) - p0;
     const Eigen::Vector3d c = Row(mesh.nodes, mesh.tets(t, 3)) - p0;
     const double six_v = std::abs(a.dot(b.cross(c)));
-    const double area = 0.5 * (a.cross(b).norm() + b.cross(c).norm() + c.cross(a).norm() + (b - a).cross(c - a).norm());
+    const double area =
+        0.5 * (a.cross(b).norm() + b.cross(c).norm() + c.cross(a).norm() + (b - a).cross(c - a).norm());
     if (six_v <= 0.0 || area <= 0.0) {
       ratio(t) = 0.0;
       continue;

@@ -24,9 +24,9 @@ inline constexpr int kTet10Edges[6][2] = {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}
 
 /// A mesh of 10-node tetrahedra, each in one material region.
 struct TetMesh {
-  Points3 nodes;              ///< #nodes by 3 positions, mm
-  Tet10Connectivity tets;     ///< #tets by 10 node indices
-  Eigen::VectorXi regions;    ///< #tets material region indices, >= 0 (index into a material list)
+  Points3 nodes;            ///< #nodes by 3 positions, mm
+  Tet10Connectivity tets;   ///< #tets by 10 node indices
+  Eigen::VectorXi regions;  ///< #tets material region indices, >= 0 (index into a material list)
 
   Eigen::Index num_nodes() const { return nodes.rows(); }
   Eigen::Index num_tets() const { return tets.rows(); }
@@ -45,9 +45,9 @@ TetMesh MakeQuadratic(const Points3& nodes, const Tet4Connectivity& tets, const 
 
 /// The boundary of a tetrahedral mesh: every face that belongs to exactly one tetrahedron.
 struct MeshBoundary {
-  Tri6Connectivity faces;          ///< #faces by 6 node indices, outward orientation
-  Eigen::VectorXi face_tet;        ///< #faces owning tetrahedron
-  std::vector<std::int32_t> nodes; ///< sorted indices of every node on the boundary (corners and mid-edge)
+  Tri6Connectivity faces;           ///< #faces by 6 node indices, outward orientation
+  Eigen::VectorXi face_tet;         ///< #faces owning tetrahedron
+  std::vector<std::int32_t> nodes;  ///< sorted indices of every node on the boundary (corners and mid-edge)
 };
 
 /// Finds the boundary faces of `mesh`. Throws Error(kFailure) if a face is shared by more than two

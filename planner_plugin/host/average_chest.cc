@@ -43,14 +43,16 @@ LandmarkSet GridLandmarks(const TriangleMesh& mesh, int columns, int rows) {
   return set;
 }
 
-AverageChest LoadAverageChest(const std::filesystem::path& model_path, const std::filesystem::path& landmarks_file) {
+AverageChest LoadAverageChest(const std::filesystem::path& model_path,
+                              const std::filesystem::path& landmarks_file) {
   nlohmann::json info;
   const ShapeModel model = ReadStatismoModel(model_path, &info);
   AverageChest out;
   out.source = model_path.string();
   out.mesh = model.ToMesh(model.mean);
   if (out.mesh.num_faces() == 0) {
-    ThrowBadInput(model_path.string(), "the model has no /representer/cells: the average chest must be a mesh");
+    ThrowBadInput(model_path.string(),
+                  "the model has no /representer/cells: the average chest must be a mesh");
   }
   out.mesh.Validate(model_path.string());
   const bool grid = DetectGrid(out.mesh, &out.grid_columns, &out.grid_rows);
@@ -63,21 +65,24 @@ AverageChest LoadAverageChest(const std::filesystem::path& model_path, const std
       if (!p.is_array() || p.size() != 3 || !p[0].is_number() || !p[1].is_number() || !p[2].is_number()) {
         ThrowBadInput(model_path.string(), "/pectus/info landmarks: '" + label + "' is not [x, y, z]");
       }
-      out.landmarks.items.push_back({label, Eigen::Vector3d(p[0].get<double>(), p[1].get<double>(), p[2].get<double>()),
-                                     "from the model file"});
+      out.landmarks.items.push_back(
+          {label, Eigen::Vector3d(p[0].get<double>(), p[1].get<double>(), p[2].get<double>()),
+           "from the model file"});
     }
     out.landmark_source = model_path.string() + " (/pectus/info landmarks)";
   } else if (grid) {
     out.landmarks = GridLandmarks(out.mesh, out.grid_columns, out.grid_rows);
     out.landmark_source = "grid convention (first and last row of the resampled grid, midline)";
   } else {
-    ThrowBadInput(model_path.string(), "the mean shape is not a resampled grid and the file holds no landmarks; "
-                                       "give them with --model-landmarks");
+    ThrowBadInput(model_path.string(),
+                  "the mean shape is not a resampled grid and the file holds no landmarks; "
+                  "give them with --model-landmarks");
   }
   out.landmarks.Validate(out.landmark_source);
   for (const char* required : {"sternal_notch", "xiphoid"}) {
     if (out.landmarks.Find(required) == nullptr) {
-      ThrowBadInput(out.landmark_source, std::string("the average chest needs the landmark '") + required + "'");
+      ThrowBadInput(out.landmark_source,
+                    std::string("the average chest needs the landmark '") + required + "'");
     }
   }
   return out;

@@ -12,10 +12,10 @@ namespace pectus::planner {
 
 /// The reference chest.
 struct AverageChest {
-  std::string source;             ///< the model file
-  TriangleMesh mesh;              ///< the model's mean shape, mm, faces outward (anterior)
-  LandmarkSet landmarks;          ///< at least sternal_notch and xiphoid
-  std::string landmark_source;    ///< where the landmarks came from (for the report)
+  std::string source;                   ///< the model file
+  TriangleMesh mesh;                    ///< the model's mean shape, mm, faces outward (anterior)
+  LandmarkSet landmarks;                ///< at least sternal_notch and xiphoid
+  std::string landmark_source;          ///< where the landmarks came from (for the report)
   int grid_columns = 0, grid_rows = 0;  ///< the grid of `pectus resample` (0 if the mesh is not one)
 };
 
@@ -31,6 +31,7 @@ LandmarkSet GridLandmarks(const TriangleMesh& mesh, int columns, int rows);
 /// `landmarks_file` (any format ReadLandmarks reads) if given; a "landmarks" object in the model's
 /// /pectus/info ({label: [x, y, z]}); the grid convention of GridLandmarks. Throws Error(kBadInput)
 /// naming the file for a model without faces or without usable landmarks.
-AverageChest LoadAverageChest(const std::filesystem::path& model, const std::filesystem::path& landmarks_file = {});
+AverageChest LoadAverageChest(const std::filesystem::path& model,
+                              const std::filesystem::path& landmarks_file = {});
 
 }  // namespace pectus::planner

@@ -49,8 +49,10 @@ Eigen::Vector3d AnteriorDirection(const TriangleMesh& mesh, const std::string& w
   return sum.normalized();
 }
 
-ChestRegistrationResult RegisterChestByLandmarks(const LandmarkSet& source, const Eigen::Vector3d& source_anterior,
-                                                 const LandmarkSet& target, const Eigen::Vector3d& target_anterior,
+ChestRegistrationResult RegisterChestByLandmarks(const LandmarkSet& source,
+                                                 const Eigen::Vector3d& source_anterior,
+                                                 const LandmarkSet& target,
+                                                 const Eigen::Vector3d& target_anterior,
                                                  const ChestRegistrationOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage("chest registration: " + why);
@@ -78,7 +80,8 @@ ChestRegistrationResult RegisterChestByLandmarks(const LandmarkSet& source, cons
     norm += (p[i] - p_mean).squaredNorm();
   }
   const double s = options.similarity ? cross / norm : 1.0;
-  if (!(s > 0) || !std::isfinite(s)) ThrowBadInput("predicted chest landmarks", "the landmarks give no valid scale");
+  if (!(s > 0) || !std::isfinite(s))
+    ThrowBadInput("predicted chest landmarks", "the landmarks give no valid scale");
   out.T_target_source.scale = s;
   out.T_target_source.rotation = R;
   out.T_target_source.translation = q_mean - s * (R * p_mean);

@@ -23,9 +23,9 @@ struct ChestRegistrationOptions {
 
 /// A registration.
 struct ChestRegistrationResult {
-  Similarity3 T_target_source;        ///< x_target = T * x_source
-  std::vector<std::string> used;      ///< landmark labels used
-  double landmark_rms_mm = 0;         ///< RMS distance of the used landmarks after registration
+  Similarity3 T_target_source;    ///< x_target = T * x_source
+  std::vector<std::string> used;  ///< landmark labels used
+  double landmark_rms_mm = 0;     ///< RMS distance of the used landmarks after registration
 };
 
 /// The area-weighted mean of the face normals of `mesh` (unit): for a chest surface with outward faces,
@@ -36,8 +36,10 @@ Eigen::Vector3d AnteriorDirection(const TriangleMesh& mesh, const std::string& w
 /// anterior direction made orthogonal to it) onto the target's; then scale (if similarity) and translation
 /// are the least-squares fit of the used landmarks (closed form). Throws Error(kBadInput) naming the set
 /// without a required landmark, or whose anterior direction is parallel to its sternal axis.
-ChestRegistrationResult RegisterChestByLandmarks(const LandmarkSet& source, const Eigen::Vector3d& source_anterior,
-                                                 const LandmarkSet& target, const Eigen::Vector3d& target_anterior,
+ChestRegistrationResult RegisterChestByLandmarks(const LandmarkSet& source,
+                                                 const Eigen::Vector3d& source_anterior,
+                                                 const LandmarkSet& target,
+                                                 const Eigen::Vector3d& target_anterior,
                                                  const ChestRegistrationOptions& options = {});
 
 }  // namespace pectus::planner

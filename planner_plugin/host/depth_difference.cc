@@ -7,7 +7,8 @@
 
 namespace pectus::planner {
 
-Eigen::VectorXd DepthDifference(const Points3& points, const Eigen::Vector3d& direction, const TriangleMesh& surface) {
+Eigen::VectorXd DepthDifference(const Points3& points, const Eigen::Vector3d& direction,
+                                const TriangleMesh& surface) {
   const double kNaN = std::numeric_limits<double>::quiet_NaN();
   Eigen::VectorXd t = Eigen::VectorXd::Constant(points.rows(), kNaN);
   if (surface.num_faces() == 0 || points.rows() == 0) return t;

@@ -13,6 +13,7 @@ namespace pectus::planner {
 /// the surface lies ahead of the point along `direction` (unit). Where the line meets the surface more
 /// than once (a fold), the smallest |t|; NaN where it misses the surface (the point lies beyond it).
 /// O(#points + #faces) for a surface that is a height field along `direction`.
-Eigen::VectorXd DepthDifference(const Points3& points, const Eigen::Vector3d& direction, const TriangleMesh& surface);
+Eigen::VectorXd DepthDifference(const Points3& points, const Eigen::Vector3d& direction,
+                                const TriangleMesh& surface);
 
 }  // namespace pectus::planner

@@ -68,17 +68,19 @@ nlohmann::json NussPlan::ToJson() const {
   return j;
 }
 
-NussPlan MakeNussPlan(const PlannerClient& planner, const AverageChest& average, const NussPlanOptions& options,
-                      Report* report) {
+NussPlan MakeNussPlan(const PlannerClient& planner, const AverageChest& average,
+                      const NussPlanOptions& options, Report* report) {
   NussPlan plan;
   const double length = planner.measurements().sternal_length_mm;
   const BarPlacement& a = options.scenario_a;
   const double a_mm = a.position_in_mm ? a.position : a.position * length;
-  const BarPlacement b = options.scenario_b ? *options.scenario_b : BarPlacement{std::max(0.0, a_mm - 20.0), true, a.force_n};
+  const BarPlacement b =
+      options.scenario_b ? *options.scenario_b : BarPlacement{std::max(0.0, a_mm - 20.0), true, a.force_n};
   {
     // Step 1: the force that lifts the sternum by the depression, at the dissertation's positions and at A.
     auto t = Time(report, "force_to_lift");
-    plan.lift_positions = {{0.65, false, 1}, {0.75, false, 1}, {0.85, false, 1}, {a.position, a.position_in_mm, 1}};
+    plan.lift_positions = {
+        {0.65, false, 1}, {0.75, false, 1}, {0.85, false, 1}, {a.position, a.position_in_mm, 1}};
     plan.force_to_lift = planner.ForceToLift(plan.lift_positions);
   }
   {
@@ -94,14 +96,15 @@ NussPlan MakeNussPlan(const PlannerClient& planner, const AverageChest& average,
     for (std::size_t i = 0; i < solved.size(); ++i) {
       TriangleMesh skin = planner.skin();
       skin.vertices.positions = solved[i].skin;
-      plan.scenarios.push_back(
-          {i == 0 ? "A" : "B", solved[i], ScorePlan(skin, reference, plan.registration, average, options.score)});
+      plan.scenarios.push_back({i == 0 ? "A" : "B", solved[i],
+                                ScorePlan(skin, reference, plan.registration, average, options.score)});
     }
   }
   if (options.search) {
     // Step 3: the best placement, then its full solution.
     auto t = Time(report, "placement_search");
-    plan.search = SearchBestPlacement(planner, average, plan.registration, options.score, options.search_options);
+    plan.search =
+        SearchBestPlacement(planner, average, plan.registration, options.score, options.search_options);
     const PlannedCase best = planner.Solve({plan.search->best}).front();
     TriangleMesh skin = planner.skin();
     skin.vertices.positions = best.skin;
@@ -113,14 +116,17 @@ NussPlan MakeNussPlan(const PlannerClient& planner, const AverageChest& average,
   auto worst = [](const PlanScore& s) {
     return std::max(MaxAbsFinite(s.difference_mm), MaxAbsFinite(s.predicted_distance_mm));
   };
-  plan.common_limit_mm = std::ceil(std::max({1.0, worst(plan.scenarios[0].score), worst(plan.scenarios[1].score)}));
+  plan.common_limit_mm =
+      std::ceil(std::max({1.0, worst(plan.scenarios[0].score), worst(plan.scenarios[1].score)}));
   plan.outcome_limit_mm = std::ceil(std::max(1.0, worst(plan.before)));
-  if (plan.search) plan.outcome_limit_mm = std::max(plan.outcome_limit_mm, std::ceil(worst(plan.scenarios[2].score)));
+  if (plan.search)
+    plan.outcome_limit_mm = std::max(plan.outcome_limit_mm, std::ceil(worst(plan.scenarios[2].score)));
   return plan;
 }
 
-std::vector<fs::path> WriteNussPlan(const NussPlan& plan, const PlannerClient& planner, const AverageChest& average,
-                                    const std::string& plugin, const fs::path& folder,
+std::vector<fs::path> WriteNussPlan(const NussPlan& plan, const PlannerClient& planner,
+                                    const AverageChest& average, const std::string& plugin,
+                                    const fs::path& folder,
                                     const std::function<fs::path(const fs::path&)>& stage) {
   std::vector<fs::path> written;
   auto target = [&](const std::string& name) {
@@ -139,13 +145,20 @@ std::vector<fs::path> WriteNussPlan(const NussPlan& plan, const PlannerClient& p
     chest.vertices.scalars["difference_mm"] = values;
     WriteMesh(target("predicted_chest_" + s.name + ".ply"), chest);
   }
-  const PlanScenario& a = plan.scenarios.front();
-  TriangleMesh bone = planner.bone();
-  bone.vertices.positions = a.solved.bone;
-  const Eigen::VectorXd moved = (a.solved.bone - planner.bone().vertices.positions).rowwise().norm();
-  bone.vertices.colors = render::MapColors(moved, 0.0, std::max(1.0, moved.maxCoeff()), render::Colormap::kViridis);
-  bone.vertices.scalars["displacement_mm"] = moved;
-  WriteMesh(target("ribcage_A.ply"), bone);
+  // The deformed ribcage of the surgeon's placement (A) and of the best one, coloured by displacement.
+  auto ribcage_of = [&](const PlanScenario& s, Eigen::VectorXd* moved) {
+    TriangleMesh bone = planner.bone();
+    bone.vertices.positions = s.solved.bone;
+    *moved = (s.solved.bone - planner.bone().vertices.positions).rowwise().norm();
+    bone.vertices.colors =
+        render::MapColors(*moved, 0.0, std::max(1.0, moved->maxCoeff()), render::Colormap::kViridis);
+    bone.vertices.scalars["displacement_mm"] = *moved;
+    return bone;
+  };
+  Eigen::VectorXd moved;
+  for (const PlanScenario& s : plan.scenarios) {
+    if (s.name != "B") WriteMesh(target("ribcage_" + s.name + ".ply"), ribcage_of(s, &moved));
+  }
 
   // Pictures, all difference maps on one scale and in one frame.
   const render::View view = AverageChestFrontView(average);
@@ -157,21 +170,30 @@ std::vector<fs::path> WriteNussPlan(const NussPlan& plan, const PlannerClient& p
     return RenderDifference(chest, values, scale, view, text);
   };
   const std::string label = "predicted - average, mm";
-  render::WritePng(SideBySide({picture(plan.scenarios[0].score, limit, "A: " + plan.scenarios[0].solved.bar.Name()),
-                               picture(plan.scenarios[1].score, limit, "B: " + plan.scenarios[1].solved.bar.Name())},
-                              limit, label),
-                   target("comparison.png"));
+  render::WritePng(
+      SideBySide({picture(plan.scenarios[0].score, limit, "A: " + plan.scenarios[0].solved.bar.Name()),
+                  picture(plan.scenarios[1].score, limit, "B: " + plan.scenarios[1].solved.bar.Name())},
+                 limit, label),
+      target("comparison.png"));
   const render::Image before = picture(plan.before, plan.outcome_limit_mm, "before the operation");
   render::WritePng(SideBySide({before}, plan.outcome_limit_mm, label), target("before.png"));
-  Bounds3 bone_bounds = ComputeBounds(planner.bone().vertices.positions);
-  render::WritePng(RenderRibcageDisplacement(bone, moved, std::max(1.0, moved.maxCoeff()),
-                                             PatientFrontView(bone_bounds), "ribcage, scenario A: " + a.solved.bar.Name()),
-                   target("ribcage_A.png"));
+  // The ribcage picture: the best placement (or A), framing the ribcage before and after.
+  const PlanScenario& shown = plan.scenarios.back();
+  const TriangleMesh bone = ribcage_of(shown, &moved);
+  Bounds3 frame = ComputeBounds(planner.bone().vertices.positions);
+  const Bounds3 after = ComputeBounds(bone.vertices.positions);
+  frame.min = frame.min.cwiseMin(after.min);
+  frame.max = frame.max.cwiseMax(after.max);
+  render::WritePng(
+      RenderRibcageDisplacement(bone, moved, std::max(1.0, moved.maxCoeff()), PatientObliqueView(frame),
+                                "ribcage, " + shown.name + ": " + shown.solved.bar.Name()),
+      target("ribcage.png"));
   PlanReportInput input;
   input.patient = planner.patient();
   input.options = planner.options();
   if (plan.search) {
-    render::WritePng(RenderSearchMap(*plan.search, "RMS difference to the average chest"), target("search.png"));
+    render::WritePng(RenderSearchMap(*plan.search, "RMS difference to the average chest"),
+                     target("search.png"));
     render::WritePng(SideBySide({before, picture(plan.scenarios[2].score, plan.outcome_limit_mm,
                                                  "best: " + plan.scenarios[2].solved.bar.Name())},
                                 plan.outcome_limit_mm, label),
@@ -197,7 +219,7 @@ std::vector<fs::path> WriteNussPlan(const NussPlan& plan, const PlannerClient& p
   input.relative = plan.relative;
   input.comparison_png = "comparison.png";
   input.before_png = "before.png";
-  input.ribcage_png = "ribcage_A.png";
+  input.ribcage_png = "ribcage.png";
   WriteFileAtomically(target("report.html"), PlanReportHtml(input));
   return written;
 }

@@ -20,9 +20,9 @@ namespace pectus::planner {
 
 /// What to plan.
 struct NussPlanOptions {
-  BarPlacement scenario_a;                   ///< the surgeon's placement
-  std::optional<BarPlacement> scenario_b;    ///< default: 20 mm nearer the notch, same force
-  bool search = true;                        ///< search the best placement
+  BarPlacement scenario_a;                 ///< the surgeon's placement
+  std::optional<BarPlacement> scenario_b;  ///< default: 20 mm nearer the notch, same force
+  bool search = true;                      ///< search the best placement
   PlacementSearchOptions search_options;
   PlanScoreOptions score;
 };
@@ -41,29 +41,30 @@ struct NussPlan {
   /// T_average_patient from the patient's reference landmarks (the chest without the deformity), used
   /// for every chest of the plan.
   ChestRegistrationResult registration;
-  PlanScore before;                                     ///< the unoperated chest against the average
-  std::vector<PlanScenario> scenarios;                  ///< A, B, and "best" if searched
+  PlanScore before;                     ///< the unoperated chest against the average
+  std::vector<PlanScenario> scenarios;  ///< A, B, and "best" if searched
   std::optional<PlacementSearchResult> search;
-  bool relative = true;                                 ///< the skin model scored (PlanScoreOptions::relative)
-  double common_limit_mm = 0;    ///< colour scale of the scenarios A and B: their worst difference (Fig. 77)
-  double outcome_limit_mm = 0;   ///< colour scale of the unoperated chest and the best placement
+  bool relative = true;         ///< the skin model scored (PlanScoreOptions::relative)
+  double common_limit_mm = 0;   ///< colour scale of the scenarios A and B: their worst difference (Fig. 77)
+  double outcome_limit_mm = 0;  ///< colour scale of the unoperated chest and the best placement
   /// Scores, lifts, force to lift, search: the figures for --report.
   nlohmann::json ToJson() const;
 };
 
 /// Makes the plan; stages are timed into `report` if not null. Throws pectus::Error.
-NussPlan MakeNussPlan(const PlannerClient& planner, const AverageChest& average, const NussPlanOptions& options,
-                      Report* report = nullptr);
+NussPlan MakeNussPlan(const PlannerClient& planner, const AverageChest& average,
+                      const NussPlanOptions& options, Report* report = nullptr);
 
 /// Writes the plan's files into `folder`: predicted_chest_<scenario>.ply (in the average chest's frame,
-/// coloured by the difference, scalar difference_mm; PredictedChest()), ribcage_A.ply (deformed, coloured
-/// by displacement), comparison.png (A and B on one scale), before.png, ribcage_A.png, search.png and
+/// coloured by the difference, scalar difference_mm; PredictedChest()), ribcage_A.ply and ribcage_best.ply
+/// (deformed, coloured by displacement), comparison.png (A and B on one scale), before.png, ribcage.png
+/// (the best placement's ribcage, or A's), search.png and
 /// best.png (the unoperated chest and the best placement on one scale; if searched), report.html. Each
 /// file goes through `stage(target)`, which returns the path to write it to (a transaction's staging).
 /// Returns the target paths written.
 std::vector<std::filesystem::path> WriteNussPlan(
-    const NussPlan& plan, const PlannerClient& planner, const AverageChest& average, const std::string& plugin,
-    const std::filesystem::path& folder,
+    const NussPlan& plan, const PlannerClient& planner, const AverageChest& average,
+    const std::string& plugin, const std::filesystem::path& folder,
     const std::function<std::filesystem::path(const std::filesystem::path&)>& stage);
 
 }  // namespace pectus::planner

@@ -21,7 +21,8 @@ bool PlacementSearchOptions::IsValid(std::string* why) const {
   if (!(force_max_n > 0 && force_max_n <= 20000)) return fail("force_max_n must be in (0, 20000] N");
   if (!(lift_limit >= 1 && lift_limit <= 100)) return fail("lift_limit must be 1 to 100");
   if (golden_iterations < 0 || golden_iterations > 60) return fail("golden_iterations must be 0 to 60");
-  if (objective != "rms" && objective != "central_rms") return fail("objective must be 'rms' or 'central_rms'");
+  if (objective != "rms" && objective != "central_rms")
+    return fail("objective must be 'rms' or 'central_rms'");
   return true;
 }
 
@@ -29,18 +30,20 @@ nlohmann::json PlacementSearchResult::ToJson() const {
   nlohmann::json grid = nlohmann::json::array();
   for (Eigen::Index i = 0; i < objective_mm.rows(); ++i) {
     std::vector<double> row(static_cast<std::size_t>(objective_mm.cols()));
-    for (Eigen::Index j = 0; j < objective_mm.cols(); ++j) row[static_cast<std::size_t>(j)] = objective_mm(i, j);
+    for (Eigen::Index j = 0; j < objective_mm.cols(); ++j)
+      row[static_cast<std::size_t>(j)] = objective_mm(i, j);
     grid.push_back(row);
   }
-  return {{"best", {{"position", best.position}, {"force_n", best.force_n}, {"objective_mm", best_objective_mm}}},
-          {"best_score", best_score.ToJson()},
-          {"positions", positions},
-          {"forces_n", forces_n},
-          {"force_limit_n", force_limit_n},
-          {"objective_mm", grid},
-          {"evaluations", evaluations},
-          {"solves", solves},
-          {"seconds", seconds}};
+  return {
+      {"best", {{"position", best.position}, {"force_n", best.force_n}, {"objective_mm", best_objective_mm}}},
+      {"best_score", best_score.ToJson()},
+      {"positions", positions},
+      {"forces_n", forces_n},
+      {"force_limit_n", force_limit_n},
+      {"objective_mm", grid},
+      {"evaluations", evaluations},
+      {"solves", solves},
+      {"seconds", seconds}};
 }
 
 namespace {
@@ -126,13 +129,15 @@ PlacementSearchResult SearchBestPlacement(const PlannerClient& planner, const Av
   for (double p : out.positions) least_lift_per_n = std::min(least_lift_per_n, response(p).lift_per_n);
   const double depression = std::max(10.0, planner.measurements().depression_mm);
   out.force_limit_n = options.force_max_n;
-  if (least_lift_per_n > 0) out.force_limit_n = std::min(out.force_limit_n, options.lift_limit * depression / least_lift_per_n);
+  if (least_lift_per_n > 0)
+    out.force_limit_n = std::min(out.force_limit_n, options.lift_limit * depression / least_lift_per_n);
   for (int j = 1; j <= options.forces; ++j) out.forces_n.push_back(out.force_limit_n * j / options.forces);
   out.objective_mm.resize(options.positions, options.forces);
   // The best force at one position: the best of the force grid (or of its cells within `window` of
   // `near`), refined between its neighbours.
   const double kUnset = std::numeric_limits<double>::infinity();
-  auto best_force = [&](double position, const double* grid_values, double* value, int near = -1, int window = 3) {
+  auto best_force = [&](double position, const double* grid_values, double* value, int near = -1,
+                        int window = 3) {
     std::vector<double> values(out.forces_n.size(), kUnset);
     for (std::size_t j = 0; j < values.size(); ++j) {
       if (grid_values != nullptr) {
@@ -146,8 +151,9 @@ PlacementSearchResult SearchBestPlacement(const PlannerClient& planner, const Av
     const double hi = j + 1 == values.size() ? out.force_limit_n : out.forces_n[j + 1];
     double force = out.forces_n[j];
     *value = values[j];
-    GoldenSection(lo, hi, options.golden_iterations, [&](double f) { return f > 0 ? evaluate(position, f, nullptr) : 1e300; },
-                  &force, value);
+    GoldenSection(
+        lo, hi, options.golden_iterations,
+        [&](double f) { return f > 0 ? evaluate(position, f, nullptr) : 1e300; }, &force, value);
     return force;
   };
   double best = std::numeric_limits<double>::infinity(), position = out.positions[0], force = out.forces_n[0];
@@ -156,7 +162,8 @@ PlacementSearchResult SearchBestPlacement(const PlannerClient& planner, const Av
     return static_cast<int>(std::lround(f / (out.forces_n[1] - out.forces_n[0]))) - 1;
   };
   for (int i = 0; i < options.positions; ++i) {
-    for (int j = 0; j < options.forces; ++j) out.objective_mm(i, j) = evaluate(out.positions[i], out.forces_n[j], nullptr);
+    for (int j = 0; j < options.forces; ++j)
+      out.objective_mm(i, j) = evaluate(out.positions[i], out.forces_n[j], nullptr);
     double value = 0;
     const double f = best_force(out.positions[i], out.objective_mm.row(i).eval().data(), &value);
     if (value < best) {
@@ -167,20 +174,22 @@ PlacementSearchResult SearchBestPlacement(const PlannerClient& planner, const Av
     }
   }
   // Step 2: the position between the grid's neighbours of the best, each at its best force.
-  const double lo = out.positions[std::max(0, bi - 1)], hi = out.positions[std::min(options.positions - 1, bi + 1)];
-  GoldenSection(lo, hi, options.golden_iterations,
-                [&](double p) {
-                  double value = 0;
-                  // The best force changes little with the position: search the grid near the best one.
-                  const double f = best_force(p, nullptr, &value, force_index(force));
-                  if (value < best) {
-                    best = value;
-                    position = p;
-                    force = f;
-                  }
-                  return value;
-                },
-                &position, &best);
+  const double lo = out.positions[std::max(0, bi - 1)],
+               hi = out.positions[std::min(options.positions - 1, bi + 1)];
+  GoldenSection(
+      lo, hi, options.golden_iterations,
+      [&](double p) {
+        double value = 0;
+        // The best force changes little with the position: search the grid near the best one.
+        const double f = best_force(p, nullptr, &value, force_index(force));
+        if (value < best) {
+          best = value;
+          position = p;
+          force = f;
+        }
+        return value;
+      },
+      &position, &best);
   out.best = {position, false, force};
   out.best_objective_mm = evaluate(position, force, &out.best_score);
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

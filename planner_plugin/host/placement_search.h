@@ -46,8 +46,8 @@ struct PlacementSearchResult {
   BarPlacement best;              ///< after refinement
   double best_objective_mm = 0;
   PlanScore best_score;
-  int evaluations = 0;            ///< chests scored
-  int solves = 0;                 ///< positions solved by the plugin
+  int evaluations = 0;  ///< chests scored
+  int solves = 0;       ///< positions solved by the plugin
   double seconds = 0;
   nlohmann::json ToJson() const;
 };

@@ -23,9 +23,9 @@ render::View AverageChestFrontView(const AverageChest& average, int width, int h
   return view;
 }
 
-render::View PatientFrontView(const Bounds3& bounds, int width, int height) {
+render::View PatientObliqueView(const Bounds3& bounds, int width, int height) {
   render::View view;
-  view.direction = Eigen::Vector3d(0, 1, 0);  // LPS: the eye in front (-y) looks posterior
+  view.direction = Eigen::Vector3d(0.35, 1.0, -0.45).normalized();  // LPS: from the front (-y), right, above
   view.up = Eigen::Vector3d(0, 0, 1);
   view.width = width;
   view.height = height;
@@ -43,19 +43,21 @@ render::Image RenderDifference(const TriangleMesh& mesh, const Eigen::VectorXd& 
   return render::WithTitle(render::RenderMesh(mesh, view, &colors), title);
 }
 
-render::Image SideBySide(const std::vector<render::Image>& pictures, double limit_mm, const std::string& label) {
+render::Image SideBySide(const std::vector<render::Image>& pictures, double limit_mm,
+                         const std::string& label) {
   std::vector<render::Image> row = pictures;
   const int height = pictures.empty() ? 600 : pictures.front().height;
   row.push_back(render::ColorBar(-limit_mm, limit_mm, render::Colormap::kDiverging, label, height));
   return render::HStack(row, 8);
 }
 
-render::Image RenderRibcageDisplacement(const TriangleMesh& deformed_bone, const Eigen::VectorXd& displacement_mm,
-                                        double limit_mm, const render::View& view, const std::string& title) {
+render::Image RenderRibcageDisplacement(const TriangleMesh& deformed_bone,
+                                        const Eigen::VectorXd& displacement_mm, double limit_mm,
+                                        const render::View& view, const std::string& title) {
   const Colors3 colors = render::MapColors(displacement_mm, 0.0, limit_mm, render::Colormap::kViridis);
   const render::Image picture = render::WithTitle(render::RenderMesh(deformed_bone, view, &colors), title);
-  return render::HStack({picture, render::ColorBar(0.0, limit_mm, render::Colormap::kViridis, "displacement, mm",
-                                                   picture.height)},
+  return render::HStack({picture, render::ColorBar(0.0, limit_mm, render::Colormap::kViridis,
+                                                   "displacement, mm", picture.height)},
                         8);
 }
 
@@ -82,7 +84,8 @@ render::Image RenderSearchMap(const PlacementSearchResult& search, const std::st
     std::snprintf(label, sizeof(label), "%.0f", search.forces_n[static_cast<std::size_t>(j)]);
     render::DrawText(&image, left + j * cell_w, top + rows * cell_h + 18, label, 0.45);
   }
-  render::DrawText(&image, left, top + rows * cell_h + 44, "bar force, N (rows: bar position from the notch)", 0.5);
+  render::DrawText(&image, left, top + rows * cell_h + 44, "bar force, N (rows: bar position from the notch)",
+                   0.5);
   // The refined best placement, at its place between the grid's cells.
   const double pi = (search.best.position - search.positions.front()) /
                     (search.positions.back() - search.positions.front()) * (rows - 1);
@@ -95,9 +98,8 @@ render::Image RenderSearchMap(const PlacementSearchResult& search, const std::st
   render::DrawLine(&image, cx - 8, cy, cx + 8, cy, render::kBlack, 1);
   render::DrawLine(&image, cx, cy - 8, cx, cy + 8, render::kBlack, 1);
   const render::Image titled = render::WithTitle(image, title);
-  return render::HStack({titled, render::ColorBar(lo, hi, render::Colormap::kViridis, "RMS difference, mm",
-                                                  titled.height)},
-                        8);
+  return render::HStack(
+      {titled, render::ColorBar(lo, hi, render::Colormap::kViridis, "RMS difference, mm", titled.height)}, 8);
 }
 
 }  // namespace pectus::planner

@@ -19,8 +19,9 @@ namespace pectus::planner {
 /// chest, so every picture drawn with it shares position and scale.
 render::View AverageChestFrontView(const AverageChest& average, int width = 560, int height = 640);
 
-/// A front view of the patient's frame (LPS: looking along +y, z up) framing `bounds`.
-render::View PatientFrontView(const Bounds3& bounds, int width = 640, int height = 560);
+/// A view of the patient's frame (LPS) from in front, a little to the right and above, z up, framing
+/// `bounds`.
+render::View PatientObliqueView(const Bounds3& bounds, int width = 640, int height = 560);
 
 /// Per-vertex colours of signed values on the diverging scale [-limit_mm, limit_mm] (NaN: grey).
 Colors3 DifferenceColors(const Eigen::VectorXd& values_mm, double limit_mm);
@@ -30,11 +31,13 @@ render::Image RenderDifference(const TriangleMesh& mesh, const Eigen::VectorXd& 
                                const render::View& view, const std::string& title);
 
 /// Pictures side by side with one colour bar on [-limit_mm, limit_mm] labelled `label`.
-render::Image SideBySide(const std::vector<render::Image>& pictures, double limit_mm, const std::string& label);
+render::Image SideBySide(const std::vector<render::Image>& pictures, double limit_mm,
+                         const std::string& label);
 
 /// The bone surface coloured by displacement magnitude on [0, limit_mm] (viridis) with its colour bar.
-render::Image RenderRibcageDisplacement(const TriangleMesh& deformed_bone, const Eigen::VectorXd& displacement_mm,
-                                        double limit_mm, const render::View& view, const std::string& title);
+render::Image RenderRibcageDisplacement(const TriangleMesh& deformed_bone,
+                                        const Eigen::VectorXd& displacement_mm, double limit_mm,
+                                        const render::View& view, const std::string& title);
 
 /// The search's objective over bar position (rows) and force (columns) as a coloured table with axes,
 /// the best placement marked.

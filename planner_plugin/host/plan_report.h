@@ -15,10 +15,10 @@ namespace pectus::planner {
 
 /// One scenario of the report.
 struct ReportScenario {
-  std::string name;                 ///< e.g. "A"
+  std::string name;  ///< e.g. "A"
   BarPlacement bar;
   PectusPlannerCaseResult figures{};
-  DistanceStats roi, central;       ///< the scores
+  DistanceStats roi, central;         ///< the scores
   double sternum_lift_needed_mm = 0;  ///< the patient's depression (for "lift / depression")
 };
 
@@ -27,16 +27,16 @@ struct PlanReportInput {
   PectusPlannerPatient patient{};
   PectusPlannerMeasurements measured{};
   PectusPlannerOptions options{};
-  std::string plugin;                              ///< the plugin's description and path
-  std::string average_chest;                       ///< model file and landmark source
-  std::vector<BarPlacement> lift_positions;        ///< with...
+  std::string plugin;                                   ///< the plugin's description and path
+  std::string average_chest;                            ///< model file and landmark source
+  std::vector<BarPlacement> lift_positions;             ///< with...
   std::vector<PectusPlannerForceToLift> force_to_lift;  ///< ...the force to lift at each
-  DistanceStats before;                            ///< the unoperated chest against the average
+  DistanceStats before;                                 ///< the unoperated chest against the average
   std::vector<ReportScenario> scenarios;
-  double common_limit_mm = 0;                      ///< the colour scale of the scenarios A and B
-  double outcome_limit_mm = 0;                     ///< ... of the unoperated chest and the best placement
-  bool relative = true;                            ///< the relative skin model (else the modelled skin)
-  const PlacementSearchResult* search = nullptr;   ///< or none
+  double common_limit_mm = 0;                     ///< the colour scale of the scenarios A and B
+  double outcome_limit_mm = 0;                    ///< ... of the unoperated chest and the best placement
+  bool relative = true;                           ///< the relative skin model (else the modelled skin)
+  const PlacementSearchResult* search = nullptr;  ///< or none
   /// Picture file names (relative to the report): the comparison, the unoperated chest, the ribcage,
   /// the search map, the best placement.
   std::string comparison_png, before_png, ribcage_png, search_png, best_png;

@@ -16,7 +16,8 @@ DistanceStats StatsOf(const Eigen::VectorXd& values, const Eigen::Matrix<bool, E
   for (Eigen::Index i = 0; i < values.size(); ++i) {
     if (std::isfinite(values(i)) && (mask == nullptr || (*mask)(i))) kept.push_back(values(i));
   }
-  return SummarizeDistances(Eigen::Map<const Eigen::VectorXd>(kept.data(), static_cast<Eigen::Index>(kept.size())));
+  return SummarizeDistances(
+      Eigen::Map<const Eigen::VectorXd>(kept.data(), static_cast<Eigen::Index>(kept.size())));
 }
 
 }  // namespace
@@ -66,7 +67,8 @@ Eigen::Matrix<bool, Eigen::Dynamic, 1> CentralRegion(const AverageChest& average
   const Eigen::Vector3d lateral = anterior.cross(e1).normalized();
   const Points3& x = average.mesh.vertices.positions;
   double u_max = 0;
-  for (Eigen::Index i = 0; i < x.rows(); ++i) u_max = std::max(u_max, std::abs((x.row(i).transpose() - notch).dot(lateral)));
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    u_max = std::max(u_max, std::abs((x.row(i).transpose() - notch).dot(lateral)));
   const double length = axis.norm();
   Eigen::Matrix<bool, Eigen::Dynamic, 1> central(x.rows());
   for (Eigen::Index i = 0; i < x.rows(); ++i) {
@@ -81,10 +83,11 @@ PlanScore ScorePlan(const TriangleMesh& skin, const LandmarkSet& landmarks, cons
                     const PlanScoreOptions& options) {
   PlanScoreOptions modelled = options;
   modelled.relative = false;
-  return ScorePlan(skin, Points3(),
-                   RegisterChestByLandmarks(landmarks, AnteriorDirection(skin, "predicted skin"), average.landmarks,
-                                            AnteriorDirection(average.mesh, "average chest"), options.registration),
-                   average, modelled);
+  return ScorePlan(
+      skin, Points3(),
+      RegisterChestByLandmarks(landmarks, AnteriorDirection(skin, "predicted skin"), average.landmarks,
+                               AnteriorDirection(average.mesh, "average chest"), options.registration),
+      average, modelled);
 }
 
 PlanScore ScorePlan(const TriangleMesh& skin, const Points3& without_deformity,
@@ -93,7 +96,8 @@ PlanScore ScorePlan(const TriangleMesh& skin, const Points3& without_deformity,
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage("plan scoring: " + why);
   if (options.relative && without_deformity.rows() != skin.num_vertices()) {
-    ThrowUsage("plan scoring: the relative skin model needs the skin without the deformity, vertex by vertex");
+    ThrowUsage(
+        "plan scoring: the relative skin model needs the skin without the deformity, vertex by vertex");
   }
   PlanScore score;
   // Step 1: the predicted chest (and its undeformed self) in the average chest's frame.
@@ -101,7 +105,8 @@ PlanScore ScorePlan(const TriangleMesh& skin, const Points3& without_deformity,
   const Similarity3& T = score.registration.T_target_source;
   auto to_average = [&](const Points3& x) {
     Points3 y(x.rows(), 3);
-    for (Eigen::Index i = 0; i < x.rows(); ++i) y.row(i) = (T * Eigen::Vector3d(x.row(i).transpose())).transpose();
+    for (Eigen::Index i = 0; i < x.rows(); ++i)
+      y.row(i) = (T * Eigen::Vector3d(x.row(i).transpose())).transpose();
     return y;
   };
   TriangleMesh moved = skin;

@@ -46,10 +46,10 @@ struct PlanScore {
   /// sunken), mm. NaN where the predicted skin does not reach (not counted).
   Eigen::VectorXd difference_mm;
   Eigen::Matrix<bool, Eigen::Dynamic, 1> central;  ///< per average vertex: in the central region
-  DistanceStats roi;                     ///< of difference_mm over the region of interest
-  DistanceStats central_roi;             ///< ... over its central part
-  Eigen::Index uncovered = 0;            ///< average vertices the predicted skin does not reach
-  Points3 predicted_in_average;          ///< predicted skin vertices in the average chest's frame, mm
+  DistanceStats roi;                               ///< of difference_mm over the region of interest
+  DistanceStats central_roi;                       ///< ... over its central part
+  Eigen::Index uncovered = 0;                      ///< average vertices the predicted skin does not reach
+  Points3 predicted_in_average;  ///< predicted skin vertices in the average chest's frame, mm
   /// Per predicted skin vertex: the same difference seen from the predicted chest (positive: in front
   /// of the average chest), NaN outside the region of interest (where the average chest does not
   /// reach). Only for the modelled skin with map_predicted_skin (the relative model's predicted chest

@@ -18,7 +18,7 @@ void ThrowIfFailed(std::int32_t code, const PectusPlannerStatus& status) {
 
 std::string BarPlacement::Name() const {
   char text[96];
-  std::snprintf(text, sizeof(text), position_in_mm ? "%g mm, %g N" : "%g L, %g N", position, force_n);
+  std::snprintf(text, sizeof(text), position_in_mm ? "%.1f mm, %.0f N" : "%.3g L, %.0f N", position, force_n);
   return text;
 }
 
@@ -70,7 +70,8 @@ LandmarkSet PlannerClient::Landmarks(int which) const {
   static const char* kWhere[] = {"on the ribcage", "on the skin", "on the skin without the deformity"};
   LandmarkSet set;
   for (const auto& l : items) {
-    set.items.push_back({l.label, Eigen::Vector3d(l.position[0], l.position[1], l.position[2]), kWhere[which]});
+    set.items.push_back(
+        {l.label, Eigen::Vector3d(l.position[0], l.position[1], l.position[2]), kWhere[which]});
   }
   return set;
 }
@@ -85,8 +86,8 @@ std::vector<PlannedCase> PlannerClient::Solve(const std::vector<BarPlacement>& b
   std::vector<double> skin(static_cast<std::size_t>(n * ns * 3)), marks(static_cast<std::size_t>(n * nl * 3));
   std::vector<PectusPlannerCaseResult> figures(bars.size());
   PectusPlannerStatus status{};
-  ThrowIfFailed(api_->solve(planner_, c_bars.data(), n, with_bone ? bone.data() : nullptr, skin.data(), marks.data(),
-                            figures.data(), &status),
+  ThrowIfFailed(api_->solve(planner_, c_bars.data(), n, with_bone ? bone.data() : nullptr, skin.data(),
+                            marks.data(), figures.data(), &status),
                 status);
   std::vector<PlannedCase> out(bars.size());
   for (Eigen::Index k = 0; k < n; ++k) {
@@ -104,13 +105,14 @@ std::vector<PlannedCase> PlannerClient::Solve(const std::vector<BarPlacement>& b
   return out;
 }
 
-std::vector<PectusPlannerForceToLift> PlannerClient::ForceToLift(const std::vector<BarPlacement>& positions) const {
+std::vector<PectusPlannerForceToLift> PlannerClient::ForceToLift(
+    const std::vector<BarPlacement>& positions) const {
   std::vector<PectusPlannerBar> c_bars;
   for (const BarPlacement& b : positions) c_bars.push_back(ToBar(b));
   std::vector<PectusPlannerForceToLift> out(positions.size());
   PectusPlannerStatus status{};
-  ThrowIfFailed(api_->force_to_lift(planner_, c_bars.data(), static_cast<std::int64_t>(c_bars.size()), out.data(),
-                                    &status),
+  ThrowIfFailed(api_->force_to_lift(planner_, c_bars.data(), static_cast<std::int64_t>(c_bars.size()),
+                                    out.data(), &status),
                 status);
   return out;
 }
@@ -129,10 +131,9 @@ PectusPlannerOptions PluginDefaultOptions(const PlannerPlugin& plugin) {
   return options;
 }
 
-PectusPlannerDatasetSummary WritePlannerDataset(const PlannerPlugin& plugin, const std::filesystem::path& table,
-                                                const std::filesystem::path& output,
-                                                const PectusPlannerOptions& options,
-                                                const std::function<void(std::int64_t, std::int64_t)>& progress) {
+PectusPlannerDatasetSummary WritePlannerDataset(
+    const PlannerPlugin& plugin, const std::filesystem::path& table, const std::filesystem::path& output,
+    const PectusPlannerOptions& options, const std::function<void(std::int64_t, std::int64_t)>& progress) {
   PectusPlannerDatasetSummary summary{};
   PectusPlannerStatus status{};
   // The callback crosses the C boundary: it must not throw.
@@ -143,10 +144,11 @@ PectusPlannerDatasetSummary WritePlannerDataset(const PlannerPlugin& plugin, con
     } catch (...) {
     }
   };
-  ThrowIfFailed(plugin.api().write_dataset(table.c_str(), output.c_str(), &options, trampoline,
-                                           const_cast<std::function<void(std::int64_t, std::int64_t)>*>(&progress),
-                                           &summary, &status),
-                status);
+  ThrowIfFailed(
+      plugin.api().write_dataset(table.c_str(), output.c_str(), &options, trampoline,
+                                 const_cast<std::function<void(std::int64_t, std::int64_t)>*>(&progress),
+                                 &summary, &status),
+      status);
   return summary;
 }
 

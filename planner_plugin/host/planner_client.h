@@ -32,9 +32,9 @@ struct BarPlacement {
 /// One solved placement as the host sees it.
 struct PlannedCase {
   BarPlacement bar;
-  Points3 bone;               ///< deformed bone surface vertices, mm
-  Points3 skin;               ///< deformed skin vertices, mm
-  LandmarkSet skin_landmarks; ///< on the deformed skin
+  Points3 bone;                ///< deformed bone surface vertices, mm
+  Points3 skin;                ///< deformed skin vertices, mm
+  LandmarkSet skin_landmarks;  ///< on the deformed skin
   PectusPlannerCaseResult figures{};
 };
 
@@ -42,7 +42,8 @@ struct PlannedCase {
 class PlannerClient {
  public:
   /// Creates the planner (fit, mesh, factorisation, skin). Throws the plugin's error as pectus::Error.
-  PlannerClient(const PlannerPlugin& plugin, const PectusPlannerPatient& patient, const PectusPlannerOptions& options);
+  PlannerClient(const PlannerPlugin& plugin, const PectusPlannerPatient& patient,
+                const PectusPlannerOptions& options);
   ~PlannerClient();
   PlannerClient(const PlannerClient&) = delete;
   PlannerClient& operator=(const PlannerClient&) = delete;
@@ -87,9 +88,8 @@ PectusPlannerPatient ReadPlannerPatient(const PlannerPlugin& plugin, const std::
 PectusPlannerOptions PluginDefaultOptions(const PlannerPlugin& plugin);
 
 /// Writes the FE dataset of every patient of `table` through the plugin; `progress(done, total)`.
-PectusPlannerDatasetSummary WritePlannerDataset(const PlannerPlugin& plugin, const std::filesystem::path& table,
-                                                const std::filesystem::path& output,
-                                                const PectusPlannerOptions& options,
-                                                const std::function<void(std::int64_t, std::int64_t)>& progress);
+PectusPlannerDatasetSummary WritePlannerDataset(
+    const PlannerPlugin& plugin, const std::filesystem::path& table, const std::filesystem::path& output,
+    const PectusPlannerOptions& options, const std::function<void(std::int64_t, std::int64_t)>& progress);
 
 }  // namespace pectus::planner

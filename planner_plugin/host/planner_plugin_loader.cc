@@ -13,7 +13,8 @@ namespace fs = std::filesystem;
 std::vector<fs::path> PlannerPluginCandidates(const fs::path& explicit_path) {
   if (!explicit_path.empty()) return {explicit_path};
   std::vector<fs::path> out;
-  if (const char* env = std::getenv("PECTUS_PLANNER_PLUGIN"); env != nullptr && *env != '\0') out.emplace_back(env);
+  if (const char* env = std::getenv("PECTUS_PLANNER_PLUGIN"); env != nullptr && *env != '\0')
+    out.emplace_back(env);
   std::error_code error;
   const fs::path exe = fs::read_symlink("/proc/self/exe", error);
   if (!error) {
@@ -31,14 +32,15 @@ std::vector<fs::path> PlannerPluginCandidates(const fs::path& explicit_path) {
 void CheckPlannerInterface(const PectusPlannerInterface* api, const fs::path& path) {
   if (api == nullptr) ThrowBadInput(path.string(), "the planner plugin returned no interface table");
   if (api->version != PECTUS_PLANNER_INTERFACE_VERSION) {
-    ThrowBadInput(path.string(), "the planner plugin implements interface version " + std::to_string(api->version) +
-                                     ", but this pectus needs version " +
-                                     std::to_string(PECTUS_PLANNER_INTERFACE_VERSION) +
-                                     "; use a plugin built with this pectus (or the pectus it was built with)");
+    ThrowBadInput(path.string(),
+                  "the planner plugin implements interface version " + std::to_string(api->version) +
+                      ", but this pectus needs version " + std::to_string(PECTUS_PLANNER_INTERFACE_VERSION) +
+                      "; use a plugin built with this pectus (or the pectus it was built with)");
   }
   if (api->struct_size < sizeof(PectusPlannerInterface)) {
-    ThrowBadInput(path.string(), "the planner plugin's interface table has " + std::to_string(api->struct_size) +
-                                     " bytes, this pectus expects " + std::to_string(sizeof(PectusPlannerInterface)));
+    ThrowBadInput(path.string(), "the planner plugin's interface table has " +
+                                     std::to_string(api->struct_size) + " bytes, this pectus expects " +
+                                     std::to_string(sizeof(PectusPlannerInterface)));
   }
 }
 
@@ -51,14 +53,15 @@ PlannerPlugin PlannerPlugin::Load(const fs::path& path) {
   void* raw = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (raw == nullptr) {
     const char* why = dlerror();
-    ThrowBadInput(path.string(), std::string("cannot load the planner plugin: ") + (why ? why : "unknown reason"));
+    ThrowBadInput(path.string(),
+                  std::string("cannot load the planner plugin: ") + (why ? why : "unknown reason"));
   }
   std::shared_ptr<void> handle(raw, [](void* h) { dlclose(h); });
   dlerror();
   void* symbol = dlsym(raw, PECTUS_PLANNER_ENTRY_POINT);
   if (symbol == nullptr) {
-    ThrowBadInput(path.string(), std::string("not a pectus planner plugin: no symbol '") + PECTUS_PLANNER_ENTRY_POINT +
-                                     "'");
+    ThrowBadInput(path.string(),
+                  std::string("not a pectus planner plugin: no symbol '") + PECTUS_PLANNER_ENTRY_POINT + "'");
   }
   const auto entry = reinterpret_cast<PectusPlannerEntryFn>(symbol);
   const PectusPlannerInterface* api = entry();
@@ -74,7 +77,8 @@ PlannerPlugin PlannerPlugin::Find(const fs::path& explicit_path) {
     if (fs::is_regular_file(candidate, error)) return Load(candidate);
     looked += (looked.empty() ? "" : ", ") + candidate.string();
   }
-  ThrowUsage("the planner plugin (" + std::string(kPlannerPluginFileName) + ") was not found; looked in: " + looked +
+  ThrowUsage("the planner plugin (" + std::string(kPlannerPluginFileName) +
+             ") was not found; looked in: " + looked +
              ". Build it (component planner_plugin), or name it with --plugin or PECTUS_PLANNER_PLUGIN");
 }
 

@@ -19,7 +19,8 @@ hid_t Check(hid_t id, const std::filesystem::path& path, const std::string& what
 void WriteDataset(hid_t parent, const std::string& name, hid_t file_type, hid_t memory_type,
                   const std::vector<hsize_t>& dims, const void* data, const std::filesystem::path& path,
                   bool compress = false) {
-  const hid_t space = Check(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), path, name);
+  const hid_t space =
+      Check(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), path, name);
   const hid_t properties = H5Pcreate(H5P_DATASET_CREATE);
   if (compress) {
     std::vector<hsize_t> chunk = dims;
@@ -28,8 +29,8 @@ void WriteDataset(hid_t parent, const std::string& name, hid_t file_type, hid_t 
     H5Pset_shuffle(properties);
     H5Pset_deflate(properties, 4);
   }
-  const hid_t set = Check(H5Dcreate2(parent, name.c_str(), file_type, space, H5P_DEFAULT, properties, H5P_DEFAULT),
-                          path, name);
+  const hid_t set = Check(
+      H5Dcreate2(parent, name.c_str(), file_type, space, H5P_DEFAULT, properties, H5P_DEFAULT), path, name);
   Check(H5Dwrite(set, memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), path, name);
   H5Dclose(set);
   H5Pclose(properties);
@@ -50,7 +51,8 @@ void WriteAttribute(hid_t object, const std::string& name, const std::string& va
   const hid_t type = H5Tcopy(H5T_C_S1);
   H5Tset_size(type, std::max<std::size_t>(1, value.size()));
   const hid_t space = H5Screate(H5S_SCALAR);
-  const hid_t attribute = Check(H5Acreate2(object, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT), path, name);
+  const hid_t attribute =
+      Check(H5Acreate2(object, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT), path, name);
   H5Awrite(attribute, type, value.c_str());
   H5Aclose(attribute);
   H5Sclose(space);
@@ -79,10 +81,11 @@ FemDatasetWriter::FemDatasetWriter(const std::filesystem::path& path, const Gene
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported through pectus::Error
   file_->id = Check(H5Fcreate(temp_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), path_, "the file");
   const hid_t root = file_->id;
-  WriteAttribute(root, "description",
-                 "pectus planner finite element dataset: surface-node displacements of patient-specific ribcages "
-                 "(Rechowicz 2012, section 4.1.2) under the Nuss bar's push",
-                 path_);
+  WriteAttribute(
+      root, "description",
+      "pectus planner finite element dataset: surface-node displacements of patient-specific ribcages "
+      "(Rechowicz 2012, section 4.1.2) under the Nuss bar's push",
+      path_);
   WriteAttribute(root, "units", "mm, N, MPa", path_);
   WriteAttribute(root, "frame", "LPS (x left, y posterior, z superior), origin at the sternal notch", path_);
   WriteAttribute(root, "load_case_order", "as /load_cases: bar position major, force minor", path_);
@@ -156,8 +159,8 @@ void FemDatasetWriter::AddPatient(const PatientRibcage& ribcage, const std::vect
     lift.push_back(results[k].sternum_lift_mm);
   }
   WriteDataset(group, "nodes", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {n, 3}, nodes.data(), path_);
-  WriteDataset(group, "displacements", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {results.size(), n, 3}, displacement.data(),
-               path_, true);
+  WriteDataset(group, "displacements", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {results.size(), n, 3},
+               displacement.data(), path_, true);
   WriteDataset(group, "sternum_lift", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {lift.size()}, lift.data(), path_);
   const PatientMeasurements& t = ribcage.targets;
   const RibcageMeasurements& m = ribcage.measured;

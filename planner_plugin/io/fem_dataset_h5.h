@@ -34,7 +34,8 @@ class FemDatasetWriter {
   /// @param[in] generic  the generic ribcage every patient is made from (defines the surface topology)
   /// @param[in] loads    the load cases, the same for every patient (positions as fractions)
   /// Throws Error(kFailure) naming the file if HDF5 cannot create it.
-  FemDatasetWriter(const std::filesystem::path& path, const GenericRibcage& generic, std::vector<BarLoad> loads);
+  FemDatasetWriter(const std::filesystem::path& path, const GenericRibcage& generic,
+                   std::vector<BarLoad> loads);
   ~FemDatasetWriter();
   FemDatasetWriter(const FemDatasetWriter&) = delete;
   FemDatasetWriter& operator=(const FemDatasetWriter&) = delete;

@@ -18,7 +18,8 @@ FemDatasetSummary RunFemDataset(const std::filesystem::path& table, const std::f
   const std::vector<BarLoad> loads = DissertationLoadCases();
   std::vector<BarLoad> positions;
   for (const BarLoad& load : loads) {
-    if (positions.empty() || positions.back().position != load.position) positions.push_back({load.position, false, 1.0});
+    if (positions.empty() || positions.back().position != load.position)
+      positions.push_back({load.position, false, 1.0});
   }
   FemDatasetWriter writer(output, generic, loads);
   const auto total = static_cast<std::int64_t>(rows.size());
@@ -26,7 +27,8 @@ FemDatasetSummary RunFemDataset(const std::filesystem::path& table, const std::f
     const PatientRow& row = rows[static_cast<std::size_t>(i)];
     const PatientRibcage ribcage = MakePatientRibcage(generic, row.measurements, settings.patient);
     if (!ribcage.converged && ribcage.residual_mm > 1.0) {
-      ThrowFailure("the generated ribcage does not reproduce the CT measurements: " + ribcage.message, table.string());
+      ThrowFailure("the generated ribcage does not reproduce the CT measurements: " + ribcage.message,
+                   table.string());
     }
     const RibcageFem fem(ribcage, settings.fem);
     writer.AddPatient(ribcage, fem.Solve(loads), fem.ForceToLiftSternum(positions), row.haller_index);

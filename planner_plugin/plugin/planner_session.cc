@@ -44,7 +44,8 @@ PlannerSettings SettingsFrom(const PectusPlannerOptions* options) {
   s.skin.columns = o.skin_columns;
   std::string why;
   if (!(o.rib_cell_length_mm >= 2 && o.rib_cell_length_mm <= 20)) {
-    ThrowUsage("planner options: rib_cell_length_mm must be 2 to 20 mm, got " + std::to_string(o.rib_cell_length_mm));
+    ThrowUsage("planner options: rib_cell_length_mm must be 2 to 20 mm, got " +
+               std::to_string(o.rib_cell_length_mm));
   }
   if (!s.generic.IsValid(&why)) ThrowUsage("planner options (mesh): " + why);
   if (!s.fem.IsValid(&why)) ThrowUsage("planner options: " + why);
@@ -71,7 +72,8 @@ PatientMeasurements MeasurementsFrom(const PectusPlannerPatient& patient) {
 
 PectusPlannerPatient PatientFrom(const PatientMeasurements& m, double ct_haller_index) {
   PectusPlannerPatient p{};
-  if (m.patient.size() >= sizeof(p.id)) ThrowBadInput("patient table", "patient id '" + m.patient + "' is too long");
+  if (m.patient.size() >= sizeof(p.id))
+    ThrowBadInput("patient table", "patient id '" + m.patient + "' is too long");
   std::memcpy(p.id, m.patient.c_str(), m.patient.size() + 1);
   p.magnification = m.magnification;
   p.width_mm = m.width_mm;
@@ -138,8 +140,9 @@ PlannerSession::PlannerSession(const PatientMeasurements& patient, const Planner
   PatientMapParameters undeformed = ribcage_.parameters;
   undeformed.depression_mm = 0;
   undeformed.torsion_rad = 0;
-  const TetMesh straight = MakeQuadratic(MapGenericNodes(generic_, undeformed, settings.patient.skinning),
-                                         generic_.tets, generic_.regions);  // same node order as ribcage_.mesh
+  const TetMesh straight =
+      MakeQuadratic(MapGenericNodes(generic_, undeformed, settings.patient.skinning), generic_.tets,
+                    generic_.regions);  // same node order as ribcage_.mesh
   reference_skin_ = skin_.Deformed(straight.nodes - ribcage_.mesh.nodes);
   reference_landmarks_ = skin_.Landmarks(reference_skin_);
   bone_ = MakeBoneSurface(ribcage_);
@@ -150,7 +153,8 @@ const LandmarkSet& PlannerSession::Landmarks(int set) const {
     case PECTUS_PLANNER_BONE_LANDMARKS: return ribcage_.landmarks;
     case PECTUS_PLANNER_SKIN_LANDMARKS: return skin_landmarks_;
     case PECTUS_PLANNER_REFERENCE_LANDMARKS: return reference_landmarks_;
-    default: ThrowUsage("landmarks: set " + std::to_string(set) + " is not 0 (bone), 1 (skin) or 2 (reference)");
+    default:
+      ThrowUsage("landmarks: set " + std::to_string(set) + " is not 0 (bone), 1 (skin) or 2 (reference)");
   }
 }
 
@@ -177,7 +181,8 @@ PectusPlannerMeasurements PlannerSession::Measurements() const {
 }
 
 PectusPlannerMesh PlannerSession::BoneMesh() const {
-  return {bone_.vertices.rows(), bone_.vertices.data(), bone_.faces.rows(), bone_.faces.data(), bone_.regions.data()};
+  return {bone_.vertices.rows(), bone_.vertices.data(), bone_.faces.rows(), bone_.faces.data(),
+          bone_.regions.data()};
 }
 
 PectusPlannerMesh PlannerSession::SkinMesh(bool without_deformity) const {
@@ -196,7 +201,8 @@ void PlannerSession::Solve(const std::vector<BarLoad>& loads, double* bone_posit
     const auto kk = static_cast<Eigen::Index>(k);
     if (bone_positions != nullptr) {
       Eigen::Map<Points3> out(bone_positions + kk * nb * 3, nb, 3);
-      for (Eigen::Index i = 0; i < nb; ++i) out.row(i) = bone_.vertices.row(i) + r.displacement.row(bone_.mesh_nodes[i]);
+      for (Eigen::Index i = 0; i < nb; ++i)
+        out.row(i) = bone_.vertices.row(i) + r.displacement.row(bone_.mesh_nodes[i]);
     }
     if (skin_positions != nullptr || skin_landmarks != nullptr) {
       const Points3 skin = skin_.Deformed(r.displacement);

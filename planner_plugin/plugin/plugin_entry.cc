@@ -73,20 +73,22 @@ std::int32_t ReadPatient(const char* table_path, const char* patient, PectusPlan
   });
 }
 
-std::int32_t Create(const PectusPlannerPatient* patient, const PectusPlannerOptions* options, PectusPlanner** out,
-                    PectusPlannerStatus* status) {
+std::int32_t Create(const PectusPlannerPatient* patient, const PectusPlannerOptions* options,
+                    PectusPlanner** out, PectusPlannerStatus* status) {
   return Guard(status, [&] {
     Require(patient, "patient");
     Require(out, "out");
     *out = nullptr;
     const auto settings = pectus::planner::SettingsFrom(options);
-    *out = new PectusPlanner{pectus::planner::PlannerSession(pectus::planner::MeasurementsFrom(*patient), settings)};
+    *out = new PectusPlanner{
+        pectus::planner::PlannerSession(pectus::planner::MeasurementsFrom(*patient), settings)};
   });
 }
 
 void Destroy(PectusPlanner* planner) { delete planner; }
 
-std::int32_t Measurements(const PectusPlanner* planner, PectusPlannerMeasurements* out, PectusPlannerStatus* status) {
+std::int32_t Measurements(const PectusPlanner* planner, PectusPlannerMeasurements* out,
+                          PectusPlannerStatus* status) {
   return Guard(status, [&] {
     Require(planner, "planner");
     Require(out, "out");
@@ -132,8 +134,8 @@ std::int32_t Solve(const PectusPlanner* planner, const PectusPlannerBar* bars, s
                    PectusPlannerCaseResult* results, PectusPlannerStatus* status) {
   return Guard(status, [&] {
     Require(planner, "planner");
-    planner->session.Solve(pectus::planner::LoadsFrom(bars, count), bone_positions, skin_positions, skin_landmarks,
-                           results);
+    planner->session.Solve(pectus::planner::LoadsFrom(bars, count), bone_positions, skin_positions,
+                           skin_landmarks, results);
   });
 }
 
@@ -149,16 +151,18 @@ std::int32_t ForceToLift(const PectusPlanner* planner, const PectusPlannerBar* b
   });
 }
 
-std::int32_t WriteDataset(const char* table_path, const char* output_path, const PectusPlannerOptions* options,
-                          PectusPlannerProgressFn progress, void* progress_user, PectusPlannerDatasetSummary* out,
+std::int32_t WriteDataset(const char* table_path, const char* output_path,
+                          const PectusPlannerOptions* options, PectusPlannerProgressFn progress,
+                          void* progress_user, PectusPlannerDatasetSummary* out,
                           PectusPlannerStatus* status) {
   return Guard(status, [&] {
     Require(table_path, "table_path");
     Require(output_path, "output_path");
-    const auto summary = pectus::planner::RunFemDataset(
-        table_path, output_path, pectus::planner::SettingsFrom(options), [&](std::int64_t done, std::int64_t total) {
-          if (progress != nullptr) progress(progress_user, done, total);
-        });
+    const auto summary =
+        pectus::planner::RunFemDataset(table_path, output_path, pectus::planner::SettingsFrom(options),
+                                       [&](std::int64_t done, std::int64_t total) {
+                                         if (progress != nullptr) progress(progress_user, done, total);
+                                       });
     if (out != nullptr) {
       *out = {summary.patients, summary.load_cases, summary.results, summary.surface_nodes, summary.seconds};
     }
@@ -184,6 +188,7 @@ const PectusPlannerInterface kInterface = {
 
 }  // namespace
 
-extern "C" __attribute__((visibility("default"))) const PectusPlannerInterface* pectus_planner_interface(void) {
+extern "C" __attribute__((visibility("default"))) const PectusPlannerInterface* pectus_planner_interface(
+    void) {
   return &kInterface;
 }

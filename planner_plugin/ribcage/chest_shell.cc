@@ -1,7 +1,6 @@
 #include "planner_plugin/ribcage/chest_shell.h"
 
 #include <Eigen/Geometry>
-
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -32,11 +31,13 @@ double SmoothProfile::operator()(double t) const {
   const double h = points_[i + 1].first - points_[i].first, s = (t - points_[i].first) / h;
   const double h00 = 2 * s * s * s - 3 * s * s + 1, h10 = s * s * s - 2 * s * s + s;
   const double h01 = -2 * s * s * s + 3 * s * s, h11 = s * s * s - s * s;
-  return h00 * points_[i].second + h10 * h * slopes_[i] + h01 * points_[i + 1].second + h11 * h * slopes_[i + 1];
+  return h00 * points_[i].second + h10 * h * slopes_[i] + h01 * points_[i + 1].second +
+         h11 * h * slopes_[i + 1];
 }
 
 ChestShell::ChestShell()
-    : ChestShell(0.0, 0.0, SmoothProfile({{0.0, 1.0}, {1.0, 1.0}}), SmoothProfile({{0.0, 1.0}, {1.0, 1.0}})) {}
+    : ChestShell(0.0, 0.0, SmoothProfile({{0.0, 1.0}, {1.0, 1.0}}), SmoothProfile({{0.0, 1.0}, {1.0, 1.0}})) {
+}
 
 ChestShell::ChestShell(double sternum_tilt_rad, double sternum_half_thickness, SmoothProfile half_width,
                        SmoothProfile half_depth)
@@ -51,7 +52,8 @@ double ChestShell::CentreY(double z) const { return SternumAnteriorY(z) + front_
 
 Eigen::Vector3d ChestShell::Point(double phi, double z) const {
   const double a = HalfWidth(z), b = HalfDepth(z);
-  const double pull = kPosteriorPull * b * std::exp(-std::pow(std::remainder(phi, 2 * std::numbers::pi) / kPosteriorPullWidth, 2));
+  const double pull = kPosteriorPull * b *
+                      std::exp(-std::pow(std::remainder(phi, 2 * std::numbers::pi) / kPosteriorPullWidth, 2));
   return {a * std::sin(phi), CentreY(z) + b * std::cos(phi) - pull, z};
 }
 

@@ -58,7 +58,7 @@ class ChestShell {
   /// The posterior-half angle phi in (0, pi/2] at which the shell reaches lateral x at z.
   double PosteriorPhiAtX(double x, double z) const;
 
-  static constexpr double kPosteriorPull = 0.8;      ///< g: the pull at the posterior midline, in units of b
+  static constexpr double kPosteriorPull = 0.8;  ///< g: the pull at the posterior midline, in units of b
   static constexpr double kPosteriorPullWidth = 0.45;  ///< sigma, rad
 
  private:

@@ -26,20 +26,28 @@ struct RibAnatomy {
   double shaft_height;      // rib height (cranio-caudal extent of its section)
   double shaft_thickness;   // rib thickness (radial)
 };
-constexpr double kRibHeadX = 22.0;          // lateral position of the rib heads
-constexpr double kMarginFraction = 0.5;     // where a false rib's cartilage meets the cartilage above
-constexpr double kCartilageHeight = 12.0;   // costal cartilage section, mm
+constexpr double kRibHeadX = 22.0;         // lateral position of the rib heads
+constexpr double kMarginFraction = 0.5;    // where a false rib's cartilage meets the cartilage above
+constexpr double kCartilageHeight = 12.0;  // costal cartilage section, mm
 constexpr double kCartilageThickness = 9.0;
-constexpr RibAnatomy kRibs[10] = {
-    {32.0, 50, -15, 0.11, 16.0, 6.0},      {10.3, 58, -40, 0.29, 13.0, 6.5},   {-11.4, 70, -68, 0.42, 13.0, 6.5},
-    {-33.1, 80, -95, 0.54, 13.0, 6.5},    {-54.8, 88, -120, 0.65, 13.0, 6.5}, {-76.5, 95, -145, 0.75, 13.0, 6.5},
-    {-98.2, 102, -168, 0.87, 13.0, 6.5},  {-119.9, 112, -202, 0, 13.0, 6.5},  {-141.6, 118, -226, 0, 12.0, 6.5},
-    {-163.3, 120, -248, 0, 11.0, 6.0}};
+constexpr RibAnatomy kRibs[10] = {{32.0, 50, -15, 0.11, 16.0, 6.0},    {10.3, 58, -40, 0.29, 13.0, 6.5},
+                                  {-11.4, 70, -68, 0.42, 13.0, 6.5},   {-33.1, 80, -95, 0.54, 13.0, 6.5},
+                                  {-54.8, 88, -120, 0.65, 13.0, 6.5},  {-76.5, 95, -145, 0.75, 13.0, 6.5},
+                                  {-98.2, 102, -168, 0.87, 13.0, 6.5}, {-119.9, 112, -202, 0, 13.0, 6.5},
+                                  {-141.6, 118, -226, 0, 12.0, 6.5},   {-163.3, 120, -248, 0, 11.0, 6.0}};
 
 // Sternum along its arc fraction f: width and thickness (manubrium 0-0.29, body 0.29-0.9, xiphoid 0.9-1).
 const SmoothProfile& SternumWidth() {
-  static const SmoothProfile p({{0.0, 48}, {0.07, 56}, {0.16, 52}, {0.29, 30}, {0.40, 30}, {0.70, 36},
-                                {0.86, 30}, {0.90, 22}, {0.96, 14}, {1.0, 8}});
+  static const SmoothProfile p({{0.0, 48},
+                                {0.07, 56},
+                                {0.16, 52},
+                                {0.29, 30},
+                                {0.40, 30},
+                                {0.70, 36},
+                                {0.86, 30},
+                                {0.90, 22},
+                                {0.96, 14},
+                                {1.0, 8}});
   return p;
 }
 const SmoothProfile& SternumThickness() {
@@ -50,8 +58,26 @@ constexpr double kManubriumEnd = 0.29, kBodyEnd = 0.90;
 
 ChestShell MakeShell(double tilt_rad) {
   // Half-width a(z) and half-depth b(z) of the rib centre lines.
-  SmoothProfile a({{-280, 114}, {-240, 120}, {-200, 124}, {-160, 124}, {-120, 120}, {-80, 111}, {-40, 97}, {0, 76}, {20, 62}, {45, 42}});
-  SmoothProfile b({{-280, 74}, {-240, 78}, {-200, 80}, {-160, 80}, {-120, 78}, {-80, 73}, {-40, 66}, {0, 55}, {20, 46}, {45, 34}});
+  SmoothProfile a({{-280, 114},
+                   {-240, 120},
+                   {-200, 124},
+                   {-160, 124},
+                   {-120, 120},
+                   {-80, 111},
+                   {-40, 97},
+                   {0, 76},
+                   {20, 62},
+                   {45, 42}});
+  SmoothProfile b({{-280, 74},
+                   {-240, 78},
+                   {-200, 80},
+                   {-160, 80},
+                   {-120, 78},
+                   {-80, 73},
+                   {-40, 66},
+                   {0, 55},
+                   {20, 46},
+                   {45, 34}});
   return ChestShell(tilt_rad, 5.5, std::move(a), std::move(b));
 }
 
@@ -64,7 +90,9 @@ double Smoothstep(double t) {
 struct Grid {
   int stations = 0, nu = 0, nv = 0;
   std::vector<Eigen::Vector3d> p;
-  const Eigen::Vector3d& at(int s, int u, int v) const { return p[(static_cast<std::size_t>(s) * (nu + 1) + u) * (nv + 1) + v]; }
+  const Eigen::Vector3d& at(int s, int u, int v) const {
+    return p[(static_cast<std::size_t>(s) * (nu + 1) + u) * (nv + 1) + v];
+  }
 };
 
 // A left rib: positions, where its cartilage starts, and its end window (which block it joins).
@@ -76,7 +104,8 @@ struct RibSweep {
 
 class Builder {
  public:
-  explicit Builder(const GenericRibcageOptions& o) : o_(o), shell_(MakeShell(o.sternum_tilt_deg * kPi / 180)) {
+  explicit Builder(const GenericRibcageOptions& o)
+      : o_(o), shell_(MakeShell(o.sternum_tilt_deg * kPi / 180)) {
     const double tilt = o.sternum_tilt_deg * kPi / 180;
     arc_ = o.sternal_length_mm / std::cos(tilt);
     tangent_ = Eigen::Vector3d(0, -std::sin(tilt), -std::cos(tilt));
@@ -98,13 +127,15 @@ class Builder {
     out.shell = shell_;
     out.sternal_arc_length_mm = arc_;
     out.nodes.resize(static_cast<Eigen::Index>(nodes_.size()), 3);
-    for (std::size_t i = 0; i < nodes_.size(); ++i) out.nodes.row(static_cast<Eigen::Index>(i)) = nodes_[i].transpose();
+    for (std::size_t i = 0; i < nodes_.size(); ++i)
+      out.nodes.row(static_cast<Eigen::Index>(i)) = nodes_[i].transpose();
     std::vector<Eigen::Vector4i> tets;
     std::vector<int> regions, parts;
     auto add = [&](const HexBlock& block, int part, const std::string& name) {
       const std::size_t before = tets.size();
       const int folded = AppendBlockTetrahedra(block, out.nodes, &tets, &regions);
-      if (folded > 0) ThrowFailure("generic ribcage: " + std::to_string(folded) + " folded tetrahedra in " + name);
+      if (folded > 0)
+        ThrowFailure("generic ribcage: " + std::to_string(folded) + " folded tetrahedra in " + name);
       parts.insert(parts.end(), tets.size() - before, part);
     };
     add(sternum_, 0, "the sternum");
@@ -118,7 +149,8 @@ class Builder {
       }
     }
     out.tets = ToConnectivity(tets);
-    out.regions = Eigen::Map<const Eigen::VectorXi>(regions.data(), static_cast<Eigen::Index>(regions.size()));
+    out.regions =
+        Eigen::Map<const Eigen::VectorXi>(regions.data(), static_cast<Eigen::Index>(regions.size()));
     out.tet_parts = Eigen::Map<const Eigen::VectorXi>(parts.data(), static_cast<Eigen::Index>(parts.size()));
     std::sort(out.fixed_nodes.begin(), out.fixed_nodes.end());
     const int ns = sternum_.ns, mid_u = sternum_.nu / 2, nv = sternum_.nv;
@@ -130,8 +162,10 @@ class Builder {
     }
     std::sort(out.sternum_posterior_nodes.begin(), out.sternum_posterior_nodes.end());
     out.landmarks.sternal_notch = sternum_.node(0, mid_u, nv);
-    out.landmarks.manubriosternal_junction = sternum_.node(static_cast<int>(std::lround(kManubriumEnd * ns)), mid_u, nv);
-    out.landmarks.xiphisternal_junction = sternum_.node(static_cast<int>(std::lround(kBodyEnd * ns)), mid_u, nv);
+    out.landmarks.manubriosternal_junction =
+        sternum_.node(static_cast<int>(std::lround(kManubriumEnd * ns)), mid_u, nv);
+    out.landmarks.xiphisternal_junction =
+        sternum_.node(static_cast<int>(std::lround(kBodyEnd * ns)), mid_u, nv);
     out.landmarks.xiphoid_tip = sternum_.node(ns, mid_u, nv);
     for (int k = 0; k < std::min(o_.rib_pairs, 7); ++k) out.rib_attachment_fraction.push_back(attachment_[k]);
     // The spine: the anterior surface of the vertebral bodies, ahead of the rib heads, from above the
@@ -164,8 +198,8 @@ class Builder {
       const double w = SternumWidth()(f), t = SternumThickness()(f);
       for (int u = 0; u <= nu; ++u) {
         for (int v = 0; v <= nv; ++v) {
-          const Eigen::Vector3d p =
-              front + (0.5 * w - u * w / nu) * Eigen::Vector3d::UnitX() + (static_cast<double>(v) / nv - 1.0) * t * anterior_;
+          const Eigen::Vector3d p = front + (0.5 * w - u * w / nu) * Eigen::Vector3d::UnitX() +
+                                    (static_cast<double>(v) / nv - 1.0) * t * anterior_;
           sternum_.node(j, u, v) = NewNode(p);
         }
       }
@@ -174,8 +208,8 @@ class Builder {
 
   // Window of the sternum's left face (u = 0) for rib k: (nu_rib + 1) x (nv + 1) node ids.
   int SternumWindowFirst(int k) {
-    const int first = static_cast<int>(std::lround(kRibs[k - 1].sternal_fraction * o_.sternum_cells_along -
-                                                   0.5 * o_.rib_cells_height));
+    const int first = static_cast<int>(
+        std::lround(kRibs[k - 1].sternal_fraction * o_.sternum_cells_along - 0.5 * o_.rib_cells_height));
     if (static_cast<int>(attachment_.size()) < k) {
       attachment_.push_back((first + 0.5 * o_.rib_cells_height) / o_.sternum_cells_along);
     }
@@ -190,9 +224,11 @@ class Builder {
   RibSweep SweepRib(int k, const std::vector<RibSweep>& previous) {
     const RibAnatomy& r = kRibs[k - 1];
     const int nu = o_.rib_cells_height, nv = o_.rib_cells_thickness;
-    if (nv != o_.sternum_cells_through) ThrowUsage("generic ribcage: rib_cells_thickness must equal sternum_cells_through");
+    if (nv != o_.sternum_cells_through)
+      ThrowUsage("generic ribcage: rib_cells_thickness must equal sternum_cells_through");
     RibSweep out;
-    // The joint: a window on the sternum's left face (ribs 1-7) or on the lower border of the cartilage above.
+    // The joint: a window on the sternum's left face (ribs 1-7) or on the lower border of the cartilage
+    // above.
     std::vector<Eigen::Vector3d> window;
     if (k <= 7) {
       out.window_first = SternumWindowFirst(k);
@@ -204,26 +240,32 @@ class Builder {
                    std::to_string(k) + " touch; use more sternum_cells_along");
       }
       for (int iu = 0; iu <= nu; ++iu) {
-        for (int iv = 0; iv <= nv; ++iv) window.push_back(nodes_[sternum_.node(out.window_first + iu, 0, iv)]);
+        for (int iv = 0; iv <= nv; ++iv)
+          window.push_back(nodes_[sternum_.node(out.window_first + iu, 0, iv)]);
       }
     } else {
       const RibSweep& above = previous[k - 2];
       const int cartilage_cells = above.grid.stations - 1 - above.junction_station;
-      out.window_first = above.junction_station + static_cast<int>(std::lround(kMarginFraction * cartilage_cells)) - nu / 2;
+      out.window_first =
+          above.junction_station + static_cast<int>(std::lround(kMarginFraction * cartilage_cells)) - nu / 2;
       if (out.window_first < above.junction_station || out.window_first + nu > above.grid.stations - 2) {
-        ThrowUsage("generic ribcage: the cartilage of rib " + std::to_string(k - 1) + " is too short for rib " +
-                   std::to_string(k) + " to join it");
+        ThrowUsage("generic ribcage: the cartilage of rib " + std::to_string(k - 1) +
+                   " is too short for rib " + std::to_string(k) + " to join it");
       }
       for (int iu = 0; iu <= nu; ++iu) {
-        for (int iv = 0; iv <= nv; ++iv) window.push_back(above.grid.at(out.window_first + iu, above.grid.nu, iv));
+        for (int iv = 0; iv <= nv; ++iv)
+          window.push_back(above.grid.at(out.window_first + iu, above.grid.nu, iv));
       }
     }
     Eigen::Vector3d window_centre = Eigen::Vector3d::Zero();
     for (const auto& p : window) window_centre += p / static_cast<double>(window.size());
-    const Eigen::Vector3d window_u = (window[static_cast<std::size_t>(nu) * (nv + 1) + nv / 2] - window[nv / 2]).normalized();
-    Eigen::Vector3d window_v = window[static_cast<std::size_t>(nu / 2) * (nv + 1) + nv] - window[static_cast<std::size_t>(nu / 2) * (nv + 1)];
+    const Eigen::Vector3d window_u =
+        (window[static_cast<std::size_t>(nu) * (nv + 1) + nv / 2] - window[nv / 2]).normalized();
+    Eigen::Vector3d window_v = window[static_cast<std::size_t>(nu / 2) * (nv + 1) + nv] -
+                               window[static_cast<std::size_t>(nu / 2) * (nv + 1)];
     window_v = (window_v - window_v.dot(window_u) * window_u).normalized();
-    const Eigen::Vector3d end_tangent = window_u.cross(window_v);  // into the joint, for a left rib (up = out x tangent)
+    const Eigen::Vector3d end_tangent =
+        window_u.cross(window_v);  // into the joint, for a left rib (up = out x tangent)
 
     // Rib: from the head around the shell to the costochondral junction, descending smoothly.
     const double phi_head = shell_.PosteriorPhiAtX(kRibHeadX, r.head_z);
@@ -240,22 +282,26 @@ class Builder {
     // Cartilage: a Hermite curve laid onto the shell. It arrives at the joint between the face's normal
     // and its own heading, and its last sections turn parallel to the joint face (sheared cells rather
     // than a kink).
-    const double window_height = (window[static_cast<std::size_t>(nu) * (nv + 1) + nv / 2] - window[nv / 2]).norm();
+    const double window_height =
+        (window[static_cast<std::size_t>(nu) * (nv + 1) + nv / 2] - window[nv / 2]).norm();
     const double window_thickness = (window[static_cast<std::size_t>(nu / 2) * (nv + 1) + nv] -
-                                     window[static_cast<std::size_t>(nu / 2) * (nv + 1)]).norm();
+                                     window[static_cast<std::size_t>(nu / 2) * (nv + 1)])
+                                        .norm();
     const double joint_length = 1.5 * std::max(window_height, window_thickness);
     const double chord = (window_centre - junction).norm();
     // A false rib's cartilage turns up into the border of the one above; a true rib's arrives obliquely.
     const Eigen::Vector3d arrival =
-        k > 7 ? end_tangent : Eigen::Vector3d((end_tangent + (window_centre - junction).normalized()).normalized());
+        k > 7 ? end_tangent
+              : Eigen::Vector3d((end_tangent + (window_centre - junction).normalized()).normalized());
     const double start_weight = k > 7 ? 0.4 : 0.8, end_weight = k > 7 ? 1.4 : 0.8;
-    std::vector<Eigen::Vector3d> cartilage_line = HermiteCurve(junction, start_weight * chord * junction_tangent,
-                                                               window_centre, end_weight * chord * arrival, 200);
+    std::vector<Eigen::Vector3d> cartilage_line = HermiteCurve(
+        junction, start_weight * chord * junction_tangent, window_centre, end_weight * chord * arrival, 200);
     for (std::size_t i = 1; i + 1 < cartilage_line.size(); ++i) {
       const Eigen::Vector3d& p = cartilage_line[i];
       cartilage_line[i] = shell_.Point(shell_.PhiOf(p), p.z());
     }
-    const int rib_cells = std::max(4, static_cast<int>(std::lround(PolylineLength(rib_line) / o_.rib_cell_length_mm)));
+    const int rib_cells =
+        std::max(4, static_cast<int>(std::lround(PolylineLength(rib_line) / o_.rib_cell_length_mm)));
     const int cartilage_cells =
         std::max(4, static_cast<int>(std::lround(PolylineLength(cartilage_line) / o_.rib_cell_length_mm)));
     std::vector<Eigen::Vector3d> centres = ResampleByArcLength(rib_line, rib_cells);
@@ -271,7 +317,8 @@ class Builder {
     std::vector<SweepStation> stations(static_cast<std::size_t>(n));
     for (int s = 0; s < n; ++s) {
       const Eigen::Vector3d tangent =
-          s == n - 1 ? end_tangent : (centres[std::min(s + 1, n - 1)] - centres[std::max(s - 1, 0)]).normalized();
+          s == n - 1 ? end_tangent
+                     : (centres[std::min(s + 1, n - 1)] - centres[std::max(s - 1, 0)]).normalized();
       SweepStation& st = stations[s];
       st.centre = centres[s];
       Eigen::Vector3d out_dir = ShellFrameOut(centres[s], tangent);
@@ -352,7 +399,8 @@ bool GenericRibcageOptions::IsValid(std::string* why) const {
   };
   if (rib_pairs < 7 || rib_pairs > 10) return fail("rib_pairs must be 7 to 10");
   if (!(sternum_tilt_deg >= 0 && sternum_tilt_deg <= 45)) return fail("sternum_tilt_deg must be 0 to 45");
-  if (!(sternal_length_mm > 50 && sternal_length_mm < 400)) return fail("sternal_length_mm must be 50 to 400");
+  if (!(sternal_length_mm > 50 && sternal_length_mm < 400))
+    return fail("sternal_length_mm must be 50 to 400");
   if (sternum_cells_along < 16 || sternum_cells_across < 2 || sternum_cells_across % 2 != 0 ||
       sternum_cells_through < 2 || sternum_cells_through % 2 != 0) {
     return fail("sternum cells: along >= 16, across and through even and >= 2");
@@ -360,7 +408,8 @@ bool GenericRibcageOptions::IsValid(std::string* why) const {
   if (rib_cells_height < 1 || rib_cells_thickness != sternum_cells_through) {
     return fail("rib_cells_height >= 1 and rib_cells_thickness == sternum_cells_through");
   }
-  if (!(rib_cell_length_mm >= 1 && rib_cell_length_mm <= 40)) return fail("rib_cell_length_mm must be 1 to 40");
+  if (!(rib_cell_length_mm >= 1 && rib_cell_length_mm <= 40))
+    return fail("rib_cell_length_mm must be 1 to 40");
   if (!(vertebral_body_offset_mm >= 0 && vertebral_body_offset_mm <= 100)) {
     return fail("vertebral_body_offset_mm must be 0 to 100");
   }

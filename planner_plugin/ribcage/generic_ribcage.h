@@ -50,31 +50,32 @@ struct GenericRibcageOptions {
 
 /// Named anatomical points of the ribcage, each a node on the sternum's anterior midline.
 struct RibcageLandmarkNodes {
-  std::int32_t sternal_notch = -1;              ///< top of the manubrium (the origin of the generic frame)
-  std::int32_t manubriosternal_junction = -1;   ///< the sternal angle (Louis), level of rib 2
-  std::int32_t xiphisternal_junction = -1;      ///< lower end of the sternal body
-  std::int32_t xiphoid_tip = -1;                ///< lower end of the xiphoid process
+  std::int32_t sternal_notch = -1;             ///< top of the manubrium (the origin of the generic frame)
+  std::int32_t manubriosternal_junction = -1;  ///< the sternal angle (Louis), level of rib 2
+  std::int32_t xiphisternal_junction = -1;     ///< lower end of the sternal body
+  std::int32_t xiphoid_tip = -1;               ///< lower end of the xiphoid process
 };
 
 /// The generic ribcage: a linear tetrahedral mesh (corner nodes only; it is lifted to quadratic after
 /// the patient mapping) with the tags the planner needs. Frame: LPS, mm, origin at the sternal notch
 /// (see ChestShell).
 struct GenericRibcage {
-  Points3 nodes;                     ///< #corner nodes by 3, mm
-  Tet4Connectivity tets;             ///< #tets by 4, positively oriented
-  Eigen::VectorXi regions;           ///< #tets RibcageRegion
-  Eigen::VectorXi tet_parts;         ///< #tets: 0 sternum, k left rib k (with its cartilage), -k right rib k
-  std::vector<std::int32_t> fixed_nodes;        ///< the posterior rib ends (rib heads at the spine)
-  std::vector<std::int32_t> sternum_posterior_nodes;  ///< nodes of the sternum's posterior surface
+  Points3 nodes;              ///< #corner nodes by 3, mm
+  Tet4Connectivity tets;      ///< #tets by 4, positively oriented
+  Eigen::VectorXi regions;    ///< #tets RibcageRegion
+  Eigen::VectorXi tet_parts;  ///< #tets: 0 sternum, k left rib k (with its cartilage), -k right rib k
+  std::vector<std::int32_t> fixed_nodes;               ///< the posterior rib ends (rib heads at the spine)
+  std::vector<std::int32_t> sternum_posterior_nodes;   ///< nodes of the sternum's posterior surface
   std::vector<std::int32_t> sternum_anterior_midline;  ///< anterior midline nodes, notch to xiphoid tip
-  std::vector<std::int32_t> sternum_axis;       ///< centre of the sternum's section at each station, notch first
-  std::vector<double> sternum_half_width;       ///< half-width of the sternum at each station, mm
+  std::vector<std::int32_t> sternum_axis;  ///< centre of the sternum's section at each station, notch first
+  std::vector<double> sternum_half_width;  ///< half-width of the sternum at each station, mm
   RibcageLandmarkNodes landmarks;
-  Points3 spine_anterior;            ///< polyline of the anterior surface of the vertebral bodies (midline), top first
-  ChestShell shell;                  ///< the surface the rib centre lines lie on
+  Points3 spine_anterior;  ///< polyline of the anterior surface of the vertebral bodies (midline), top first
+  ChestShell shell;        ///< the surface the rib centre lines lie on
   double sternal_arc_length_mm = 0;  ///< length of the sternum along its axis
-  std::vector<double> rib_attachment_fraction;  ///< per rib 1-7: centre of its sternal joint, fraction of the arc
-  GenericRibcageOptions options;     ///< what it was built with
+  std::vector<double>
+      rib_attachment_fraction;    ///< per rib 1-7: centre of its sternal joint, fraction of the arc
+  GenericRibcageOptions options;  ///< what it was built with
 };
 
 /// Builds the generic ribcage. Throws Error(kUsage) for invalid options and Error(kFailure) if the

@@ -20,6 +20,30 @@ Points3 Scaled(const Points3& p, const Eigen::Vector3d& scale) {
   return out;
 }
 
+// Throws Error(kBadInput) naming the patient and the part if the map folds a tetrahedron (measurements
+// beyond what the generic ribcage's skinning can take), before the finite elements meet it.
+void ThrowIfFolded(const GenericRibcage& generic, const Points3& nodes, const PatientMeasurements& targets) {
+  Eigen::Index folded = 0, first = -1;
+  for (Eigen::Index t = 0; t < generic.tets.rows(); ++t) {
+    auto at = [&](int c) -> Eigen::Vector3d { return nodes.row(generic.tets(t, c)).transpose(); };
+    if (!(SignedVolume(at(0), at(1), at(2), at(3)) > 0)) {
+      if (folded++ == 0) first = t;
+    }
+  }
+  if (folded == 0) return;
+  const int part = generic.tet_parts(first);
+  const std::string where =
+      part == 0 ? std::string("the sternum")
+                : std::string(part > 0 ? "left " : "right ") +
+                      (generic.regions(first) == kCartilageRegion ? "costal cartilage " : "rib ") +
+                      std::to_string(std::abs(part));
+  ThrowBadInput("patient measurements",
+                "patient " + targets.patient + ": the ribcage fitted to these measurements folds " +
+                    std::to_string(folded) + " tetrahedra (first: " + std::to_string(first) + ", in " +
+                    where +
+                    "); the depression or torsion is beyond what the generic ribcage's skinning can take");
+}
+
 }  // namespace
 
 bool PatientMeasurements::IsValid(std::string* why) const {
@@ -35,7 +59,8 @@ bool PatientMeasurements::IsValid(std::string* why) const {
   if (slice_spacing_mm < 0) return fail("slice spacing must not be negative");
   if (!in(SternalLength(), 40, 400)) return fail("sternal length must be 40 to 400 mm");
   if (!in(TrueDepression(), 0, 60)) return fail("sternal depression must be 0 to 60 mm");
-  if (!in(TrueDepression(), 0, 0.5 * TrueDepth())) return fail("sternal depression must be under half the depth");
+  if (!in(TrueDepression(), 0, 0.5 * TrueDepth()))
+    return fail("sternal depression must be under half the depth");
   if (!in(torsion_deg, -45, 45)) return fail("sternal torsion must be -45 to 45 degrees");
   return true;
 }
@@ -59,7 +84,8 @@ SternumSkinning MakeSternumSkinning(const GenericRibcage& generic, const Eigen::
   Points3 axis(static_cast<Eigen::Index>(generic.sternum_axis.size()), 3);
   std::vector<double> half_width;
   for (std::size_t j = 0; j < generic.sternum_axis.size(); ++j) {
-    axis.row(static_cast<Eigen::Index>(j)) = generic.nodes.row(generic.sternum_axis[j]).cwiseProduct(scale.transpose());
+    axis.row(static_cast<Eigen::Index>(j)) =
+        generic.nodes.row(generic.sternum_axis[j]).cwiseProduct(scale.transpose());
     half_width.push_back(generic.sternum_half_width[j] * scale.x());
   }
   // The bone's influence rises between the joints of the second and third cartilages.
@@ -72,7 +98,8 @@ Points3 MapGenericNodes(const GenericRibcage& generic, const PatientMapParameter
   const SternumSkinning bone = MakeSternumSkinning(generic, parameters.scale, skinning);
   Points3 out = Scaled(generic.nodes, parameters.scale);
   for (Eigen::Index i = 0; i < out.rows(); ++i) {
-    out.row(i) = bone.Apply(out.row(i).transpose(), parameters.depression_mm, parameters.torsion_rad).transpose();
+    out.row(i) =
+        bone.Apply(out.row(i).transpose(), parameters.depression_mm, parameters.torsion_rad).transpose();
   }
   return out;
 }
@@ -82,6 +109,15 @@ PatientRibcage MakePatientRibcage(const GenericRibcage& generic, const PatientMe
   std::string why;
   if (!targets.IsValid(&why)) ThrowBadInput("patient measurements", why);
   if (!options.IsValid(&why)) ThrowUsage("patient ribcage options: " + why);
+  // The CT is measured on the slice of deepest depression, at the level of the costal margin: without
+  // ribs 8-10 that slice has no ribs beside the sternum, and the fit chases a width and depth the
+  // ribcage does not have (folding the lower cartilages).
+  if (generic.options.rib_pairs < 10) {
+    ThrowUsage(
+        "patient ribcage: the generic ribcage has " + std::to_string(generic.options.rib_pairs) +
+        " rib pairs; fitting CT measurements needs all 10 (the slice of deepest depression crosses the "
+        "costal margin, ribs 8-10)");
+  }
   PatientRibcage out;
   out.patient = targets.patient;
   out.targets = targets;
@@ -89,7 +125,8 @@ PatientRibcage MakePatientRibcage(const GenericRibcage& generic, const PatientMe
   Eigen::VectorXi face_tet;
   out.surface.faces = ExtractLinearBoundary(generic.tets, &face_tet);
   out.surface.face_parts.resize(face_tet.size());
-  for (Eigen::Index f = 0; f < face_tet.size(); ++f) out.surface.face_parts(f) = generic.tet_parts(face_tet(f));
+  for (Eigen::Index f = 0; f < face_tet.size(); ++f)
+    out.surface.face_parts(f) = generic.tet_parts(face_tet(f));
 
   const double width = targets.TrueWidth(), depth = targets.TrueDepth(), length = targets.SternalLength();
   const double depression = targets.TrueDepression(), torsion = targets.torsion_deg;
@@ -115,7 +152,8 @@ PatientRibcage MakePatientRibcage(const GenericRibcage& generic, const PatientMe
     m = measure(p);
     const double r_w = width - m.width_mm, r_d = depth - m.depth_mm, r_l = length - m.sternal_length_mm;
     const double r_dep = depression - m.depression_mm, r_t = torsion - m.torsion_deg;
-    const double worst = std::max({std::abs(r_w), std::abs(r_d), std::abs(r_l), std::abs(r_dep), std::abs(r_t)});
+    const double worst =
+        std::max({std::abs(r_w), std::abs(r_d), std::abs(r_l), std::abs(r_dep), std::abs(r_t)});
     if (worst < best_worst) {
       best_worst = worst;
       best = p;
@@ -132,7 +170,8 @@ PatientRibcage MakePatientRibcage(const GenericRibcage& generic, const PatientMe
     p.scale.z() *= std::pow(length / m.sternal_length_mm, relax);
     double gain = 1.0;
     if (have_previous && std::abs(m.depression_mm - previous_measured) > 1e-6) {
-      gain = std::clamp((p.depression_mm - previous_parameter) / (m.depression_mm - previous_measured), 0.5, 4.0);
+      gain = std::clamp((p.depression_mm - previous_parameter) / (m.depression_mm - previous_measured), 0.5,
+                        4.0);
     }
     previous_parameter = p.depression_mm;
     previous_measured = m.depression_mm;
@@ -153,9 +192,11 @@ PatientRibcage MakePatientRibcage(const GenericRibcage& generic, const PatientMe
                 "patient %s: %s after %d iterations; residuals width %.3f, depth %.3f, sternal length %.3f, "
                 "depression %.3f mm, torsion %.3f deg",
                 targets.patient.c_str(), out.converged ? "fitted" : "NOT fitted", out.iterations,
-                width - m.width_mm, depth - m.depth_mm, length - m.sternal_length_mm, depression - m.depression_mm,
-                torsion - m.torsion_deg);
+                width - m.width_mm, depth - m.depth_mm, length - m.sternal_length_mm,
+                depression - m.depression_mm, torsion - m.torsion_deg);
   out.message = line;
+
+  ThrowIfFolded(generic, out.surface.nodes, targets);
 
   // The quadratic mesh on the fitted corner nodes (mid-edge nodes at the midpoints: straight edges).
   out.mesh = MakeQuadratic(out.surface.nodes, generic.tets, generic.regions);
@@ -165,7 +206,8 @@ PatientRibcage MakePatientRibcage(const GenericRibcage& generic, const PatientMe
   for (std::int32_t n : generic.fixed_nodes) fixed[n] = 1;
   for (Eigen::Index t = 0; t < out.mesh.num_tets(); ++t) {
     for (int e = 0; e < 6; ++e) {
-      if (fixed[out.mesh.tets(t, kTet10Edges[e][0])] == 1 && fixed[out.mesh.tets(t, kTet10Edges[e][1])] == 1) {
+      if (fixed[out.mesh.tets(t, kTet10Edges[e][0])] == 1 &&
+          fixed[out.mesh.tets(t, kTet10Edges[e][1])] == 1) {
         fixed[out.mesh.tets(t, 4 + e)] = 2;
       }
     }
@@ -180,7 +222,8 @@ PatientRibcage MakePatientRibcage(const GenericRibcage& generic, const PatientMe
   std::vector<Eigen::Index> contact;
   for (Eigen::Index f = 0; f < boundary.faces.rows(); ++f) {
     if (generic.tet_parts(boundary.face_tet(f)) != 0) continue;
-    if (posterior[boundary.faces(f, 0)] && posterior[boundary.faces(f, 1)] && posterior[boundary.faces(f, 2)]) {
+    if (posterior[boundary.faces(f, 0)] && posterior[boundary.faces(f, 1)] &&
+        posterior[boundary.faces(f, 2)]) {
       contact.push_back(f);
     }
   }
@@ -196,8 +239,10 @@ PatientRibcage MakePatientRibcage(const GenericRibcage& generic, const PatientMe
   landmark("sternal_notch", generic.landmarks.sternal_notch, "suprasternal notch, top of the manubrium");
   const Eigen::Vector3d notch = out.mesh.nodes.row(generic.landmarks.sternal_notch).transpose();
   const Eigen::Vector3d angle = out.mesh.nodes.row(generic.landmarks.manubriosternal_junction).transpose();
-  out.landmarks.items.push_back({"manubrium_centre", 0.5 * (notch + angle), "centre of the manubrium, anterior"});
-  landmark("sternal_angle", generic.landmarks.manubriosternal_junction, "manubriosternal joint, anterior midline");
+  out.landmarks.items.push_back(
+      {"manubrium_centre", 0.5 * (notch + angle), "centre of the manubrium, anterior"});
+  landmark("sternal_angle", generic.landmarks.manubriosternal_junction,
+           "manubriosternal joint, anterior midline");
   landmark("xiphoid", generic.landmarks.xiphisternal_junction, "xiphisternal joint, anterior midline");
   landmark("xiphoid_tip", generic.landmarks.xiphoid_tip, "lower end of the xiphoid process");
   return out;

@@ -19,18 +19,18 @@ namespace pectus::planner {
 
 /// A patient's measurements, as taken on the CT (Figure 24 of the dissertation). Lengths in mm.
 struct PatientMeasurements {
-  std::string patient;            ///< identifier, for messages (e.g. "57")
+  std::string patient;  ///< identifier, for messages (e.g. "57")
   /// Magnification of the CT images: lengths measured in the image plane (width, depth, depression)
   /// are divided by it. Must be given, even when 1 (as the dissertation's ribcage modeller insists).
   double magnification = 1.0;
-  double width_mm = 0;            ///< ribcage width on the slice of deepest depression (image), 100-500
-  double depth_mm = 0;            ///< ribcage depth on the same slice (image), 60-400
+  double width_mm = 0;  ///< ribcage width on the slice of deepest depression (image), 100-500
+  double depth_mm = 0;  ///< ribcage depth on the same slice (image), 60-400
   /// Sternal length, mm (40-400); or, when slice_spacing_mm > 0, computed as
   /// (last_sternum_slice - first_sternum_slice) * slice_spacing_mm.
   double sternal_length_mm = 0;
   double first_sternum_slice = 0, last_sternum_slice = 0, slice_spacing_mm = 0;
-  double depression_mm = 0;       ///< sternal depression on the image, 0 to 60
-  double torsion_deg = 0;         ///< sternal torsion, -45 to 45 (positive: the right edge deeper)
+  double depression_mm = 0;  ///< sternal depression on the image, 0 to 60
+  double torsion_deg = 0;    ///< sternal torsion, -45 to 45 (positive: the right edge deeper)
 
   /// False, with the reason (naming the patient), if a value is out of range.
   bool IsValid(std::string* why) const;
@@ -57,28 +57,30 @@ struct PatientRibcageOptions {
 /// The five parameters of the patient map.
 struct PatientMapParameters {
   Eigen::Vector3d scale = Eigen::Vector3d::Ones();  ///< non-uniform scale about the notch (x, y, z)
-  double depression_mm = 0;   ///< posterior translation of the sternal bone
-  double torsion_rad = 0;     ///< rotation of the sternal bone about its axis
+  double depression_mm = 0;                         ///< posterior translation of the sternal bone
+  double torsion_rad = 0;                           ///< rotation of the sternal bone about its axis
 };
 
 /// A patient's ribcage, ready for finite elements.
 struct PatientRibcage {
   std::string patient;
-  TetMesh mesh;                             ///< quadratic tetrahedra; regions: RibcageRegion
-  Eigen::Index num_corner_nodes = 0;        ///< mesh.nodes' first rows are the corner nodes
-  Eigen::VectorXi tet_parts;                ///< as GenericRibcage::tet_parts
-  std::vector<std::int32_t> fixed_nodes;    ///< every node (corner and mid-edge) on the posterior rib ends
-  Tri6Connectivity sternum_posterior_faces; ///< boundary faces on the sternum's posterior surface (bar contact)
+  TetMesh mesh;                           ///< quadratic tetrahedra; regions: RibcageRegion
+  Eigen::Index num_corner_nodes = 0;      ///< mesh.nodes' first rows are the corner nodes
+  Eigen::VectorXi tet_parts;              ///< as GenericRibcage::tet_parts
+  std::vector<std::int32_t> fixed_nodes;  ///< every node (corner and mid-edge) on the posterior rib ends
+  Tri6Connectivity
+      sternum_posterior_faces;  ///< boundary faces on the sternum's posterior surface (bar contact)
   std::vector<std::int32_t> sternum_anterior_midline;  ///< corner nodes, notch first
-  LandmarkSet landmarks;   ///< sternal_notch, manubrium_centre, sternal_angle, xiphoid (joint), xiphoid_tip (mm)
-  RibcageSurface surface;  ///< the corner-node bone surface with parts and spine, for measurements
-  PatientMapParameters parameters;         ///< the fitted map
-  PatientMeasurements targets;             ///< what was asked for
-  RibcageMeasurements measured;            ///< what the generated ribcage measures
-  bool converged = false;    ///< every residual within options.tolerance_mm
-  double residual_mm = 0;    ///< the largest residual of the returned map (mm, or degrees for torsion)
+  LandmarkSet
+      landmarks;  ///< sternal_notch, manubrium_centre, sternal_angle, xiphoid (joint), xiphoid_tip (mm)
+  RibcageSurface surface;           ///< the corner-node bone surface with parts and spine, for measurements
+  PatientMapParameters parameters;  ///< the fitted map
+  PatientMeasurements targets;      ///< what was asked for
+  RibcageMeasurements measured;     ///< what the generated ribcage measures
+  bool converged = false;           ///< every residual within options.tolerance_mm
+  double residual_mm = 0;           ///< the largest residual of the returned map (mm, or degrees for torsion)
   int iterations = 0;
-  std::string message;                     ///< one line: converged or not, residuals
+  std::string message;  ///< one line: converged or not, residuals
 };
 
 /// Maps the generic ribcage's corner nodes (#nodes by 3) by `parameters`: scale, then skinning.
@@ -90,7 +92,9 @@ SternumSkinning MakeSternumSkinning(const GenericRibcage& generic, const Eigen::
                                     const SternumSkinningOptions& skinning);
 
 /// Fits the patient map to `targets` and builds the patient's quadratic mesh. Throws Error(kBadInput)
-/// naming the patient for invalid measurements. A fit that does not reach the tolerance is returned
+/// naming the patient for invalid measurements or a fitted ribcage that folds an element, and
+/// Error(kUsage) for a generic ribcage of fewer than 10 rib pairs (the CT's slice of deepest depression
+/// crosses the costal margin, ribs 8-10). A fit that does not reach the tolerance is returned
 /// with converged = false and the residuals in `message` (the caller decides).
 PatientRibcage MakePatientRibcage(const GenericRibcage& generic, const PatientMeasurements& targets,
                                   const PatientRibcageOptions& options = {});

@@ -24,7 +24,8 @@ std::vector<std::string> SplitCsv(const std::string& line) {
   return fields;
 }
 
-double ParseNumber(const std::string& text, const std::string& column, const std::string& name, std::int64_t line) {
+double ParseNumber(const std::string& text, const std::string& column, const std::string& name,
+                   std::int64_t line) {
   double value = 0;
   const char* end = text.data() + text.size();
   const auto [ptr, ec] = std::from_chars(text.data(), end, value);
@@ -49,7 +50,8 @@ std::vector<PatientRow> ParsePatientTable(const std::string& text, const std::st
     break;
   }
   for (const char* required : {"patient", "width_mm", "sternal_length_mm", "depth_mm", "depression_mm"}) {
-    if (column.count(required) == 0) ThrowBadInput(name, std::string("missing column '") + required + "'", line_number);
+    if (column.count(required) == 0)
+      ThrowBadInput(name, std::string("missing column '") + required + "'", line_number);
   }
   std::vector<PatientRow> rows;
   std::set<std::string> seen;
@@ -67,7 +69,8 @@ std::vector<PatientRow> ParsePatientTable(const std::string& text, const std::st
     PatientMeasurements& m = row.measurements;
     m.patient = get("patient");
     if (m.patient.empty()) ThrowBadInput(name, "empty patient identifier", line_number);
-    if (!seen.insert(m.patient).second) ThrowBadInput(name, "patient '" + m.patient + "' appears twice", line_number);
+    if (!seen.insert(m.patient).second)
+      ThrowBadInput(name, "patient '" + m.patient + "' appears twice", line_number);
     m.width_mm = number("width_mm");
     m.sternal_length_mm = number("sternal_length_mm");
     m.depth_mm = number("depth_mm");

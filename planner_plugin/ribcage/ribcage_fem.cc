@@ -86,7 +86,8 @@ Tri6Connectivity RibcageFem::ContactPatch(const BarLoad& load) const {
   }
   if (chosen.empty()) ThrowFailure("bar at " + load.Name() + ": no sternal face near the bar level");
   Tri6Connectivity patch(static_cast<Eigen::Index>(chosen.size()), 6);
-  for (std::size_t k = 0; k < chosen.size(); ++k) patch.row(static_cast<Eigen::Index>(k)) = faces.row(chosen[k]);
+  for (std::size_t k = 0; k < chosen.size(); ++k)
+    patch.row(static_cast<Eigen::Index>(k)) = faces.row(chosen[k]);
   return patch;
 }
 
@@ -149,9 +150,9 @@ std::vector<BarResult> RibcageFem::Solve(const std::vector<BarLoad>& loads) cons
     cases.push_back({unit.Name(), NodalForces(unit), {}});
     const Tri6Connectivity patch = ContactPatch(unit);
     faces.push_back(patch.rows());
-    areas.push_back(AddProfiledTraction(ribcage_.mesh.nodes, patch, Eigen::Vector3d::Zero(),
-                                        [&](const Eigen::Vector3d& x) { return ContactProfile(unit, x.z()); },
-                                        nullptr));
+    areas.push_back(AddProfiledTraction(
+        ribcage_.mesh.nodes, patch, Eigen::Vector3d::Zero(),
+        [&](const Eigen::Vector3d& x) { return ContactProfile(unit, x.z()); }, nullptr));
   }
   const std::vector<Points3> unit_displacement = solver_->Solve(cases);
   std::vector<double> unit_lift, unit_max;

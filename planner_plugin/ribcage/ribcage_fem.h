@@ -47,8 +47,8 @@ struct RibcageFemOptions {
 /// One solved load case.
 struct BarResult {
   BarLoad load;
-  Points3 displacement;       ///< #nodes by 3, mm
-  double sternum_lift_mm = 0; ///< anterior displacement of the sternum at the level of deepest depression
+  Points3 displacement;        ///< #nodes by 3, mm
+  double sternum_lift_mm = 0;  ///< anterior displacement of the sternum at the level of deepest depression
   double max_displacement_mm = 0;
   Eigen::Index contact_faces = 0;
   double contact_area_mm2 = 0;  ///< integral of the contact profile over the sternum's back (effective area)

@@ -98,7 +98,8 @@ double SpineY(const Points3& spine, double z) {
       return spine(i - 1, 1) + t * (spine(i, 1) - spine(i - 1, 1));
     }
   }
-  ThrowBadInput("ribcage surface", "the spine line does not reach the measurement slice at z = " + std::to_string(z));
+  ThrowBadInput("ribcage surface",
+                "the spine line does not reach the measurement slice at z = " + std::to_string(z));
 }
 
 struct Setup {
@@ -161,8 +162,8 @@ std::string RibcageMeasurements::BriefReport() const {
   std::snprintf(line, sizeof(line),
                 "width %.2f mm, depth %.2f mm, sternal length %.2f mm, depression %.2f mm, torsion %.2f deg, "
                 "Haller index %.2f (inner width %.1f mm / sternum-spine %.1f mm), slice at z = %.1f mm",
-                width_mm, depth_mm, sternal_length_mm, depression_mm, torsion_deg, haller_index, inner_width_mm,
-                sternum_to_spine_mm, slice_z_mm);
+                width_mm, depth_mm, sternal_length_mm, depression_mm, torsion_deg, haller_index,
+                inner_width_mm, sternum_to_spine_mm, slice_z_mm);
   return line;
 }
 
@@ -227,7 +228,8 @@ RibcageMeasurements MeasureRibcage(const RibcageSurface& surface, const RibcageM
   // rib within 20 mm of the extreme point: one crossing of the rib through the slice).
   double inner_left = left->x, inner_right = right->x;
   for (const SlicePoint& q : points) {
-    if (q.part == left->part && std::hypot(q.x - left->x, q.y - left->y) < 20.0) inner_left = std::min(inner_left, q.x);
+    if (q.part == left->part && std::hypot(q.x - left->x, q.y - left->y) < 20.0)
+      inner_left = std::min(inner_left, q.x);
     if (q.part == right->part && std::hypot(q.x - right->x, q.y - right->y) < 20.0) {
       inner_right = std::max(inner_right, q.x);
     }

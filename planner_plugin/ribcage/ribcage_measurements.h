@@ -12,10 +12,11 @@ namespace pectus::planner {
 
 /// A ribcage's bone surface, as the measurements see it.
 struct RibcageSurface {
-  Points3 nodes;               ///< #nodes by 3 positions, mm, LPS (x left, y posterior, z superior)
-  Faces3 faces;                ///< #faces by 3 boundary triangles of the bones
-  Eigen::VectorXi face_parts;  ///< #faces: 0 on the sternum, k != 0 on rib k (left) or -k (right) with its cartilage
-  Points3 spine_anterior;      ///< polyline of the anterior surface of the vertebral bodies, z decreasing
+  Points3 nodes;  ///< #nodes by 3 positions, mm, LPS (x left, y posterior, z superior)
+  Faces3 faces;   ///< #faces by 3 boundary triangles of the bones
+  Eigen::VectorXi
+      face_parts;  ///< #faces: 0 on the sternum, k != 0 on rib k (left) or -k (right) with its cartilage
+  Points3 spine_anterior;  ///< polyline of the anterior surface of the vertebral bodies, z decreasing
 };
 
 /// Options of the measurements.
@@ -38,11 +39,12 @@ struct RibcageMeasurementOptions {
 
 /// What the measurements found. Lengths in mm, angles in degrees.
 struct RibcageMeasurements {
-  double width_mm = 0;             ///< outer transverse extent of the bones on the slice
-  double depth_mm = 0;             ///< antero-posterior extent of the bones on the slice
-  double sternal_length_mm = 0;    ///< height (z extent) of the sternum: first to last axial slice showing it
-  double depression_mm = 0;        ///< highest (most anterior) point of the ribcage to the sternum's anterior surface
-  double torsion_deg = 0;          ///< sternal rotation on the slice; positive when its right edge lies deeper
+  double width_mm = 0;           ///< outer transverse extent of the bones on the slice
+  double depth_mm = 0;           ///< antero-posterior extent of the bones on the slice
+  double sternal_length_mm = 0;  ///< height (z extent) of the sternum: first to last axial slice showing it
+  double depression_mm =
+      0;                   ///< highest (most anterior) point of the ribcage to the sternum's anterior surface
+  double torsion_deg = 0;  ///< sternal rotation on the slice; positive when its right edge lies deeper
   double inner_width_mm = 0;       ///< transverse extent between the inner surfaces of the widest ribs
   double sternum_to_spine_mm = 0;  ///< posterior surface of the sternum to the anterior surface of the spine
   double haller_index = 0;         ///< inner_width_mm / sternum_to_spine_mm
@@ -54,7 +56,8 @@ struct RibcageMeasurements {
 
 /// Measures `surface`. Throws Error(kBadInput) if it has no sternum faces or no slice through the
 /// sternum, or if the spine line does not reach the slice.
-RibcageMeasurements MeasureRibcage(const RibcageSurface& surface, const RibcageMeasurementOptions& options = {});
+RibcageMeasurements MeasureRibcage(const RibcageSurface& surface,
+                                   const RibcageMeasurementOptions& options = {});
 
 /// Depression profile: (z, depression) on every searched slice, mm (for plots and tests).
 std::vector<std::pair<double, double>> DepressionProfile(const RibcageSurface& surface,

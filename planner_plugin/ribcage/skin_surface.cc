@@ -39,7 +39,8 @@ SkinSurface BuildSkinSurface(const PatientRibcage& ribcage, const SkinSurfaceOpt
   const Points3& x = ribcage.mesh.nodes;
   const MeshBoundary boundary = ExtractBoundary(ribcage.mesh);
   const double top = ribcage.measured.notch_z_mm + options.above_notch_mm;
-  const double bottom = ribcage.measured.notch_z_mm - ribcage.measured.sternal_length_mm - options.below_xiphoid_mm;
+  const double bottom =
+      ribcage.measured.notch_z_mm - ribcage.measured.sternal_length_mm - options.below_xiphoid_mm;
   // The axis the rays leave from: midway between the sternum and the spine, per height.
   const Points3& spine = ribcage.surface.spine_anterior;
   auto axis_y = [&](double z) {
@@ -61,7 +62,9 @@ SkinSurface BuildSkinSurface(const PatientRibcage& ribcage, const SkinSurfaceOpt
     const double z = x(n, 2);
     if (z > top + window || z < bottom - window) continue;
     if (x(n, 1) > axis_y(z)) continue;  // posterior half: never under the anterior skin
-    bucket[static_cast<std::size_t>(std::clamp(static_cast<int>(std::floor(top + window - z)), 0, buckets - 1))].push_back(n);
+    bucket[static_cast<std::size_t>(
+               std::clamp(static_cast<int>(std::floor(top + window - z)), 0, buckets - 1))]
+        .push_back(n);
   }
   SkinSurface skin;
   skin.rows = options.rows;
@@ -155,7 +158,8 @@ SkinSurface BuildSkinSurface(const PatientRibcage& ribcage, const SkinSurfaceOpt
       const double t = (z - za) / (zb - za);
       point.weights = {{a0, (1 - t) * (1 - tc)}, {a1, (1 - t) * tc}, {b0, t * (1 - tc)}, {b1, t * tc}};
     }
-    if (point.weights.empty()) ThrowFailure("skin landmarks: " + bone.label + " lies outside the skin's extent");
+    if (point.weights.empty())
+      ThrowFailure("skin landmarks: " + bone.label + " lies outside the skin's extent");
     skin.landmark_points.push_back(std::move(point));
   }
   return skin;

@@ -45,7 +45,7 @@ struct SkinPoint {
 struct SkinSurface {
   TriangleMesh mesh;  ///< (rows x columns) vertices, row-major from the top row, right to left; outward faces
   int rows = 0, columns = 0;
-  Points3 outward;    ///< #vertices by 3 unit directions of the soft-tissue offset (horizontal rays)
+  Points3 outward;  ///< #vertices by 3 unit directions of the soft-tissue offset (horizontal rays)
   /// Per vertex: (mesh node, weight) pairs, weights summing to 1. The vertex lies on its horizontal ray
   /// from the chest's axis at the weighted depth of these bone nodes plus soft_tissue_mm.
   std::vector<std::vector<std::pair<std::int32_t, double>>> ties;

@@ -31,15 +31,16 @@ bool SternumSkinningOptions::IsValid(std::string* why) const {
   return true;
 }
 
-SternumSkinning::SternumSkinning(Points3 axis, std::vector<double> half_width, double ramp_from, double ramp_to,
-                                 double scale, const SternumSkinningOptions& options)
+SternumSkinning::SternumSkinning(Points3 axis, std::vector<double> half_width, double ramp_from,
+                                 double ramp_to, double scale, const SternumSkinningOptions& options)
     : axis_(std::move(axis)),
       half_width_(std::move(half_width)),
       ramp_from_(ramp_from),
       ramp_to_(ramp_to),
       scale_(scale),
       options_(options) {
-  if (axis_.rows() < 2 || static_cast<Eigen::Index>(half_width_.size()) != axis_.rows() || !(ramp_to > ramp_from)) {
+  if (axis_.rows() < 2 || static_cast<Eigen::Index>(half_width_.size()) != axis_.rows() ||
+      !(ramp_to > ramp_from)) {
     ThrowFailure("sternum skinning: need an axis of two or more points with one half-width each");
   }
   std::string why;
@@ -104,15 +105,18 @@ double SternumSkinning::Weight(const Eigen::Vector3d& p) const {
   const double across =
       FallOff(distance, scale_ * options_.inner_envelope_mm, scale_ * options_.outer_envelope_mm);
   const double behind = p.y() - a.centre.y();
-  const double depth = FallOff(behind, scale_ * options_.posterior_inner_mm, scale_ * options_.posterior_outer_mm);
+  const double depth =
+      FallOff(behind, scale_ * options_.posterior_inner_mm, scale_ * options_.posterior_outer_mm);
   return along * across * depth;
 }
 
-Eigen::Vector3d SternumSkinning::Apply(const Eigen::Vector3d& p, double depression_mm, double torsion_rad) const {
+Eigen::Vector3d SternumSkinning::Apply(const Eigen::Vector3d& p, double depression_mm,
+                                       double torsion_rad) const {
   const double w = Weight(p);
   if (w == 0.0) return p;
   const AxisPoint a = Locate(p);
-  const Eigen::Matrix3d hinge = Eigen::AngleAxisd(HingeAngle(depression_mm), Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const Eigen::Matrix3d hinge =
+      Eigen::AngleAxisd(HingeAngle(depression_mm), Eigen::Vector3d::UnitX()).toRotationMatrix();
   const Eigen::Vector3d centre = hinge * (a.centre - hinge_) + hinge_;
   const Eigen::Vector3d moved =
       Eigen::AngleAxisd(torsion_rad, hinge * a.direction) * (hinge * (p - hinge_) + hinge_ - centre) + centre;

@@ -37,8 +37,8 @@ class SternumSkinning {
   /// @param[in] ramp_from   arc fraction where the weight starts to rise (second cartilage)
   /// @param[in] ramp_to     arc fraction where it reaches 1 (third cartilage)
   /// @param[in] scale       envelope distances are multiplied by this (ribcage width / generic width)
-  SternumSkinning(Points3 axis, std::vector<double> half_width, double ramp_from, double ramp_to, double scale,
-                  const SternumSkinningOptions& options);
+  SternumSkinning(Points3 axis, std::vector<double> half_width, double ramp_from, double ramp_to,
+                  double scale, const SternumSkinningOptions& options);
 
   /// The weight of point p, in [0, 1] (smootherstep fall-off: continuous with two derivatives).
   double Weight(const Eigen::Vector3d& p) const;

@@ -9,7 +9,8 @@
 namespace pectus::planner {
 
 std::vector<Eigen::Vector3d> SweepPositions(const std::vector<SweepStation>& stations, int nu, int nv,
-                                            const std::vector<Eigen::Vector3d>* end_window, int blend_stations) {
+                                            const std::vector<Eigen::Vector3d>* end_window,
+                                            int blend_stations) {
   const int n = static_cast<int>(stations.size());
   if (n < 2 || nu < 1 || nv < 1 || blend_stations < 1) ThrowFailure("sweep: too few stations or cells");
   const std::size_t per_station = static_cast<std::size_t>(nu + 1) * (nv + 1);

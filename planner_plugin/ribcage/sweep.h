@@ -18,7 +18,8 @@ struct SweepStation {
 };
 
 /// Node positions of a sweep as a structured grid: (stations) x (nu + 1) x (nv + 1), node (s, iu, iv) at
-/// centre + (iu / nu - 1/2) height up + (iv / nv - 1/2) thickness out, stored at [(s (nu+1) + iu)(nv+1) + iv].
+/// centre + (iu / nu - 1/2) height up + (iv / nv - 1/2) thickness out, stored at [(s (nu+1) + iu)(nv+1) +
+/// iv].
 ///
 /// With `end_window` (nu + 1) x (nv + 1) positions (same index order), the last station is the window
 /// itself (where the sweep joins a face of another block), and the offset between the natural last
@@ -29,7 +30,8 @@ struct SweepStation {
 /// @param[in] end_window      nullptr, or (nu + 1)(nv + 1) positions, mm
 /// @param[in] blend_stations  >= 1
 std::vector<Eigen::Vector3d> SweepPositions(const std::vector<SweepStation>& stations, int nu, int nv,
-                                            const std::vector<Eigen::Vector3d>* end_window, int blend_stations);
+                                            const std::vector<Eigen::Vector3d>* end_window,
+                                            int blend_stations);
 
 /// Points along a polyline at equal arc-length spacing: `segments` + 1 points from its first to its
 /// last point (segments >= 1).

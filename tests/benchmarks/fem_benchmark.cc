@@ -11,14 +11,14 @@
 
 #include <algorithm>
 #include <chrono>
-#include <numeric>
-#include <vector>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <numeric>
 #include <string>
+#include <vector>
 
 #include "planner_plugin/fem/calculix_io.h"
 #include "planner_plugin/io/fem_dataset_h5.h"
@@ -65,7 +65,8 @@ nlohmann::json RunPatient(const GenericRibcage& generic, const PatientRow& row, 
   out["timings"]["assembly_and_factorisation"] = stage.Lap();
   const std::vector<BarResult> results = fem.Solve(DissertationLoadCases());
   out["timings"]["solve_24_load_cases"] = stage.Lap();
-  const std::vector<ForceToLift> lift = fem.ForceToLiftSternum({{0.65, false, 1}, {0.75, false, 1}, {0.85, false, 1}});
+  const std::vector<ForceToLift> lift =
+      fem.ForceToLiftSternum({{0.65, false, 1}, {0.75, false, 1}, {0.85, false, 1}});
   out["timings"]["force_to_lift"] = stage.Lap();
   if (dataset != nullptr) {
     dataset->AddPatient(ribcage, results, lift, row.haller_index);
@@ -73,11 +74,16 @@ nlohmann::json RunPatient(const GenericRibcage& generic, const PatientRow& row, 
   }
   out["timings"]["total"] = total.Lap();
   const LinearElasticSummary& s = fem.solver().summary();
-  out["mesh"] = {{"nodes", s.nodes}, {"tets", s.tets}, {"free_dofs", s.free_dofs},
-                 {"nnz_K_lower", s.factorization.nonzeros_lower}, {"nnz_L", s.factorization.nonzeros_factor},
+  out["mesh"] = {{"nodes", s.nodes},
+                 {"tets", s.tets},
+                 {"free_dofs", s.free_dofs},
+                 {"nnz_K_lower", s.factorization.nonzeros_lower},
+                 {"nnz_L", s.factorization.nonzeros_factor},
                  {"factorisation_gflop", 1e-9 * s.factorization.flops}};
   out["solver"] = s.BriefReport();
   out["fit"] = ribcage.message;
+  out["fit_residual_mm"] =
+      ribcage.residual_mm;  // largest |CT - measured| of width, depth, length, depression
   out["measured"] = {{"width_mm", ribcage.measured.width_mm},
                      {"depth_mm", ribcage.measured.depth_mm},
                      {"sternal_length_mm", ribcage.measured.sternal_length_mm},
@@ -85,7 +91,9 @@ nlohmann::json RunPatient(const GenericRibcage& generic, const PatientRow& row, 
                      {"haller_index", ribcage.measured.haller_index},
                      {"ct_haller_index", row.haller_index}};
   for (const ForceToLift& f : lift) {
-    out["force_to_lift_n"][std::to_string(f.position.position).substr(0, 4)] = f.force_n;
+    const std::string at = std::to_string(f.position.position).substr(0, 4);
+    out["force_to_lift_n"][at] = f.force_n;
+    out["force_per_20mm_n"][at] = 20.0 / f.lift_per_newton_mm;  // the dissertation's figure: ~1000 N
   }
   out["sternum_lift_mm_at_0.85L_1500N"] = results[23 - 1].sternum_lift_mm;
   return out;
@@ -129,7 +137,8 @@ nlohmann::json CartilageSweep(const GenericRibcage& generic, const PatientRow& r
     options.materials.cartilage.youngs_modulus_mpa = e;
     const RibcageFem fem(ribcage, options);
     nlohmann::json entry = {{"cartilage_mpa", e}};
-    for (const ForceToLift& f : fem.ForceToLiftSternum({{0.65, false, 1}, {0.75, false, 1}, {0.85, false, 1}})) {
+    for (const ForceToLift& f :
+         fem.ForceToLiftSternum({{0.65, false, 1}, {0.75, false, 1}, {0.85, false, 1}})) {
       entry["force_to_lift_n"].push_back(f.force_n);
       entry["force_per_20mm_n"].push_back(20.0 / f.lift_per_newton_mm);
     }
@@ -171,8 +180,9 @@ int main(int argc, char** argv) {
     } else if (a == "--cell-mm") {
       generic_options.rib_cell_length_mm = std::stod(next());
     } else {
-      std::cerr << "usage: fem_benchmark [--patient ID | --all] [--dataset OUT.h5] [--table CSV] [--threads N] "
-                   "[--cell-mm MM] [--ccx CCX] [--cartilage-sweep]\n";
+      std::cerr
+          << "usage: fem_benchmark [--patient ID | --all] [--dataset OUT.h5] [--table CSV] [--threads N] "
+             "[--cell-mm MM] [--ccx CCX] [--cartilage-sweep]\n";
       return 2;
     }
   }
@@ -184,16 +194,18 @@ int main(int argc, char** argv) {
     Stopwatch total;
     const std::vector<PatientRow> rows = ReadPatientTable(table);
     const GenericRibcage generic = BuildGenericRibcage(generic_options);
-    report["generic_ribcage"] = {{"corner_nodes", generic.nodes.rows()}, {"tets", generic.tets.rows()},
-                                 {"build", total.Lap()}};
+    report["generic_ribcage"] = {
+        {"corner_nodes", generic.nodes.rows()}, {"tets", generic.tets.rows()}, {"build", total.Lap()}};
     if (!ccx.empty()) report["calculix_peer"] = RunCalculixPeer(generic, FindPatient(rows, patient), ccx);
     if (sweep) report["cartilage_sweep"] = CartilageSweep(generic, FindPatient(rows, patient));
     if (!all) {
       report["patients"].push_back(RunPatient(generic, FindPatient(rows, patient), nullptr));
     } else {
       std::unique_ptr<FemDatasetWriter> dataset;
-      if (!dataset_path.empty()) dataset = std::make_unique<FemDatasetWriter>(dataset_path, generic, DissertationLoadCases());
-      pectus::Progress progress("FE of " + std::to_string(rows.size()) + " patients", static_cast<std::int64_t>(rows.size()));
+      if (!dataset_path.empty())
+        dataset = std::make_unique<FemDatasetWriter>(dataset_path, generic, DissertationLoadCases());
+      pectus::Progress progress("FE of " + std::to_string(rows.size()) + " patients",
+                                static_cast<std::int64_t>(rows.size()));
       for (const PatientRow& row : rows) {
         report["patients"].push_back(RunPatient(generic, row, dataset.get()));
         progress.Advance();
@@ -204,17 +216,30 @@ int main(int argc, char** argv) {
       for (const auto& p : report["patients"]) seconds.push_back(p["timings"]["total"]["wall_s"]);
       summary["patient_wall_s_max"] = *std::max_element(seconds.begin(), seconds.end());
       summary["patient_wall_s_mean"] = std::accumulate(seconds.begin(), seconds.end(), 0.0) / seconds.size();
+      double worst_fit = 0;
+      for (const auto& p : report["patients"])
+        worst_fit = std::max(worst_fit, p["fit_residual_mm"].get<double>());
+      summary["fit_residual_mm_max"] = worst_fit;
       for (const char* position : {"0.65", "0.75", "0.85"}) {
         std::vector<double> f;
         for (const auto& p : report["patients"]) f.push_back(p["force_to_lift_n"][position]);
         std::sort(f.begin(), f.end());
-        summary["force_to_lift_n"][position] = {{"min", f.front()}, {"median", f[f.size() / 2]}, {"max", f.back()},
-                                                {"mean", std::accumulate(f.begin(), f.end(), 0.0) / f.size()}};
+        summary["force_to_lift_n"][position] = {
+            {"min", f.front()},
+            {"median", f[f.size() / 2]},
+            {"max", f.back()},
+            {"mean", std::accumulate(f.begin(), f.end(), 0.0) / f.size()}};
+        std::vector<double> g;
+        for (const auto& p : report["patients"]) g.push_back(p["force_per_20mm_n"][position]);
+        std::sort(g.begin(), g.end());
+        summary["force_per_20mm_n"][position] = {
+            {"min", g.front()}, {"median", g[g.size() / 2]}, {"max", g.back()}};
       }
       report["summary"] = summary;
       if (dataset) {
         dataset->Commit();
-        report["dataset"] = {{"path", dataset_path}, {"results", rows.size() * 24},
+        report["dataset"] = {{"path", dataset_path},
+                             {"results", rows.size() * 24},
                              {"surface_nodes_per_patient", dataset->num_surface_nodes()}};
       }
     }

@@ -38,7 +38,8 @@ struct Cantilever {
       if (on_tip) tip.push_back(f);
     }
     tip_faces.resize(static_cast<Eigen::Index>(tip.size()), 6);
-    for (std::size_t k = 0; k < tip.size(); ++k) tip_faces.row(static_cast<Eigen::Index>(k)) = boundary.faces.row(tip[k]);
+    for (std::size_t k = 0; k < tip.size(); ++k)
+      tip_faces.row(static_cast<Eigen::Index>(k)) = boundary.faces.row(tip[k]);
   }
 
   LoadCase TipLoad(const Eigen::Vector3d& force) const {

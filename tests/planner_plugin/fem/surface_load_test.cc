@@ -25,7 +25,8 @@ struct TopFace {
       if (on) top.push_back(f);
     }
     faces.resize(static_cast<Eigen::Index>(top.size()), 6);
-    for (std::size_t k = 0; k < top.size(); ++k) faces.row(static_cast<Eigen::Index>(k)) = boundary.faces.row(top[k]);
+    for (std::size_t k = 0; k < top.size(); ++k)
+      faces.row(static_cast<Eigen::Index>(k)) = boundary.faces.row(top[k]);
   }
 };
 
@@ -46,7 +47,8 @@ TEST(SurfaceLoad, ConsistentForcesIntegrateTheTractionExactly) {
   double moment = 0;
   for (Eigen::Index n = 0; n < top.mesh.num_nodes(); ++n) moment += g(3 * n) * top.mesh.nodes(n, 0);
   EXPECT_NEAR(moment, 40.0 * 40 * 40 * 40 / 4 * 8000.0 / 3, 1e-3 * moment);
-  EXPECT_THROW(AddForceOverPatch(top.mesh.nodes, Tri6Connectivity(0, 6), Eigen::Vector3d(0, 0, 1), &f), Error);
+  EXPECT_THROW(AddForceOverPatch(top.mesh.nodes, Tri6Connectivity(0, 6), Eigen::Vector3d(0, 0, 1), &f),
+               Error);
 }
 
 }  // namespace

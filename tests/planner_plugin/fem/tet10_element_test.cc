@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
-
 #include <random>
 
 #include "planner_plugin/fem/assembly.h"
@@ -17,7 +16,8 @@ namespace {
 TEST(Tet10Element, ShapeFunctionsAreAPartitionOfUnityAndInterpolateNodes) {
   // Reference positions of the 10 nodes.
   Tet10Nodes ref;
-  ref << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0.5, 0, 0, 0.5, 0.5, 0, 0, 0.5, 0, 0, 0, 0.5, 0.5, 0, 0.5, 0, 0.5, 0.5;
+  ref << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0.5, 0, 0, 0.5, 0.5, 0, 0, 0.5, 0, 0, 0, 0.5, 0.5, 0, 0.5, 0,
+      0.5, 0.5;
   for (int a = 0; a < 10; ++a) {
     const Eigen::Matrix<double, 10, 1> N = Tet10ShapeFunctions(ref.row(a).transpose());
     for (int b = 0; b < 10; ++b) EXPECT_NEAR(N(b), a == b ? 1.0 : 0.0, 1e-15) << a << " " << b;
@@ -30,7 +30,8 @@ TEST(Tet10Element, ShapeFunctionsAreAPartitionOfUnityAndInterpolateNodes) {
   for (int k = 0; k < 3; ++k) {
     Eigen::Vector3d d = Eigen::Vector3d::Zero();
     d(k) = h;
-    const Eigen::Matrix<double, 10, 1> fd = (Tet10ShapeFunctions(xi + d) - Tet10ShapeFunctions(xi - d)) / (2 * h);
+    const Eigen::Matrix<double, 10, 1> fd =
+        (Tet10ShapeFunctions(xi + d) - Tet10ShapeFunctions(xi - d)) / (2 * h);
     EXPECT_LT((fd - Tet10ShapeDerivatives(xi).col(k)).norm(), 1e-9);
   }
 }
@@ -91,7 +92,8 @@ TEST(Tet10Element, PatchTestReproducesLinearFieldToMachinePrecision) {
   // Internal forces balance: no residual force at free nodes, and the reactions sum to zero.
   const Eigen::VectorXd reactions = solver.Reactions(u, load);
   Eigen::Vector3d total = Eigen::Vector3d::Zero();
-  for (std::size_t k = 0; k < prescribed.size(); ++k) total(prescribed[k] % 3) += reactions(static_cast<Eigen::Index>(k));
+  for (std::size_t k = 0; k < prescribed.size(); ++k)
+    total(prescribed[k] % 3) += reactions(static_cast<Eigen::Index>(k));
   EXPECT_LT(total.norm(), 1e-8 * reactions.cwiseAbs().maxCoeff());
 }
 

@@ -15,7 +15,8 @@ namespace {
 namespace fs = std::filesystem;
 
 // A statismo model file whose mean is `mean` (two training shapes, +-0.5 mm apart along z).
-void WriteModel(const fs::path& path, const TriangleMesh& mean, const nlohmann::json& info = nlohmann::json::object()) {
+void WriteModel(const fs::path& path, const TriangleMesh& mean,
+                const nlohmann::json& info = nlohmann::json::object()) {
   Eigen::MatrixXd shapes(2, 3 * mean.num_vertices());
   Points3 a = mean.vertices.positions, b = mean.vertices.positions;
   a.col(2).array() += 0.5;
@@ -52,8 +53,8 @@ TEST_F(AverageChestTest, AResampledGridGivesItsLandmarksByConvention) {
 
 TEST_F(AverageChestTest, LandmarksInTheModelFileOrAFileComeFirst) {
   const TriangleMesh grid = testing::AnalyticChestGrid(31, 41);
-  const nlohmann::json info = {{"landmarks", {{"sternal_notch", {1, 2, 3}}, {"xiphoid", {4, 5, 6}},
-                                              {"manubrium_centre", {7, 8, 9}}}}};
+  const nlohmann::json info = {
+      {"landmarks", {{"sternal_notch", {1, 2, 3}}, {"xiphoid", {4, 5, 6}}, {"manubrium_centre", {7, 8, 9}}}}};
   WriteModel(dir_ / "with_landmarks.h5", grid, info);
   const AverageChest average = LoadAverageChest(dir_ / "with_landmarks.h5");
   EXPECT_EQ(average.landmarks.Position("manubrium_centre", "t"), Eigen::Vector3d(7, 8, 9));

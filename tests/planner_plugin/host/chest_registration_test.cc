@@ -61,9 +61,11 @@ TEST(ChestRegistration, RigidKeepsTheScaleAndTheAnteriorNeedNotBeExact) {
   rigid.similarity = false;
   // An anterior direction tilted along the sternal line changes nothing: only its part across the
   // sternal line counts.
-  const Eigen::Vector3d sternal = (source.Position("xiphoid", "") - source.Position("sternal_notch", "")).normalized();
-  const ChestRegistrationResult r = RegisterChestByLandmarks(source, Eigen::Vector3d(0, -1, 0) + 0.5 * sternal,
-                                                             Moved(source, T), T.rotation * Eigen::Vector3d(0, -1, 0), rigid);
+  const Eigen::Vector3d sternal =
+      (source.Position("xiphoid", "") - source.Position("sternal_notch", "")).normalized();
+  const ChestRegistrationResult r =
+      RegisterChestByLandmarks(source, Eigen::Vector3d(0, -1, 0) + 0.5 * sternal, Moved(source, T),
+                               T.rotation * Eigen::Vector3d(0, -1, 0), rigid);
   EXPECT_EQ(r.T_target_source.scale, 1.0);
   EXPECT_LT((r.T_target_source.rotation - T.rotation).norm(), 1e-12);
   EXPECT_GT(r.landmark_rms_mm, 1.0);  // a rigid fit cannot absorb a 20 % size difference

@@ -46,12 +46,15 @@ TEST(DepthDifference, IsTheHeightOfAPlaneAboveOrBelowEachPoint) {
 }
 
 TEST(DepthDifference, ACurvedSurfaceIsMetWithinItsInterpolationErrorAndFoldsGiveTheNearest) {
-  const auto dome = [](double x, double y) { return 30 - 0.002 * ((x - 50) * (x - 50) + (y - 50) * (y - 50)); };
+  const auto dome = [](double x, double y) {
+    return 30 - 0.002 * ((x - 50) * (x - 50) + (y - 50) * (y - 50));
+  };
   const TriangleMesh mesh = Grid(101, dome);  // 1 mm spacing: linear interpolation within 0.001 mm
   Points3 points(3, 3);
   points << 50, 50, 0, 20.3, 70.7, 10, 80.25, 10.5, 40;
   const Eigen::VectorXd t = DepthDifference(points, Eigen::Vector3d(0, 0, 1), mesh);
-  for (Eigen::Index k = 0; k < 3; ++k) EXPECT_NEAR(t(k), dome(points(k, 0), points(k, 1)) - points(k, 2), 1e-3);
+  for (Eigen::Index k = 0; k < 3; ++k)
+    EXPECT_NEAR(t(k), dome(points(k, 0), points(k, 1)) - points(k, 2), 1e-3);
   // Two layers (a fold): the nearer one counts.
   TriangleMesh two = Grid(3, [](double, double) { return 10.0; });
   const TriangleMesh upper = Grid(3, [](double, double) { return 25.0; });

@@ -41,7 +41,8 @@ Predicted MakePredicted(const Similarity3& T_patient_average, double bump_mm) {
   }
   const AverageChest a = Average();
   p.landmarks = a.landmarks;
-  for (Eigen::Index i = 0; i < x.rows(); ++i) x.row(i) = (T_patient_average * Eigen::Vector3d(x.row(i).transpose())).transpose();
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    x.row(i) = (T_patient_average * Eigen::Vector3d(x.row(i).transpose())).transpose();
   for (Landmark& l : p.landmarks.items) l.position = T_patient_average * l.position;
   return p;
 }
@@ -107,7 +108,8 @@ TEST(PlanScoring, AverageChestTheSkinDoesNotReachIsCountedNotScored) {
     if (high) keep.push_back(f);
   }
   upper.faces.resize(static_cast<Eigen::Index>(keep.size()), 3);
-  for (std::size_t k = 0; k < keep.size(); ++k) upper.faces.row(static_cast<Eigen::Index>(k)) = p.mesh.faces.row(keep[k]);
+  for (std::size_t k = 0; k < keep.size(); ++k)
+    upper.faces.row(static_cast<Eigen::Index>(k)) = p.mesh.faces.row(keep[k]);
   const PlanScore s = ScorePlan(upper, p.landmarks, average);
   EXPECT_GT(s.uncovered, average.mesh.num_vertices() / 3);
   EXPECT_EQ(s.roi.count + s.uncovered, average.mesh.num_vertices());

@@ -39,7 +39,8 @@ TEST(PlannerPluginLoader, RefusesAPluginOfAnotherVersionNamingBoth) {
   EXPECT_EQ(kind, ErrorKind::kBadInput);
   EXPECT_NE(message.find("interface version 2"), std::string::npos) << message;
   EXPECT_NE(message.find("needs version 1"), std::string::npos) << message;
-  EXPECT_NE(message.find(fs::path(PECTUS_PLANNER_FAKE_V2_PATH).filename().string()), std::string::npos) << message;
+  EXPECT_NE(message.find(fs::path(PECTUS_PLANNER_FAKE_V2_PATH).filename().string()), std::string::npos)
+      << message;
   // The same check on any table: a table too small for this host is refused too.
   PectusPlannerInterface small{};
   small.version = PECTUS_PLANNER_INTERFACE_VERSION;
@@ -49,7 +50,8 @@ TEST(PlannerPluginLoader, RefusesAPluginOfAnotherVersionNamingBoth) {
 }
 
 TEST(PlannerPluginLoader, SaysWhatIsWrongWithFilesThatAreNotPlugins) {
-  const fs::path text = fs::temp_directory_path() / ("pectus_not_a_plugin_" + std::to_string(::getpid()) + ".so");
+  const fs::path text =
+      fs::temp_directory_path() / ("pectus_not_a_plugin_" + std::to_string(::getpid()) + ".so");
   std::ofstream(text) << "not a shared library\n";
   auto [kind, message] = Failure([&] { PlannerPlugin::Load(text); });
   EXPECT_EQ(kind, ErrorKind::kBadInput);

@@ -47,16 +47,15 @@ TEST(FemDataset, EveryPatientTimesTwentyFourLoadCasesReadsBack) {
              "3,6.3,280,165,151,40\n";
   }
   PlannerSettings settings = SettingsFrom(nullptr);
-  settings.generic.rib_cell_length_mm = 10;
-  settings.generic.rib_pairs = 7;
+  settings.generic.rib_cell_length_mm = 10;  // a coarse mesh of the whole ribcage (all 10 rib pairs)
   settings.generic.sternum_cells_along = 28;
   int calls = 0;
-  const FemDatasetSummary s = RunFemDataset(dir / "two.csv", dir / "fem.h5", settings,
-                                            [&](std::int64_t done, std::int64_t total) {
-                                              ++calls;
-                                              EXPECT_EQ(done, calls);
-                                              EXPECT_EQ(total, 2);
-                                            });
+  const FemDatasetSummary s =
+      RunFemDataset(dir / "two.csv", dir / "fem.h5", settings, [&](std::int64_t done, std::int64_t total) {
+        ++calls;
+        EXPECT_EQ(done, calls);
+        EXPECT_EQ(total, 2);
+      });
   EXPECT_EQ(calls, 2);
   EXPECT_EQ(s.patients, 2);
   EXPECT_EQ(s.results, 48);

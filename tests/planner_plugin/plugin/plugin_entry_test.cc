@@ -50,18 +50,26 @@ TEST_F(PluginEntry, ExportsOneVersionedTableThatCAndCppLayOutAlike) {
   EXPECT_NE(std::string(api_->description).find("pectus planner"), std::string::npos);
   size_t c[15] = {};
   pectus_planner_api_layout_from_c(c, 15);
-  const size_t cpp[15] = {sizeof(PectusPlannerStatus),         sizeof(PectusPlannerPatient),
-                          sizeof(PectusPlannerOptions),        sizeof(PectusPlannerMeasurements),
-                          sizeof(PectusPlannerMesh),           sizeof(PectusPlannerLandmark),
-                          sizeof(PectusPlannerBar),            sizeof(PectusPlannerCaseResult),
-                          sizeof(PectusPlannerForceToLift),    sizeof(PectusPlannerDatasetSummary),
-                          sizeof(PectusPlannerInterface),      offsetof(PectusPlannerInterface, write_dataset),
-                          offsetof(PectusPlannerPatient, ct_haller_index), offsetof(PectusPlannerOptions, skin_columns),
+  const size_t cpp[15] = {sizeof(PectusPlannerStatus),
+                          sizeof(PectusPlannerPatient),
+                          sizeof(PectusPlannerOptions),
+                          sizeof(PectusPlannerMeasurements),
+                          sizeof(PectusPlannerMesh),
+                          sizeof(PectusPlannerLandmark),
+                          sizeof(PectusPlannerBar),
+                          sizeof(PectusPlannerCaseResult),
+                          sizeof(PectusPlannerForceToLift),
+                          sizeof(PectusPlannerDatasetSummary),
+                          sizeof(PectusPlannerInterface),
+                          offsetof(PectusPlannerInterface, write_dataset),
+                          offsetof(PectusPlannerPatient, ct_haller_index),
+                          offsetof(PectusPlannerOptions, skin_columns),
                           PECTUS_PLANNER_INTERFACE_VERSION};
   for (int i = 0; i < 15; ++i) EXPECT_EQ(c[i], cpp[i]) << "layout item " << i;
   // Nothing but the entry point is visible: not even the engine's functions (which this test binary
   // links itself, so the name below is the real one).
-  EXPECT_EQ(dlsym(handle_, "_ZN6pectus7planner19BuildGenericRibcageERKNS0_21GenericRibcageOptionsE"), nullptr);
+  EXPECT_EQ(dlsym(handle_, "_ZN6pectus7planner19BuildGenericRibcageERKNS0_21GenericRibcageOptionsE"),
+            nullptr);
 }
 
 TEST_F(PluginEntry, FailuresComeBackAsStatusesNamingWhatIsWrong) {
@@ -94,8 +102,8 @@ TEST_F(PluginEntry, FailuresComeBackAsStatusesNamingWhatIsWrong) {
   std::memset(unterminated.id, 'x', sizeof(unterminated.id));
   EXPECT_EQ(api_->create(&unterminated, nullptr, &planner, &status), PECTUS_PLANNER_BAD_INPUT);
   // A dataset that cannot be written is a failure, and nothing is left behind.
-  EXPECT_EQ(api_->write_dataset("/nonexistent/table.csv", "/tmp/pectus_never.h5", nullptr, nullptr, nullptr, nullptr,
-                                &status),
+  EXPECT_EQ(api_->write_dataset("/nonexistent/table.csv", "/tmp/pectus_never.h5", nullptr, nullptr, nullptr,
+                                nullptr, &status),
             PECTUS_PLANNER_BAD_INPUT);
   EXPECT_FALSE(std::filesystem::exists("/tmp/pectus_never.h5"));
 }
@@ -143,9 +151,11 @@ TEST_F(PluginEntry, APlannerThroughTheBoundaryMeasuresLikeTheCtAndSolves) {
   const PectusPlannerBar bars[2] = {{0.8, 0, 100.0}, {0.8, 0, 300.0}};
   PectusPlannerCaseResult results[2];
   std::vector<double> positions(2 * 3 * static_cast<std::size_t>(skin.num_vertices));
-  ASSERT_EQ(api_->solve(planner, bars, 2, nullptr, positions.data(), nullptr, results, &status), PECTUS_PLANNER_OK)
+  ASSERT_EQ(api_->solve(planner, bars, 2, nullptr, positions.data(), nullptr, results, &status),
+            PECTUS_PLANNER_OK)
       << status.message;
-  EXPECT_NEAR(results[1].sternum_lift_mm, 3.0 * results[0].sternum_lift_mm, 1e-9 * results[1].sternum_lift_mm);
+  EXPECT_NEAR(results[1].sternum_lift_mm, 3.0 * results[0].sternum_lift_mm,
+              1e-9 * results[1].sternum_lift_mm);
   // A bar off the sternum is refused with a message, not a crash.
   const PectusPlannerBar off = {1.3, 0, 100.0};
   EXPECT_EQ(api_->solve(planner, &off, 1, nullptr, nullptr, nullptr, nullptr, &status), PECTUS_PLANNER_USAGE);

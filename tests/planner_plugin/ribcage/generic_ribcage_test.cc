@@ -49,7 +49,8 @@ TEST(GenericRibcage, IsOneConformingSolidWithThreeMaterials) {
     ASSERT_EQ(directed.count({edge.second, edge.first}), 1u);
   }
   // Three regions, ten rib pairs, symmetric about the midline.
-  for (int region : {kSternumRegion, kRibRegion, kCartilageRegion}) EXPECT_GT((g.regions.array() == region).count(), 100);
+  for (int region : {kSternumRegion, kRibRegion, kCartilageRegion})
+    EXPECT_GT((g.regions.array() == region).count(), 100);
   EXPECT_EQ(g.tet_parts.maxCoeff(), 10);
   EXPECT_EQ(g.tet_parts.minCoeff(), -10);
   EXPECT_NEAR(g.nodes.col(0).maxCoeff(), -g.nodes.col(0).minCoeff(), 1e-9);

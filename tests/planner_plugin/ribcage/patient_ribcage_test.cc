@@ -41,7 +41,8 @@ TEST_F(PatientRibcageTest, MeasuringTheRibcageGivesBackItsInputsWithinOneMillime
     }
     r.mesh.Validate("patient " + id);
     EXPECT_EQ(r.landmarks.size(), 5u);
-    EXPECT_LT(r.landmarks.Position("sternal_notch", "landmarks").norm(), 1e-9);  // the scale is about the notch
+    EXPECT_LT(r.landmarks.Position("sternal_notch", "landmarks").norm(),
+              1e-9);  // the scale is about the notch
   }
 }
 
@@ -85,18 +86,31 @@ TEST_F(PatientRibcageTest, RejectsMeasurementsOutOfRangeNamingThePatient) {
   t.torsion_deg = 0;
   t.magnification = 0;
   EXPECT_THROW(MakePatientRibcage(*generic_, t), Error);
+  // A ribcage without the costal margin cannot be measured like the CT (it folded the lower cartilages).
+  t.magnification = 1;
+  GenericRibcageOptions seven;
+  seven.rib_pairs = 7;
+  try {
+    MakePatientRibcage(BuildGenericRibcage(seven), t);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kUsage);
+    EXPECT_NE(std::string(e.what()).find("10"), std::string::npos) << e.what();
+  }
 }
 
 TEST(PatientTable, ParsesColumnsByNameAndReportsTheLine) {
   const auto rows = ParsePatientTable(
-      "depth_mm,patient,width_mm,sternal_length_mm,depression_mm,torsion_deg\n140,a,250,150,20,-10\n", "t.csv");
+      "depth_mm,patient,width_mm,sternal_length_mm,depression_mm,torsion_deg\n140,a,250,150,20,-10\n",
+      "t.csv");
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_EQ(rows[0].measurements.patient, "a");
   EXPECT_EQ(rows[0].measurements.depth_mm, 140);
   EXPECT_EQ(rows[0].measurements.torsion_deg, -10);
   try {
-    ParsePatientTable("patient,width_mm,sternal_length_mm,depth_mm,depression_mm\n1,250,150,140,20\n2,25x,150,140,20\n",
-                      "t.csv");
+    ParsePatientTable(
+        "patient,width_mm,sternal_length_mm,depth_mm,depression_mm\n1,250,150,140,20\n2,25x,150,140,20\n",
+        "t.csv");
     FAIL() << "expected an error";
   } catch (const Error& e) {
     EXPECT_EQ(e.file(), "t.csv");

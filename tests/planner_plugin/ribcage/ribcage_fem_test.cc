@@ -11,13 +11,13 @@ namespace {
 
 const std::string kTable = std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv";
 
-// Patient 57 on a somewhat coarser mesh than the default (8 mm cells), to keep the test quick.
+// Patient 57 on a coarser mesh than the default (10 mm cells), to keep the test quick.
 class RibcageFemTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     GenericRibcageOptions o;
     o.sternum_cells_along = 28;
-    o.rib_cell_length_mm = 8.0;
+    o.rib_cell_length_mm = 10.0;
     generic_ = new GenericRibcage(BuildGenericRibcage(o));
     const auto rows = ReadPatientTable(kTable);
     patient_ = new PatientRibcage(MakePatientRibcage(*generic_, FindPatient(rows, "57").measurements));
@@ -65,12 +65,14 @@ TEST_F(RibcageFemTest, ReactionsAtTheSpineBalanceTheBar) {
   const Eigen::VectorXd r = fem_->solver().Reactions(u, load);
   Eigen::Vector3d total = Eigen::Vector3d::Zero();
   const auto& prescribed = fem_->solver().partition().prescribed;
-  for (std::size_t k = 0; k < prescribed.size(); ++k) total(prescribed[k] % 3) += r(static_cast<Eigen::Index>(k));
+  for (std::size_t k = 0; k < prescribed.size(); ++k)
+    total(prescribed[k] % 3) += r(static_cast<Eigen::Index>(k));
   EXPECT_LT((total - Eigen::Vector3d(0, 400.0, 0)).norm(), 1e-6 * 400.0) << total.transpose();
 }
 
 TEST_F(RibcageFemTest, ForceToLiftTheSternumByItsDepression) {
-  const std::vector<ForceToLift> f = fem_->ForceToLiftSternum({{0.65, false, 1}, {0.75, false, 1}, {0.85, false, 1}});
+  const std::vector<ForceToLift> f =
+      fem_->ForceToLiftSternum({{0.65, false, 1}, {0.75, false, 1}, {0.85, false, 1}});
   ASSERT_EQ(f.size(), 3u);
   for (const ForceToLift& x : f) {
     // 21 mm of depression; in vivo about 175-200 N (Weber 2006); the dissertation's model about 1000 N.

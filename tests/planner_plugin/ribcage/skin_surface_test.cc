@@ -14,7 +14,8 @@ TEST(SkinSurface, LiesOverTheChestWallAndFollowsTheRibcage) {
   o.sternum_cells_along = 28;
   o.rib_cell_length_mm = 8.0;
   const GenericRibcage generic = BuildGenericRibcage(o);
-  const auto rows = ReadPatientTable(std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv");
+  const auto rows =
+      ReadPatientTable(std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv");
   const PatientRibcage patient = MakePatientRibcage(generic, FindPatient(rows, "57").measurements);
   SkinSurfaceOptions options;
   options.rows = 24;
@@ -38,13 +39,17 @@ TEST(SkinSurface, LiesOverTheChestWallAndFollowsTheRibcage) {
   const LandmarkSet flat_on_skin = flat_skin.Landmarks(flat_skin.mesh.vertices.positions);
   const double bone_sunk = patient.landmarks.Position("xiphoid", "bone").y() -
                            flat_patient.landmarks.Position("xiphoid", "bone").y();
-  const double skin_sunk = on_skin.Position("xiphoid", "skin").y() - flat_on_skin.Position("xiphoid", "skin").y();
+  const double skin_sunk =
+      on_skin.Position("xiphoid", "skin").y() - flat_on_skin.Position("xiphoid", "skin").y();
   EXPECT_GT(bone_sunk, 15.0);
   EXPECT_NEAR(skin_sunk, bone_sunk, 0.1 * bone_sunk);
   // Rigid motion of the ribcage moves the skin rigidly (the ties are a partition of unity).
-  const Points3 shift = Points3::Constant(patient.mesh.num_nodes(), 3, 0).rowwise() + Eigen::RowVector3d(1, -2, 3);
+  const Points3 shift =
+      Points3::Constant(patient.mesh.num_nodes(), 3, 0).rowwise() + Eigen::RowVector3d(1, -2, 3);
   const Points3 moved = skin.Deformed(shift);
-  EXPECT_LT(((moved - skin.mesh.vertices.positions).rowwise() - Eigen::RowVector3d(1, -2, 3)).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_LT(
+      ((moved - skin.mesh.vertices.positions).rowwise() - Eigen::RowVector3d(1, -2, 3)).cwiseAbs().maxCoeff(),
+      1e-9);
   // Lifted by the bar, the skin over the sternum comes forward with it.
   const RibcageFem fem(patient);
   const BarResult r = fem.Solve({{0.85, false, 60.0}}).front();

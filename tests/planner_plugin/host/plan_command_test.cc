@@ -1,0 +1,115 @@
+// `pectus plan` as a user runs it (apps/commands/plan_command.cc): the example for patient 57,
+// on a coarse mesh and a small search, against an analytic average chest written as a statismo model.
+// Known answers: scenario B is 20 mm nearer the notch than A; the model is linear, so A's sternal lift
+// is its force times the depression over the force to lift; the best placement scores better than both
+// scenarios and than the unoperated chest; every file the report shows exists. Bad input: exit codes.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "analytic_chest.h"
+#include "shape/model/shape_model.h"
+#include "shape/model/statismo_io.h"
+#include "tests/support/cli_run.h"
+
+namespace pectus::planner {
+namespace {
+namespace fs = std::filesystem;
+using testing_support::Pectus;
+
+const std::string kTable = std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv";
+
+class PlanCommandTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("pectus_plan_command_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+    // The average chest: an analytic grid (landmarks by the grid's convention), two shapes 1 mm apart.
+    const TriangleMesh grid = testing::AnalyticChestGrid(31, 41);
+    Eigen::MatrixXd shapes(2, 3 * grid.num_vertices());
+    Points3 a = grid.vertices.positions, b = grid.vertices.positions;
+    a.col(2).array() += 0.5;
+    b.col(2).array() -= 0.5;
+    shapes.row(0) = Eigen::Map<const Eigen::VectorXd>(a.data(), a.size()).transpose();
+    shapes.row(1) = Eigen::Map<const Eigen::VectorXd>(b.data(), b.size()).transpose();
+    ShapeModel model = BuildShapeModel(shapes);
+    model.faces = grid.faces;
+    WriteStatismoModel(dir_ / "average.h5", model, nlohmann::json::object());
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string Path(const std::string& name) const { return "'" + (dir_ / name).string() + "'"; }
+  fs::path dir_;
+};
+
+TEST_F(PlanCommandTest, Patient57GivesTwoScenariosTheBestPlacementAndAnHtmlReportWithPictures) {
+  const auto run =
+      Pectus("plan --patient-table '" + kTable + "' --patient 57 --model " + Path("average.h5") +
+             " --bar-position 0.85 --force 1700 --out " + Path("plan57") + " --report " + Path("r.json") +
+             " --cell-mm 8 --search-positions 3 --search-forces 4 --search-refinements 3 --threads 1");
+  ASSERT_EQ(run.code, 0) << run.output;
+  // 1700 N is far beyond the force to lift for this model: the command says so.
+  EXPECT_NE(run.output.find("far outside its range"), std::string::npos) << run.output;
+  std::ifstream in(dir_ / "r.json");
+  const nlohmann::json r = nlohmann::json::parse(in);
+  ASSERT_EQ(r["scenarios"].size(), 3u);
+  const auto& a = r["scenarios"][0];
+  const auto& b = r["scenarios"][1];
+  const auto& best = r["scenarios"][2];
+  EXPECT_EQ(a["name"], "A");
+  EXPECT_EQ(b["name"], "B");
+  EXPECT_EQ(best["name"], "best");
+  // B: 20 mm nearer the notch, in mm along the sternum (0.85 of patient 57's 168 mm is 142.8 mm).
+  const double length = r["ribcage"]["model"]["sternal_length_mm"];
+  EXPECT_TRUE(b["bar"]["position_in_mm"].get<bool>());
+  EXPECT_NEAR(b["bar"]["position"].get<double>(), 0.85 * length - 20.0, 1e-6);
+  // Linear model: lift(A) = 1700 N x depression / force to lift at 0.85.
+  const double depression = r["ribcage"]["model"]["depression_mm"];
+  double force_to_lift = 0;
+  for (const auto& f : r["force_to_lift"]) {
+    if (f["position"] == 0.85 && !f["position_in_mm"].get<bool>()) force_to_lift = f["force_to_lift_n"];
+  }
+  ASSERT_GT(force_to_lift, 0.0);
+  EXPECT_NEAR(a["sternum_lift_mm"].get<double>(), 1700.0 * depression / force_to_lift, 1e-6 * 1700.0);
+  // The search's placement is better than both scenarios and than leaving the chest as it is.
+  const double best_rms = best["score"]["rms_mm"];
+  EXPECT_LT(best_rms, a["score"]["rms_mm"].get<double>());
+  EXPECT_LT(best_rms, b["score"]["rms_mm"].get<double>());
+  EXPECT_LT(best_rms, r["before"]["rms_mm"].get<double>());
+  EXPECT_DOUBLE_EQ(best_rms, r["search"]["best"]["objective_mm"].get<double>());
+  // The report shows the comparison, the search and the pictures, and every picture exists.
+  std::ifstream html(dir_ / "plan57" / "report.html");
+  std::stringstream text;
+  text << html.rdbuf();
+  for (const char* png : {"comparison.png", "search.png", "best.png", "ribcage.png"}) {
+    EXPECT_NE(text.str().find(png), std::string::npos) << png;
+    EXPECT_GT(fs::file_size(dir_ / "plan57" / png), 1000u) << png;
+  }
+}
+
+TEST_F(PlanCommandTest, BadInputAndUsageHaveTheirExitCodesAndWriteNothing) {
+  const std::string common = "plan --patient-table '" + kTable + "' --model " + Path("average.h5") +
+                             " --out " + Path("out") + " --cell-mm 8 --no-search";
+  auto run = Pectus(common + " --patient nobody");  // an argument naming no patient of the table: usage
+  EXPECT_EQ(run.code, 2) << run.output;
+  EXPECT_NE(run.output.find("nobody"), std::string::npos) << run.output;
+  {
+    std::ofstream table(dir_ / "deep.csv");  // a depression beyond the modeller's 0-60 mm: bad input
+    table << "patient,width_mm,sternal_length_mm,depth_mm,depression_mm\np1,250,150,140,70\n";
+  }
+  run = Pectus("plan --patient-table " + Path("deep.csv") + " --patient p1 --model " + Path("average.h5") +
+               " --out " + Path("out") + " --no-search");
+  EXPECT_EQ(run.code, 3) << run.output;
+  EXPECT_NE(run.output.find("p1"), std::string::npos) << run.output;
+  run = Pectus(common + " --patient 57 --bar-position 1.5");
+  EXPECT_EQ(run.code, 2) << run.output;
+  run = Pectus("plan --patient-table '" + kTable + "' --patient 57 --out " + Path("out"));  // no --model
+  EXPECT_EQ(run.code, 2) << run.output;
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+}  // namespace
+}  // namespace pectus::planner
