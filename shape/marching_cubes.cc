@@ -44,7 +44,8 @@ CaseTable BuildTable() {
     const int u = (axis + 1) % 3, v = (axis + 2) % 3;
     for (int side = 0; side < 2; ++side) {
       const int base = side << axis;
-      t.faces[std::size_t(2 * axis + side)] = {base, base | (1 << u), base | (1 << u) | (1 << v), base | (1 << v)};
+      t.faces[std::size_t(2 * axis + side)] = {base, base | (1 << u), base | (1 << u) | (1 << v),
+                                               base | (1 << v)};
     }
   }
   auto midpoint = [&](int edge) -> Eigen::Vector3d {
@@ -63,7 +64,8 @@ CaseTable BuildTable() {
       std::vector<std::array<int, 2>> segments;  // pairs of edges
       std::vector<Eigen::Vector3d> refs;         // a point on the inside side of each segment
       int crossings = 0;
-      for (int i = 0; i < 4; ++i) crossings += inside(q[std::size_t(i)]) != inside(q[std::size_t((i + 1) % 4)]);
+      for (int i = 0; i < 4; ++i)
+        crossings += inside(q[std::size_t(i)]) != inside(q[std::size_t((i + 1) % 4)]);
       if (crossings == 2) {
         std::array<int, 2> seg{};
         int s = 0;
@@ -154,7 +156,8 @@ MarchingCubesResult ExtractIsosurface(const ScalarField& field, const Points3& s
   MarchingCubesResult result;
   if (seeds.rows() == 0) return result;
   const Bounds3 b = ComputeBounds(seeds);
-  CheckGridFits(std::max((b.max - options.origin).cwiseAbs().maxCoeff(), (b.min - options.origin).cwiseAbs().maxCoeff()),
+  CheckGridFits(std::max((b.max - options.origin).cwiseAbs().maxCoeff(),
+                         (b.min - options.origin).cwiseAbs().maxCoeff()),
                 h, "marching cubes grid");
   // Cubes this near the end of the key range are not left (their neighbours would not pack).
   auto inside_key_range = [](GridKey cube) {
@@ -186,11 +189,14 @@ MarchingCubesResult ExtractIsosurface(const ScalarField& field, const Points3& s
       }
     points.resize(Eigen::Index(to_evaluate.size()), 3);
     for (std::size_t i = 0; i < to_evaluate.size(); ++i) {
-      points.row(Eigen::Index(i)) = (options.origin + UnpackGridKey(to_evaluate[i]).cast<double>() * h).transpose();
+      points.row(Eigen::Index(i)) =
+          (options.origin + UnpackGridKey(to_evaluate[i]).cast<double>() * h).transpose();
     }
     field(points, &batch_values);
-    if (batch_values.size() != points.rows()) ThrowFailure("marching cubes: the field returned the wrong count");
-    for (std::size_t i = 0; i < to_evaluate.size(); ++i) *values.Find(to_evaluate[i]) = batch_values(Eigen::Index(i));
+    if (batch_values.size() != points.rows())
+      ThrowFailure("marching cubes: the field returned the wrong count");
+    for (std::size_t i = 0; i < to_evaluate.size(); ++i)
+      *values.Find(to_evaluate[i]) = batch_values(Eigen::Index(i));
     result.evaluations += std::int64_t(to_evaluate.size());
 
     // Keep the cubes the surface crosses; step across every face the surface crosses.
@@ -213,7 +219,8 @@ MarchingCubesResult ExtractIsosurface(const ScalarField& field, const Points3& s
       if (!inside_key_range(cube)) continue;
       for (int f = 0; f < 6; ++f) {
         const auto& q = table.faces[std::size_t(f)];
-        const int m = ((mask >> q[0]) & 1) + ((mask >> q[1]) & 1) + ((mask >> q[2]) & 1) + ((mask >> q[3]) & 1);
+        const int m =
+            ((mask >> q[0]) & 1) + ((mask >> q[1]) & 1) + ((mask >> q[2]) & 1) + ((mask >> q[3]) & 1);
         if (m == 0 || m == 4) continue;
         const int axis = f / 2;
         const GridKey neighbour = (f % 2) ? cube + kStep[axis] : cube - kStep[axis];
@@ -269,9 +276,11 @@ MarchingCubesResult ExtractIsosurface(const ScalarField& field, const Points3& s
     }
   }
   result.mesh.vertices.positions.resize(Eigen::Index(vertices.size()), 3);
-  for (std::size_t i = 0; i < vertices.size(); ++i) result.mesh.vertices.positions.row(Eigen::Index(i)) = vertices[i];
+  for (std::size_t i = 0; i < vertices.size(); ++i)
+    result.mesh.vertices.positions.row(Eigen::Index(i)) = vertices[i];
   result.mesh.faces.resize(Eigen::Index(faces.size()), 3);
-  for (std::size_t i = 0; i < faces.size(); ++i) result.mesh.faces.row(Eigen::Index(i)) = faces[i].transpose();
+  for (std::size_t i = 0; i < faces.size(); ++i)
+    result.mesh.faces.row(Eigen::Index(i)) = faces[i].transpose();
   return result;
 }
 

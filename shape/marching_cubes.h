@@ -17,9 +17,9 @@ using ScalarField = std::function<void(const Points3& points, Eigen::VectorXd* v
 
 /// Options of ExtractIsosurface.
 struct MarchingCubesOptions {
-  double spacing = 1.0;                               ///< grid step (mm), > 0
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero();   ///< a grid corner (mm)
-  std::int64_t max_cubes = 100'000'000;               ///< stop (reached_limit) after this many cubes
+  double spacing = 1.0;                              ///< grid step (mm), > 0
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< a grid corner (mm)
+  std::int64_t max_cubes = 100'000'000;              ///< stop (reached_limit) after this many cubes
 
   /// False, with the reason in `why`, if a value is out of range.
   bool IsValid(std::string* why) const;
@@ -27,11 +27,11 @@ struct MarchingCubesOptions {
 
 /// The mesh and what it took.
 struct MarchingCubesResult {
-  TriangleMesh mesh;                  ///< triangles counter-clockwise seen from where s > 0
-  std::int64_t surface_cubes = 0;     ///< cubes the surface passes through
-  std::int64_t undefined_cubes = 0;   ///< cubes skipped because a corner value was NaN
-  std::int64_t evaluations = 0;       ///< grid points evaluated
-  bool reached_limit = false;         ///< max_cubes was hit: the surface is incomplete
+  TriangleMesh mesh;                 ///< triangles counter-clockwise seen from where s > 0
+  std::int64_t surface_cubes = 0;    ///< cubes the surface passes through
+  std::int64_t undefined_cubes = 0;  ///< cubes skipped because a corner value was NaN
+  std::int64_t evaluations = 0;      ///< grid points evaluated
+  bool reached_limit = false;        ///< max_cubes was hit: the surface is incomplete
 };
 
 /// Extracts the zero set of `field` connected to the cubes that contain `seeds`.

@@ -31,7 +31,8 @@ MeshCheck CheckMesh(const TriangleMesh& mesh) {
     for (int i = 0; i < 3; ++i) {
       const std::int32_t v = mesh.faces(f, i);
       if (v < 0 || v >= nv) {
-        check.message = "face " + std::to_string(f) + " has vertex index " + std::to_string(v) + " out of range";
+        check.message =
+            "face " + std::to_string(f) + " has vertex index " + std::to_string(v) + " out of range";
         return check;
       }
       polygons[static_cast<std::size_t>(f)][static_cast<std::size_t>(i)] = static_cast<std::size_t>(v);
@@ -42,8 +43,9 @@ MeshCheck CheckMesh(const TriangleMesh& mesh) {
     return check;
   };
   if (!PMP::is_polygon_soup_a_polygon_mesh(polygons)) {
-    check.message = "not an oriented manifold: an edge has more than two faces or two faces in the same "
-                    "direction, or a vertex joins more than one fan of faces";
+    check.message =
+        "not an oriented manifold: an edge has more than two faces or two faces in the same "
+        "direction, or a vertex joins more than one fan of faces";
     return finish();
   }
   check.manifold = true;

@@ -15,13 +15,13 @@ struct MeshCheck {
   /// is_polygon_soup_a_polygon_mesh: every edge in at most two faces with opposite directions, every
   /// vertex on one fan). The other fields are only filled when this holds.
   bool manifold = false;
-  bool self_intersecting = false;      ///< two faces that share no vertex meet (does_self_intersect)
-  bool closed = false;                 ///< no border edges (watertight)
-  std::int64_t border_edges = 0;       ///< edges with one face
-  std::int64_t components = 0;         ///< connected pieces
-  double area_mm2 = 0.0;               ///< total area
-  double seconds = 0.0;                ///< wall time of the check
-  std::string message;                 ///< empty when manifold and not self-intersecting, else why not
+  bool self_intersecting = false;  ///< two faces that share no vertex meet (does_self_intersect)
+  bool closed = false;             ///< no border edges (watertight)
+  std::int64_t border_edges = 0;   ///< edges with one face
+  std::int64_t components = 0;     ///< connected pieces
+  double area_mm2 = 0.0;           ///< total area
+  double seconds = 0.0;            ///< wall time of the check
+  std::string message;             ///< empty when manifold and not self-intersecting, else why not
 };
 
 /// Checks `mesh` with CGAL (exact predicates). Never throws for a bad mesh: the answer says what is

@@ -38,20 +38,23 @@ bool PoseAdjustmentOptions::IsValid(std::string* why) const {
     if (why) *why = text;
     return false;
   };
-  if (!(min_robust_scale_mm > 0.0) || !std::isfinite(min_robust_scale_mm)) return fail("robust scale floor must be > 0");
+  if (!(min_robust_scale_mm > 0.0) || !std::isfinite(min_robust_scale_mm))
+    return fail("robust scale floor must be > 0");
   if (max_iterations < 1) return fail("max iterations must be >= 1");
   return true;
 }
 
-PoseAdjustmentResult AdjustPoses(const std::vector<SweepCorrespondence>& pairs, std::vector<Rigid3>* T_world_sweep,
-                                 const PoseAdjustmentOptions& options) {
+PoseAdjustmentResult AdjustPoses(const std::vector<SweepCorrespondence>& pairs,
+                                 std::vector<Rigid3>* T_world_sweep, const PoseAdjustmentOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage("pose adjustment: " + why);
   std::vector<Rigid3>& P = *T_world_sweep;
   const std::size_t n = P.size();
-  if (options.anchor >= n) ThrowUsage("pose adjustment: anchor " + std::to_string(options.anchor) + " of " + std::to_string(n));
+  if (options.anchor >= n)
+    ThrowUsage("pose adjustment: anchor " + std::to_string(options.anchor) + " of " + std::to_string(n));
   for (const auto& c : pairs) {
-    if (c.i >= n || c.j >= n || c.i == c.j) ThrowUsage("pose adjustment: correspondence between invalid sweeps");
+    if (c.i >= n || c.j >= n || c.i == c.j)
+      ThrowUsage("pose adjustment: correspondence between invalid sweeps");
   }
   PoseAdjustmentResult result;
   result.rms_before_mm = PointToPlaneRms(pairs, P);
@@ -63,7 +66,8 @@ PoseAdjustmentResult AdjustPoses(const std::vector<SweepCorrespondence>& pairs, 
   // Robust scale from the starting residuals.
   std::vector<double> abs_r;
   abs_r.reserve(pairs.size());
-  for (const auto& c : pairs) abs_r.push_back(std::abs((P[c.i].linear() * c.n).dot(P[c.j] * c.p - P[c.i] * c.q)));
+  for (const auto& c : pairs)
+    abs_r.push_back(std::abs((P[c.i].linear() * c.n).dot(P[c.j] * c.p - P[c.i] * c.q)));
   result.robust_scale_mm = std::max(options.min_robust_scale_mm, MadScale(&abs_r));
 
   std::vector<Eigen::Quaterniond> q(n);
@@ -81,7 +85,8 @@ PoseAdjustmentResult AdjustPoses(const std::vector<SweepCorrespondence>& pairs, 
   for (const auto& c : pairs) {
     problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PointToPlaneResidual, 1, 4, 3, 4, 3>(
                                  new PointToPlaneResidual(c.p, c.q, c.n, c.weight)),
-                             &loss, q[c.i].coeffs().data(), t[c.i].data(), q[c.j].coeffs().data(), t[c.j].data());
+                             &loss, q[c.i].coeffs().data(), t[c.i].data(), q[c.j].coeffs().data(),
+                             t[c.j].data());
   }
   for (std::size_t s = 0; s < n; ++s) {
     if (!problem.HasParameterBlock(q[s].coeffs().data())) continue;

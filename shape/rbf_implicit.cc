@@ -12,6 +12,7 @@
 #include "registration/kdtree.h"
 #include "shape/core/error.h"
 #include "shape/local_rbf.h"
+#include "shape/rbf_levels.h"
 #include "shape/sparse_grid.h"
 
 namespace pectus {
@@ -23,70 +24,6 @@ inline double Wendland(double r) {
   const double a = 1.0 - r;
   const double a2 = a * a;
   return a2 * a2 * (4.0 * r + 1.0);
-}
-
-// Points averaged per cube (and per side of a thin sheet: points whose normals oppose the first point
-// of their cube are averaged apart), with their counts. Deterministic.
-struct Level {
-  double spacing = 0.0;
-  Points3 positions;
-  Points3 normals;
-  Eigen::VectorXd counts;
-  Eigen::VectorXd eps_plus, eps_minus;  // off-surface distances per point (centre levels only)
-  std::unique_ptr<KdTree3> tree;
-};
-
-void AverageByVoxel(const Points3& positions, const Points3& normals, const Eigen::VectorXd& counts,
-                    double spacing, Level* level) {
-  const Eigen::Index n = positions.rows();
-  const Bounds3 b = ComputeBounds(positions);
-  CheckGridFits(b.extent().maxCoeff() + spacing, spacing, "RBF centre grid");
-  std::vector<std::pair<GridKey, std::uint32_t>> keyed(static_cast<std::size_t>(n));
-#pragma omp parallel for schedule(static)
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const Eigen::Vector3d u = (positions.row(i).transpose() - b.min) / spacing;
-    keyed[static_cast<std::size_t>(i)] = {
-        PackGridKey(std::int64_t(u.x()), std::int64_t(u.y()), std::int64_t(u.z())), std::uint32_t(i)};
-  }
-  std::sort(keyed.begin(), keyed.end());
-  std::vector<Eigen::Vector3d> pos, nor;
-  std::vector<double> cnt;
-  pos.reserve(keyed.size() / 4 + 1);
-  nor.reserve(keyed.size() / 4 + 1);
-  cnt.reserve(keyed.size() / 4 + 1);
-  for (std::size_t s = 0; s < keyed.size();) {
-    std::size_t e = s;
-    while (e < keyed.size() && keyed[e].first == keyed[s].first) ++e;
-    const Eigen::Vector3d ref = normals.row(keyed[s].second).transpose();
-    for (int side = 0; side < 2; ++side) {
-      Eigen::Vector3d sp = Eigen::Vector3d::Zero(), sn = Eigen::Vector3d::Zero();
-      double sc = 0.0;
-      for (std::size_t t = s; t < e; ++t) {
-        const Eigen::Index i = keyed[t].second;
-        const Eigen::Vector3d nv = normals.row(i).transpose();
-        if ((nv.dot(ref) >= 0.0) != (side == 0)) continue;
-        sp += counts(i) * positions.row(i).transpose();
-        sn += counts(i) * nv;
-        sc += counts(i);
-      }
-      if (sc > 0.0 && sn.norm() > 1e-12) {
-        pos.push_back(sp / sc);
-        nor.push_back(sn.normalized());
-        cnt.push_back(sc);
-      }
-    }
-    s = e;
-  }
-  level->spacing = spacing;
-  level->positions.resize(Eigen::Index(pos.size()), 3);
-  level->normals.resize(Eigen::Index(pos.size()), 3);
-  level->counts.resize(Eigen::Index(pos.size()));
-  for (std::size_t i = 0; i < pos.size(); ++i) {
-    level->positions.row(Eigen::Index(i)) = pos[i].transpose();
-    level->normals.row(Eigen::Index(i)) = nor[i].transpose();
-    level->counts(Eigen::Index(i)) = cnt[i];
-  }
-  level->tree = std::make_unique<KdTree3>(level->positions);
 }
 
 }  // namespace
@@ -116,7 +53,7 @@ bool RbfImplicitOptions::IsValid(std::string* why) const {
 struct RbfImplicit::Impl {
   RbfImplicitOptions options;
   Points3 positions;                 // input points (for the fitting accuracy)
-  std::deque<Level> levels;          // [0] constraints at centre_spacing / 2, [1] centres, coarser after
+  std::deque<RbfLevel> levels;       // [0] constraints at centre_spacing / 2, [1] centres, coarser after
   Eigen::Vector3d grid_origin;       // corner of cell (0, 0, 0)
   GridKeyMap<std::int32_t> cell_of;  // cell key -> index into fits, -1 = undefined
   std::vector<LocalRbf> fits;
@@ -125,32 +62,6 @@ struct RbfImplicit::Impl {
 
   Eigen::Vector3d CellCentre(GridKey key) const {
     return grid_origin + (UnpackGridKey(key).cast<double>().array() + 0.5).matrix() * options.cell_size;
-  }
-
-  // Off-surface distances of a centre level (Carr et al. 2001, Sec. 3.1: an off-surface point must not
-  // lie nearer to other data than to its own point).
-  void ValidateOffSurface(Level* level) const {
-    const Level& fine = levels[0];
-    const Eigen::Index n = level->positions.rows();
-    level->eps_plus.resize(n);
-    level->eps_minus.resize(n);
-#pragma omp parallel for schedule(static)
-    for (Eigen::Index i = 0; i < n; ++i) {
-      const Eigen::Vector3d p = level->positions.row(i).transpose();
-      const Eigen::Vector3d nv = level->normals.row(i).transpose();
-      for (int side = 0; side < 2; ++side) {
-        double eps = options.off_surface_distance;
-        const double sign = side == 0 ? 1.0 : -1.0;
-        int tries = 0;
-        for (; tries < 4; ++tries, eps *= 0.5) {
-          std::uint32_t idx;
-          double d2;
-          fine.tree->Nearest(p + sign * eps * nv, &idx, &d2);
-          if (d2 >= 0.49 * eps * eps) break;
-        }
-        (side == 0 ? level->eps_plus : level->eps_minus)(i) = tries < 4 ? eps : 0.0;
-      }
-    }
   }
 
   // The local fit of one cell, or nullopt if the cell is undefined.
@@ -189,8 +100,8 @@ struct RbfImplicit::Impl {
       if (rows.size() <= 8 * max_centres) break;
     }
     if (j + 1 == k) levels[j].tree->Radius(c, radius, &rows, false);
-    const Level& cl = levels[k];
-    const Level& rl = levels[j];
+    const RbfLevel& cl = levels[k];
+    const RbfLevel& rl = levels[j];
     const Eigen::Index m = Eigen::Index(centres.size());
     const Eigen::Index nr = Eigen::Index(rows.size());
 
@@ -226,9 +137,7 @@ struct RbfImplicit::Impl {
     problem.values.conservativeResize(row);
     problem.weights.conservativeResize(row);
     LocalRbf fit;
-    static const double hole_smoothing = getenv("HSM") ? atof(getenv("HSM")) : -1.0;
-    const double smoothing = (hole_smoothing > 0 && along > options.cell_size) ? hole_smoothing : options.smoothing;
-    if (!fit.Fit(problem, smoothing)) return std::nullopt;
+    if (!fit.Fit(problem, options.smoothing)) return std::nullopt;
     return fit;
   }
 
@@ -244,7 +153,8 @@ struct RbfImplicit::Impl {
       std::fill(last, last + 8, ~GridKey{0});
 #pragma omp for schedule(static)
       for (Eigen::Index q = 0; q < n; ++q) {
-        const Eigen::Vector3d u = (queries.row(q).transpose() - grid_origin) / h - Eigen::Vector3d::Constant(0.5);
+        const Eigen::Vector3d u =
+            (queries.row(q).transpose() - grid_origin) / h - Eigen::Vector3d::Constant(0.5);
         const std::int64_t a = std::int64_t(std::floor(u.x())), b = std::int64_t(std::floor(u.y())),
                            cc = std::int64_t(std::floor(u.z()));
         int slot = 0;
@@ -326,9 +236,9 @@ RbfImplicit::RbfImplicit(const Points3& positions, const Points3& normals, const
   for (double spacing = options.centre_spacing;; spacing *= 2.0) {
     // In place: a level's k-d tree refers to its positions (a deque never moves its elements).
     im.levels.emplace_back();
-    const Level& prev = im.levels[im.levels.size() - 2];
+    const RbfLevel& prev = im.levels[im.levels.size() - 2];
     AverageByVoxel(prev.positions, prev.normals, prev.counts, spacing, &im.levels.back());
-    im.ValidateOffSurface(&im.levels.back());
+    SetOffSurfaceDistances(im.levels[0], options.off_surface_distance, &im.levels.back());
     if (im.levels.back().positions.rows() <= options.max_centres / 2 || im.levels.size() > 24) break;
   }
 }
@@ -364,7 +274,7 @@ RbfFittingAccuracy RbfImplicit::FittingAccuracy() {
     acc.on_surface_p95_mm = *p95;
     acc.on_surface_max_mm = *std::max_element(abs_values.begin(), abs_values.end());
   }
-  const Level& cl = impl_->levels[1];
+  const RbfLevel& cl = impl_->levels[1];
   const Eigen::Index m = cl.positions.rows();
   Points3 off(2 * m, 3);
   Eigen::VectorXd target(2 * m);
@@ -380,7 +290,8 @@ RbfFittingAccuracy RbfImplicit::FittingAccuracy() {
   off.conservativeResize(k, 3);
   Evaluate(off, &s);
   for (Eigen::Index i = 0; i < k; ++i) {
-    if (std::isfinite(s(i))) acc.off_surface_max_mm = std::max(acc.off_surface_max_mm, std::abs(s(i) - target(i)));
+    if (std::isfinite(s(i)))
+      acc.off_surface_max_mm = std::max(acc.off_surface_max_mm, std::abs(s(i) - target(i)));
   }
   acc.num_off_surface = k;
   acc.fitting_accuracy_mm = std::max(acc.on_surface_max_mm, acc.off_surface_max_mm);

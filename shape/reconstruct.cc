@@ -93,7 +93,8 @@ bool ReconstructOptions::IsValid(std::string* why) const {
   if (!non_negative(smoothing)) return fail("smoothing must be >= 0");
   if (!non_negative(fill_holes)) return fail("fill-holes size must be >= 0 mm");
   if (!non_negative(margin)) return fail("margin must be >= 0 mm (0 = automatic)");
-  if (!non_negative(off_surface_distance)) return fail("off-surface distance must be >= 0 mm (0 = automatic)");
+  if (!non_negative(off_surface_distance))
+    return fail("off-surface distance must be >= 0 mm (0 = automatic)");
   if (normal_neighbours < 3 || normal_neighbours > 256) return fail("normal neighbours must be in [3, 256]");
   if (viewpoint && !viewpoint->allFinite()) return fail("viewpoint must be finite");
   return true;
@@ -198,8 +199,8 @@ ReconstructResult ReconstructSurface(const PointCloud& cloud, const ReconstructO
   std::ostringstream msg;
   msg << result.mesh.num_vertices() << " vertices, " << result.mesh.num_faces() << " triangles from "
       << result.used_points << " points; " << result.trim.holes_filled << " holes filled"
-      << (result.trim.boundary_edges == 0 ? ", watertight" : "")
-      << "; fitting accuracy " << result.accuracy.fitting_accuracy_mm << " mm";
+      << (result.trim.boundary_edges == 0 ? ", watertight" : "") << "; fitting accuracy "
+      << result.accuracy.fitting_accuracy_mm << " mm";
   result.message = msg.str();
   return result;
 }

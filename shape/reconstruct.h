@@ -50,21 +50,21 @@ struct ReconstructOptions {
 
 /// The surface and what it took.
 struct ReconstructResult {
-  TriangleMesh mesh;                 ///< vertices with normals and a "data_distance" scalar (mm)
-  RbfFittingAccuracy accuracy;       ///< dissertation Eq. 11 and its parts
-  TrimResult trim;                   ///< holes filled, pieces removed
-  std::optional<MeshCheck> check;    ///< when options.check
-  std::string normals_source;        ///< "input", "propagated" or "viewpoint"
-  double point_spacing_mm = 0.0;     ///< side of the square each input point covers (from density)
-  double spacing_mm = 0.0;           ///< grid step used
-  double centre_spacing_mm = 0.0;    ///< RBF centre spacing used
-  double cell_size_mm = 0.0;         ///< partition-of-unity cell used
-  std::int64_t input_points = 0;     ///< points given
-  std::int64_t used_points = 0;      ///< points with a usable normal
-  std::int64_t cells = 0;            ///< local fits made (undefined ones included)
-  std::int64_t surface_cubes = 0;    ///< marching cubes the surface crossed
+  TriangleMesh mesh;               ///< vertices with normals and a "data_distance" scalar (mm)
+  RbfFittingAccuracy accuracy;     ///< dissertation Eq. 11 and its parts
+  TrimResult trim;                 ///< holes filled, pieces removed
+  std::optional<MeshCheck> check;  ///< when options.check
+  std::string normals_source;      ///< "input", "propagated" or "viewpoint"
+  double point_spacing_mm = 0.0;   ///< side of the square each input point covers (from density)
+  double spacing_mm = 0.0;         ///< grid step used
+  double centre_spacing_mm = 0.0;  ///< RBF centre spacing used
+  double cell_size_mm = 0.0;       ///< partition-of-unity cell used
+  std::int64_t input_points = 0;   ///< points given
+  std::int64_t used_points = 0;    ///< points with a usable normal
+  std::int64_t cells = 0;          ///< local fits made (undefined ones included)
+  std::int64_t surface_cubes = 0;  ///< marching cubes the surface crossed
   std::vector<std::pair<std::string, double>> timings_s;  ///< wall time per stage, in order
-  std::string message;               ///< one line: what was made
+  std::string message;                                    ///< one line: what was made
 };
 
 /// Reconstructs a surface. Throws Error(kBadInput) naming `what` for a cloud that cannot give one

@@ -53,8 +53,8 @@ bool SurfaceNormalOptions::IsValid(std::string* why) const {
   return true;
 }
 
-SurfaceNormalResult SurfaceNormals(const PointCloud& cloud, const KdTree3& tree, const SurfaceNormalOptions& options,
-                                   const std::string& what) {
+SurfaceNormalResult SurfaceNormals(const PointCloud& cloud, const KdTree3& tree,
+                                   const SurfaceNormalOptions& options, const std::string& what) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage("normals: " + why);
   SurfaceNormalResult result;
@@ -76,10 +76,11 @@ SurfaceNormalResult SurfaceNormals(const PointCloud& cloud, const KdTree3& tree,
   if (result.normals.rows() == 0) {
     const double linear = LinearFraction(cloud.positions, tree, options.neighbours);
     if (linear > 0.5) {
-      ThrowBadInput(what, "no normals obtainable: the " + std::to_string(options.neighbours) +
-                              " nearest neighbours of " + std::to_string(int(std::lround(100.0 * linear))) +
-                              " % of the points lie on a line (scan lines farther apart than the neighbourhood "
-                              "reaches; raise --normal-neighbours or give normals)");
+      ThrowBadInput(what,
+                    "no normals obtainable: the " + std::to_string(options.neighbours) +
+                        " nearest neighbours of " + std::to_string(int(std::lround(100.0 * linear))) +
+                        " % of the points lie on a line (scan lines farther apart than the neighbourhood "
+                        "reaches; raise --normal-neighbours or give normals)");
     }
     NormalOptions no;
     no.k = options.neighbours;
@@ -89,10 +90,12 @@ SurfaceNormalResult SurfaceNormals(const PointCloud& cloud, const KdTree3& tree,
     result.normals = EstimateNormals(cloud.positions, no, &tree).normals;
     result.source = options.viewpoint ? "viewpoint" : "propagated";
   }
-  for (Eigen::Index i = 0; i < result.normals.rows(); ++i) result.usable += result.normals.row(i).squaredNorm() > 0.25;
+  for (Eigen::Index i = 0; i < result.normals.rows(); ++i)
+    result.usable += result.normals.row(i).squaredNorm() > 0.25;
   if (result.usable < cloud.size() / 2) {
     ThrowBadInput(what, "no normals obtainable: only " + std::to_string(result.usable) + " of " +
-                            std::to_string(cloud.size()) + " points have a neighbourhood spread in two directions");
+                            std::to_string(cloud.size()) +
+                            " points have a neighbourhood spread in two directions");
   }
   return result;
 }

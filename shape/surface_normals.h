@@ -12,8 +12,8 @@ namespace pectus {
 
 /// Options of SurfaceNormals.
 struct SurfaceNormalOptions {
-  int neighbours = 16;          ///< k of the PCA normals, [3, 256]
-  bool recompute = false;       ///< estimate normals even if the cloud has them
+  int neighbours = 16;     ///< k of the PCA normals, [3, 256]
+  bool recompute = false;  ///< estimate normals even if the cloud has them
   /// Orient toward this scanner position (mm) instead of by propagation (Hoppe et al. 1992, Sec. 3.3).
   std::optional<Eigen::Vector3d> viewpoint;
 
@@ -23,8 +23,8 @@ struct SurfaceNormalOptions {
 
 /// Oriented normals and where they came from.
 struct SurfaceNormalResult {
-  Points3 normals;     ///< #points by 3, unit; a zero row where a point has no usable normal
-  std::string source;  ///< "input", "viewpoint" or "propagated"
+  Points3 normals;          ///< #points by 3, unit; a zero row where a point has no usable normal
+  std::string source;       ///< "input", "viewpoint" or "propagated"
   Eigen::Index usable = 0;  ///< rows with a unit normal
 };
 
@@ -34,7 +34,7 @@ struct SurfaceNormalResult {
 /// fewer than half the points get one.
 /// @param[in] cloud  positions (mm), optionally normals
 /// @param[in] tree   k-d tree over cloud.positions
-SurfaceNormalResult SurfaceNormals(const PointCloud& cloud, const KdTree3& tree, const SurfaceNormalOptions& options,
-                                   const std::string& what);
+SurfaceNormalResult SurfaceNormals(const PointCloud& cloud, const KdTree3& tree,
+                                   const SurfaceNormalOptions& options, const std::string& what);
 
 }  // namespace pectus

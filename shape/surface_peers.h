@@ -19,7 +19,8 @@ TriangleMesh PclPoissonSurface(const PointCloud& cloud, int depth = 8);
 /// @param[in] resolution   grid points per axis over the bounding box
 /// @param[in] epsilon_mm   off-surface displacement (mm)
 /// @param[in] extend       the grid extends beyond the bounding box by this fraction on every side
-TriangleMesh PclMarchingCubesRbf(const PointCloud& cloud, int resolution, double epsilon_mm, double extend = 0.1);
+TriangleMesh PclMarchingCubesRbf(const PointCloud& cloud, int resolution, double epsilon_mm,
+                                 double extend = 0.1);
 
 /// CGAL's Poisson surface reconstruction (Kazhdan et al. 2006 with CGAL's Delaunay refinement and its
 /// sparse solver; CGAL::poisson_surface_reconstruction_delaunay), its example's meshing criteria.

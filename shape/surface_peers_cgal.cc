@@ -4,8 +4,8 @@
 #endif
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Surface_mesh.h>
-#include <CGAL/poisson_surface_reconstruction.h>
 #include <CGAL/compute_average_spacing.h>
+#include <CGAL/poisson_surface_reconstruction.h>
 
 #include <utility>
 #include <vector>
@@ -31,10 +31,9 @@ TriangleMesh CgalPoissonSurface(const PointCloud& cloud) {
   const double spacing = CGAL::compute_average_spacing<CGAL::Sequential_tag>(
       points, 6, CGAL::parameters::point_map(CGAL::First_of_pair_property_map<PointWithNormal>()));
   CGAL::Surface_mesh<Point> mesh;
-  if (!CGAL::poisson_surface_reconstruction_delaunay(points.begin(), points.end(),
-                                                     CGAL::First_of_pair_property_map<PointWithNormal>(),
-                                                     CGAL::Second_of_pair_property_map<PointWithNormal>(), mesh,
-                                                     spacing)) {
+  if (!CGAL::poisson_surface_reconstruction_delaunay(
+          points.begin(), points.end(), CGAL::First_of_pair_property_map<PointWithNormal>(),
+          CGAL::Second_of_pair_property_map<PointWithNormal>(), mesh, spacing)) {
     ThrowFailure("CGAL Poisson reconstruction failed");
   }
   TriangleMesh out;

@@ -30,7 +30,8 @@ struct Link {
 // Turns every sweep's normals to one side: sweeps join the oriented set in order of their overlap with
 // it, each taking the side most of its overlapping samples agree on; then the whole set faces away from
 // its centroid (outward for a closed object, toward the scanner for a chest).
-void OrientSweeps(const std::vector<Rigid3>& P, double distance_mm, std::size_t anchor, std::vector<SweepSurface>* sweeps) {
+void OrientSweeps(const std::vector<Rigid3>& P, double distance_mm, std::size_t anchor,
+                  std::vector<SweepSurface>* sweeps) {
   const std::size_t n = sweeps->size();
   auto& S = *sweeps;
   // votes(a, b): sum of sign(n_a . n_b) over samples of a near b with normals within 60 degrees of
@@ -47,7 +48,8 @@ void OrientSweeps(const std::vector<Rigid3>& P, double distance_mm, std::size_t 
       double d2;
       const Eigen::Vector3d x = T_b_a * S[a].cloud->positions.row(r).transpose() - S[b].target->origin();
       if (!S[b].target->tree().NearestWithin(x, distance_mm, &k, &d2)) continue;
-      const double c = (T_b_a.linear() * S[a].normals.row(r).transpose()).dot(S[b].normals.row(k).transpose());
+      const double c =
+          (T_b_a.linear() * S[a].normals.row(r).transpose()).dot(S[b].normals.row(k).transpose());
       if (std::abs(c) > 0.5) v += c > 0 ? 1.0 : -1.0;
     }
     votes(Eigen::Index(a), Eigen::Index(b)) = v;
@@ -96,8 +98,8 @@ void OrientSweeps(const std::vector<Rigid3>& P, double distance_mm, std::size_t 
 }
 
 // Every pair overlapping by at least min_fraction of the smaller sweep's samples.
-std::vector<Link> FindLinks(const std::vector<SweepSurface>& S, const std::vector<Rigid3>& P, double distance_mm,
-                            double min_fraction) {
+std::vector<Link> FindLinks(const std::vector<SweepSurface>& S, const std::vector<Rigid3>& P,
+                            double distance_mm, double min_fraction) {
   const std::size_t n = S.size();
   std::vector<Link> all;
   for (std::size_t i = 0; i < n; ++i)
@@ -119,8 +121,10 @@ std::vector<Link> FindLinks(const std::vector<SweepSurface>& S, const std::vecto
 }
 
 // Correspondences of every link in both directions.
-std::vector<SweepCorrespondence> AllCorrespondences(const std::vector<SweepSurface>& S, const std::vector<Rigid3>& P,
-                                                    const std::vector<Link>& links, int per_pair, double gate_mm) {
+std::vector<SweepCorrespondence> AllCorrespondences(const std::vector<SweepSurface>& S,
+                                                    const std::vector<Rigid3>& P,
+                                                    const std::vector<Link>& links, int per_pair,
+                                                    double gate_mm) {
   std::vector<std::vector<SweepCorrespondence>> found(links.size() * 2);
 #pragma omp parallel for schedule(dynamic)
   for (std::size_t k = 0; k < found.size(); ++k) {
@@ -134,8 +138,8 @@ std::vector<SweepCorrespondence> AllCorrespondences(const std::vector<SweepSurfa
 }
 
 // Poses from a maximum spanning tree (by overlap) of the pairs whose ICP succeeded, grown from the anchor.
-void PosesFromTree(const std::vector<Link>& links, const std::vector<Rigid3>& T_i_j, const std::vector<bool>& ok,
-                   std::size_t anchor, std::vector<Rigid3>* P) {
+void PosesFromTree(const std::vector<Link>& links, const std::vector<Rigid3>& T_i_j,
+                   const std::vector<bool>& ok, std::size_t anchor, std::vector<Rigid3>* P) {
   std::vector<bool> placed(P->size(), false);
   placed[anchor] = true;
   std::priority_queue<std::pair<double, std::size_t>> queue;  // overlap, link
@@ -165,7 +169,8 @@ bool SweepMergeOptions::IsValid(std::string* why) const {
   };
   if (!(overlap_distance_mm > 0)) return fail("overlap distance must be > 0 mm");
   if (min_overlap_fraction < 0 || min_overlap_fraction >= 1) return fail("minimum overlap must be in [0, 1)");
-  if (global_rounds < 0 || global_points_per_pair < 10) return fail("global rounds >= 0 and points per pair >= 10");
+  if (global_rounds < 0 || global_points_per_pair < 10)
+    return fail("global rounds >= 0 and points per pair >= 10");
   if (global_max_distance_mm < 0) return fail("global gate must be >= 0");
   if (smoothing_mm < 0) return fail("smoothing must be >= 0 mm");
   if (outlier_neighbours < 0 || outlier_std_ratio <= 0) return fail("outlier neighbours >= 0 and ratio > 0");
@@ -179,9 +184,11 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
   if (!options.IsValid(&why)) ThrowUsage("merge options: " + why);
   if (clouds.empty()) ThrowBadInput("sweeps", "no sweeps to merge");
   if (clouds.size() != start.size()) {
-    ThrowBadInput("poses", std::to_string(start.size()) + " poses for " + std::to_string(clouds.size()) + " sweeps");
+    ThrowBadInput("poses",
+                  std::to_string(start.size()) + " poses for " + std::to_string(clouds.size()) + " sweeps");
   }
-  if (options.anchor >= clouds.size()) ThrowUsage("anchor sweep " + std::to_string(options.anchor) + " does not exist");
+  if (options.anchor >= clouds.size())
+    ThrowUsage("anchor sweep " + std::to_string(options.anchor) + " does not exist");
   const std::size_t n = clouds.size();
   SweepMergeResult result;
 
@@ -207,13 +214,15 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
 
   // 2. Which sweeps overlap, at the starting poses.
   t0 = Clock::now();
-  const std::vector<Link> links = FindLinks(sweeps, P, options.overlap_distance_mm, options.min_overlap_fraction);
+  const std::vector<Link> links =
+      FindLinks(sweeps, P, options.overlap_distance_mm, options.min_overlap_fraction);
   result.seconds_overlap = Since(t0);
   if (n > 1) {
     for (std::size_t s = 0; s < n; ++s) {
       if (std::none_of(links.begin(), links.end(), [&](const Link& l) { return l.i == s || l.j == s; })) {
         ThrowFailure("sweep " + std::to_string(s) + " overlaps no other sweep (within " +
-                     std::to_string(options.overlap_distance_mm) + " mm at the starting poses); give better "
+                     std::to_string(options.overlap_distance_mm) +
+                     " mm at the starting poses); give better "
                      "starting poses or a larger --overlap-distance");
       }
     }
@@ -234,8 +243,8 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
       Progress progress("pairwise alignment", std::int64_t(links.size()));
       for (std::size_t k = 0; k < links.size(); ++k) {
         const auto [i, j, overlap] = links[k];
-        const IcpResult r =
-            AlignIcp(*sweeps[i].target, clouds[j].positions, sweeps[j].normals, P[i].inverse() * P[j], options.pairwise);
+        const IcpResult r = AlignIcp(*sweeps[i].target, clouds[j].positions, sweeps[j].normals,
+                                     P[i].inverse() * P[j], options.pairwise);
         relative[k] = r.T_target_source;
         pairwise_ok[k] = r.success;
         progress.Advance();
@@ -301,7 +310,8 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
   PointCloud merged;
   for (std::size_t s = 0; s < n; ++s) {
     PointCloud c;
-    c.positions = (clouds[s].positions * P[s].linear().transpose()).rowwise() + P[s].translation().transpose();
+    c.positions =
+        (clouds[s].positions * P[s].linear().transpose()).rowwise() + P[s].translation().transpose();
     c.normals = sweeps[s].normals * P[s].linear().transpose();
     if (clouds[s].has_colors()) c.colors = clouds[s].colors;
     c.scalars["sweep"] = Eigen::VectorXd::Constant(c.size(), double(s));
@@ -312,9 +322,11 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
 
   // 6. Statistical outlier removal, then decimation to the target spacing.
   t0 = Clock::now();
-  std::vector<std::uint32_t> keep = StatisticalInliers(merged.positions, options.outlier_neighbours, options.outlier_std_ratio);
+  std::vector<std::uint32_t> keep =
+      StatisticalInliers(merged.positions, options.outlier_neighbours, options.outlier_std_ratio);
   result.outliers_removed = merged.size() - std::int64_t(keep.size());
-  if (options.target_spacing_mm > 0) keep = VoxelDownsample(merged.positions, options.target_spacing_mm, &keep);
+  if (options.target_spacing_mm > 0)
+    keep = VoxelDownsample(merged.positions, options.target_spacing_mm, &keep);
   result.merged = SelectRows(merged, keep);
   result.merged.positions.rowwise() += T_world_centred.translation().transpose();
   result.points_out = result.merged.size();
@@ -323,8 +335,9 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
   double worst_after = 0;
   for (const auto& pr : result.pairs) worst_after = std::max(worst_after, pr.rms_after_mm);
   char text[256];
-  std::snprintf(text, sizeof text, "%zu sweeps, %zu overlapping pairs, worst pair RMS %.3f mm, %lld points out", n,
-                links.size(), worst_after, static_cast<long long>(result.points_out));
+  std::snprintf(text, sizeof text,
+                "%zu sweeps, %zu overlapping pairs, worst pair RMS %.3f mm, %lld points out", n, links.size(),
+                worst_after, static_cast<long long>(result.points_out));
   result.message = text;
   return result;
 }

@@ -12,8 +12,8 @@ namespace {
 
 // Border points: the mean of the k nearest neighbours, projected on the tangent plane, lies off the
 // point by more than `shift` of the neighbours' mean distance.
-std::vector<std::uint8_t> FindBorder(const Points3& points, const Points3& normals, const KdTree3& tree, int k,
-                                     double shift) {
+std::vector<std::uint8_t> FindBorder(const Points3& points, const Points3& normals, const KdTree3& tree,
+                                     int k, double shift) {
   const Eigen::Index n = points.rows();
   std::vector<std::uint8_t> border(static_cast<std::size_t>(n), 0);
 #pragma omp parallel
@@ -54,15 +54,19 @@ bool SweepSurfaceOptions::IsValid(std::string* why) const {
   if (normal_neighbours < 3 || normal_neighbours > 256) return fail("normal neighbours must be in [3, 256]");
   if (border_neighbours < 4 || border_neighbours > 256) return fail("border neighbours must be in [4, 256]");
   if (!(border_shift > 0.0 && border_shift < 1.0)) return fail("border shift must be in (0, 1)");
-  if (!(max_view_angle_deg > 0.0 && max_view_angle_deg <= 90.0)) return fail("max view angle must be in (0, 90]");
-  if (!(view_weight_power >= 0.0 && view_weight_power <= 8.0)) return fail("view weight power must be in [0, 8]");
-  if (!(sample_spacings >= 1.0) || !std::isfinite(sample_spacings)) return fail("sample spacings must be >= 1");
+  if (!(max_view_angle_deg > 0.0 && max_view_angle_deg <= 90.0))
+    return fail("max view angle must be in (0, 90]");
+  if (!(view_weight_power >= 0.0 && view_weight_power <= 8.0))
+    return fail("view weight power must be in [0, 8]");
+  if (!(sample_spacings >= 1.0) || !std::isfinite(sample_spacings))
+    return fail("sample spacings must be >= 1");
   return true;
 }
 
 void SweepSurface::FlipNormals() { normals *= -1.0; }
 
-SweepSurface PrepareSweep(const PointCloud& cloud, const SweepSurfaceOptions& options, const std::string& name) {
+SweepSurface PrepareSweep(const PointCloud& cloud, const SweepSurfaceOptions& options,
+                          const std::string& name) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage("sweep preparation: " + why);
   if (cloud.size() < 10) ThrowBadInput(name, "has " + std::to_string(cloud.size()) + " points (< 10)");
@@ -88,7 +92,8 @@ SweepSurface PrepareSweep(const PointCloud& cloud, const SweepSurfaceOptions& op
     for (Eigen::Index r = 0; r < s.normals.rows(); ++r) {
       const double c = std::abs(s.normals.row(r).dot(view.transpose()));
       if (c < min_cos) s.grazing[std::size_t(r)] = 1;
-      if (options.view_weight_power > 0.0) s.confidence[std::size_t(r)] = float(std::pow(c, options.view_weight_power));
+      if (options.view_weight_power > 0.0)
+        s.confidence[std::size_t(r)] = float(std::pow(c, options.view_weight_power));
     }
   }
   Points3 target_normals = s.normals;
@@ -103,9 +108,9 @@ SweepSurface PrepareSweep(const PointCloud& cloud, const SweepSurfaceOptions& op
 }
 
 std::vector<SweepCorrespondence> FindSweepCorrespondences(const std::vector<SweepSurface>& sweeps,
-                                                          const std::vector<Rigid3>& T_world_sweep, std::size_t i,
-                                                          std::size_t j, int max_samples, double gate_mm,
-                                                          double max_angle_deg) {
+                                                          const std::vector<Rigid3>& T_world_sweep,
+                                                          std::size_t i, std::size_t j, int max_samples,
+                                                          double gate_mm, double max_angle_deg) {
   const SweepSurface& a = sweeps[i];
   const SweepSurface& b = sweeps[j];
   const Rigid3 T_i_j = T_world_sweep[i].inverse() * T_world_sweep[j];
@@ -120,7 +125,8 @@ std::vector<SweepCorrespondence> FindSweepCorrespondences(const std::vector<Swee
     const Eigen::Vector3d p = b.cloud->positions.row(r).transpose();
     std::uint32_t k;
     double d2;
-    if (!a.target->tree().NearestWithin(T_i_j * p - a.target->origin(), gate_mm, &k, &d2) || d2 > gate2) continue;
+    if (!a.target->tree().NearestWithin(T_i_j * p - a.target->origin(), gate_mm, &k, &d2) || d2 > gate2)
+      continue;
     if (a.border[k] || a.grazing[k] || b.grazing[r]) continue;
     const Eigen::Vector3d nq = a.normals.row(k).transpose();
     const Eigen::Vector3d np = T_i_j.linear() * b.normals.row(r).transpose();
@@ -130,17 +136,18 @@ std::vector<SweepCorrespondence> FindSweepCorrespondences(const std::vector<Swee
     const Eigen::Vector3d q = a.target->centred_positions().row(k).transpose() + a.target->origin();
     const Eigen::Vector3d d = T_i_j * p - q;
     if ((d - nq.dot(d) * nq).squaredNorm() > a.spacing_mm * a.spacing_mm) continue;
-    out.push_back({i, j, p, q, nq,
-                   std::max(1e-3, double(a.confidence[k]) * double(b.confidence[r]))});
+    out.push_back({i, j, p, q, nq, std::max(1e-3, double(a.confidence[k]) * double(b.confidence[r]))});
   }
   return out;
 }
 
-double PointToPlaneRms(const std::vector<SweepCorrespondence>& pairs, const std::vector<Rigid3>& T_world_sweep) {
+double PointToPlaneRms(const std::vector<SweepCorrespondence>& pairs,
+                       const std::vector<Rigid3>& T_world_sweep) {
   if (pairs.empty()) return 0.0;
   double sum = 0.0;
   for (const auto& c : pairs) {
-    const double r = (T_world_sweep[c.i].linear() * c.n).dot(T_world_sweep[c.j] * c.p - T_world_sweep[c.i] * c.q);
+    const double r =
+        (T_world_sweep[c.i].linear() * c.n).dot(T_world_sweep[c.j] * c.p - T_world_sweep[c.i] * c.q);
     sum += r * r;
   }
   return std::sqrt(sum / double(pairs.size()));

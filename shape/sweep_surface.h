@@ -14,8 +14,8 @@ namespace pectus {
 
 /// Options of PrepareSweep.
 struct SweepSurfaceOptions {
-  int normal_neighbours = 16;   ///< k of the PCA normals (>= 3)
-  int border_neighbours = 12;   ///< k of the border test (>= 4)
+  int normal_neighbours = 16;  ///< k of the PCA normals (>= 3)
+  int border_neighbours = 12;  ///< k of the border test (>= 4)
   /// A point is on the border of the sweep (its edge or the rim of a hole in it) when the mean of its
   /// border_neighbours nearest neighbours, projected on its tangent plane, lies more than this fraction
   /// of their mean distance away from it (0.64 on a straight edge of an even grid, about 0 inside).
@@ -37,18 +37,18 @@ struct SweepSurfaceOptions {
 
 /// A sweep prepared once, in its own frame.
 struct SweepSurface {
-  const PointCloud* cloud = nullptr;    ///< the sweep (not owned; must outlive this)
-  Points3 normals;                      ///< #points by 3, unit, one consistent side (see FlipNormals)
-  std::vector<std::uint8_t> border;     ///< 1 for points on the sweep's border
-  std::vector<std::uint8_t> grazing;    ///< 1 for points seen at a grazing angle (max_view_angle_deg)
-  std::vector<float> confidence;        ///< per point, cos(angle to the line of sight)^view_weight_power
+  const PointCloud* cloud = nullptr;  ///< the sweep (not owned; must outlive this)
+  Points3 normals;                    ///< #points by 3, unit, one consistent side (see FlipNormals)
+  std::vector<std::uint8_t> border;   ///< 1 for points on the sweep's border
+  std::vector<std::uint8_t> grazing;  ///< 1 for points seen at a grazing angle (max_view_angle_deg)
+  std::vector<float> confidence;      ///< per point, cos(angle to the line of sight)^view_weight_power
   /// Point-to-plane target over the sweep; border points carry a zero normal there, so that ICP never
   /// pairs a point with the edge of the other sweep (Turk and Levoy 1994), which would pull the sweeps
   /// toward each other's edges.
   std::unique_ptr<IcpTarget> target;
-  std::vector<std::uint32_t> samples;   ///< rows of an even subsample (voxels of sample_spacings)
+  std::vector<std::uint32_t> samples;  ///< rows of an even subsample (voxels of sample_spacings)
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  ///< mm, sweep frame
-  double spacing_mm = 0.0;              ///< median distance between neighbouring points
+  double spacing_mm = 0.0;                             ///< median distance between neighbouring points
 
   /// Reverses every normal (the sweep's side; the target's normals are sign-free).
   void FlipNormals();
@@ -56,7 +56,8 @@ struct SweepSurface {
 
 /// Normals by PCA oriented by propagation (Hoppe et al. 1992), border points, target and subsample.
 /// Throws Error(kBadInput) naming `name` for fewer than 10 points or non-finite coordinates.
-SweepSurface PrepareSweep(const PointCloud& cloud, const SweepSurfaceOptions& options, const std::string& name);
+SweepSurface PrepareSweep(const PointCloud& cloud, const SweepSurfaceOptions& options,
+                          const std::string& name);
 
 /// A point of sweep j on the tangent plane of sweep i: the residual is n . (T_j p - T_i q) in the world.
 struct SweepCorrespondence {
@@ -68,14 +69,15 @@ struct SweepCorrespondence {
 
 /// Pairs evenly strided samples of sweep j (at most max_samples) with their nearest points of sweep i at
 /// the poses T_world_sweep, keeping pairs closer than gate_mm (and than i's point spacing along the
-/// tangent plane: farther is a point beyond i's edge paired with the edge) whose normals (same side) differ by less
-/// than max_angle_deg, whose point of i is not on i's border and neither of which is grazing.
+/// tangent plane: farther is a point beyond i's edge paired with the edge) whose normals (same side) differ
+/// by less than max_angle_deg, whose point of i is not on i's border and neither of which is grazing.
 std::vector<SweepCorrespondence> FindSweepCorrespondences(const std::vector<SweepSurface>& sweeps,
-                                                          const std::vector<Rigid3>& T_world_sweep, std::size_t i,
-                                                          std::size_t j, int max_samples, double gate_mm,
-                                                          double max_angle_deg = 45.0);
+                                                          const std::vector<Rigid3>& T_world_sweep,
+                                                          std::size_t i, std::size_t j, int max_samples,
+                                                          double gate_mm, double max_angle_deg = 45.0);
 
 /// RMS of the point-to-plane residuals of `pairs` at the poses T_world_sweep (mm); 0 if empty.
-double PointToPlaneRms(const std::vector<SweepCorrespondence>& pairs, const std::vector<Rigid3>& T_world_sweep);
+double PointToPlaneRms(const std::vector<SweepCorrespondence>& pairs,
+                       const std::vector<Rigid3>& T_world_sweep);
 
 }  // namespace pectus

@@ -39,8 +39,8 @@ std::vector<std::array<std::int32_t, 3>> FaceNeighbours(const Faces3& faces) {
 }
 
 // Connected components of the faces with keep[f], joined across edges; -1 for the others.
-std::int32_t Components(const std::vector<std::array<std::int32_t, 3>>& neighbours, const std::vector<char>& keep,
-                        std::vector<std::int32_t>* label) {
+std::int32_t Components(const std::vector<std::array<std::int32_t, 3>>& neighbours,
+                        const std::vector<char>& keep, std::vector<std::int32_t>* label) {
   label->assign(neighbours.size(), -1);
   std::int32_t count = 0;
   std::vector<std::int32_t> stack;
@@ -89,7 +89,8 @@ std::int64_t RepairFans(const Faces3& faces, const std::vector<std::array<std::i
       parent.resize(std::size_t(n));
       std::iota(parent.begin(), parent.end(), 0);
       auto find = [&](std::int32_t x) {
-        while (parent[std::size_t(x)] != x) x = parent[std::size_t(x)] = parent[std::size_t(parent[std::size_t(x)])];
+        while (parent[std::size_t(x)] != x)
+          x = parent[std::size_t(x)] = parent[std::size_t(parent[std::size_t(x)])];
         return x;
       };
       for (std::int32_t i = 0; i < n; ++i) {

@@ -27,13 +27,13 @@ struct TrimOptions {
 
 /// What trimming did.
 struct TrimResult {
-  std::int64_t faces_removed = 0;          ///< uncovered, small pieces and fan repairs together
-  std::int64_t holes_filled = 0;           ///< uncovered regions kept as hole fillings
-  double largest_hole_filled_mm = 0.0;     ///< width of the widest of them
-  std::int64_t holes_left_open = 0;        ///< enclosed uncovered regions wider than max_hole_size
-  std::int64_t components_removed = 0;     ///< small pieces removed
-  std::int64_t fans_removed = 0;           ///< extra triangle fans removed at non-manifold vertices
-  std::int64_t boundary_edges = 0;         ///< edges with one triangle after trimming (0: watertight)
+  std::int64_t faces_removed = 0;       ///< uncovered, small pieces and fan repairs together
+  std::int64_t holes_filled = 0;        ///< uncovered regions kept as hole fillings
+  double largest_hole_filled_mm = 0.0;  ///< width of the widest of them
+  std::int64_t holes_left_open = 0;     ///< enclosed uncovered regions wider than max_hole_size
+  std::int64_t components_removed = 0;  ///< small pieces removed
+  std::int64_t fans_removed = 0;        ///< extra triangle fans removed at non-manifold vertices
+  std::int64_t boundary_edges = 0;      ///< edges with one triangle after trimming (0: watertight)
 };
 
 /// Trims `mesh` in place. Its vertices get a scalar "data_distance" (mm, distance to the nearest data

@@ -19,32 +19,49 @@ namespace fs = std::filesystem;
 class MergeCommand : public Command {
  public:
   std::string Name() const override { return "merge"; }
-  std::string Summary() const override { return "Align overlapping sweeps (ICP + global adjustment) and merge them into one cloud"; }
+  std::string Summary() const override {
+    return "Align overlapping sweeps (ICP + global adjustment) and merge them into one cloud";
+  }
   std::string Example() const override {
     return "  cd ../shared/datasets/stanford_bunny\n"
-           "  pectus merge bun*.ply chin.ply ear_back.ply top*.ply --poses start.conf --poses-out aligned.conf \\\n"
+           "  pectus merge bun*.ply chin.ply ear_back.ply top*.ply --poses start.conf --poses-out "
+           "aligned.conf \\\n"
            "      --input-units m -o merged.ply --report r.json\n"
            "  pectus merge --poses bun.conf --input-units m -o merged.ply   (every sweep the .conf lists)\n"
-           "  pectus merge sweep_*.ply -o merged.ply --smoothing 1.0 --spacing 0.8   (scanner poses = identity)";
+           "  pectus merge sweep_*.ply -o merged.ply --smoothing 1.0 --spacing 0.8   (scanner poses = "
+           "identity)";
   }
   void Configure(CLI::App* app) override {
-    app->add_option("sweeps", sweeps_, "Sweep files (PLY, OBJ, STL, PCD, XYZ); default: every sweep in --poses");
-    app->add_option("-o,--output", output_, "Merged cloud (.ply keeps normals and the sweep index)")->required();
-    app->add_option("--poses", poses_in_, "Starting poses, Stanford .conf (bmesh FILE tx ty tz qx qy qz qw); default identity");
+    app->add_option("sweeps", sweeps_,
+                    "Sweep files (PLY, OBJ, STL, PCD, XYZ); default: every sweep in --poses");
+    app->add_option("-o,--output", output_, "Merged cloud (.ply keeps normals and the sweep index)")
+        ->required();
+    app->add_option("--poses", poses_in_,
+                    "Starting poses, Stanford .conf (bmesh FILE tx ty tz qx qy qz qw); default identity");
     app->add_option("--poses-out", poses_out_, "Write the refined poses as a Stanford .conf (input units)");
-    app->add_option("--input-units", units_, "Unit of the sweeps and of the .conf translations: mm, cm, m, in")->default_val("mm");
+    app->add_option("--input-units", units_,
+                    "Unit of the sweeps and of the .conf translations: mm, cm, m, in")
+        ->default_val("mm");
     app->add_flag("--no-refine", no_refine_, "Keep the given poses; only merge, filter and decimate");
     app->add_option("--anchor", anchor_, "Sweep whose pose is kept (file name); default the first");
-    app->add_option("--smoothing", options_.smoothing_mm, "Blending radius of overlapping sweeps (mm); 0 = none")
-        ->default_val(0.0)->check(CLI::NonNegativeNumber);
-    app->add_option("--spacing", options_.target_spacing_mm, "Decimate to this point spacing (mm); 0 = keep all")
-        ->default_val(0.0)->check(CLI::NonNegativeNumber);
-    app->add_option("--outlier-ratio", options_.outlier_std_ratio, "Statistical outlier removal: mean kNN distance above mean + RATIO std")
+    app->add_option("--smoothing", options_.smoothing_mm,
+                    "Blending radius of overlapping sweeps (mm); 0 = none")
+        ->default_val(0.0)
+        ->check(CLI::NonNegativeNumber);
+    app->add_option("--spacing", options_.target_spacing_mm,
+                    "Decimate to this point spacing (mm); 0 = keep all")
+        ->default_val(0.0)
+        ->check(CLI::NonNegativeNumber);
+    app->add_option("--outlier-ratio", options_.outlier_std_ratio,
+                    "Statistical outlier removal: mean kNN distance above mean + RATIO std")
         ->default_val(3.0);
-    app->add_option("--outlier-neighbours", options_.outlier_neighbours, "k of the outlier test; 0 = off")->default_val(16);
-    app->add_option("--overlap-distance", options_.overlap_distance_mm, "Points this close (mm) at the start count as overlap")
+    app->add_option("--outlier-neighbours", options_.outlier_neighbours, "k of the outlier test; 0 = off")
+        ->default_val(16);
+    app->add_option("--overlap-distance", options_.overlap_distance_mm,
+                    "Points this close (mm) at the start count as overlap")
         ->default_val(5.0);
-    app->add_option("--max-rms", options_.pairwise.max_rms_mm, "A pairwise fit worse than this RMS (mm) is not trusted")
+    app->add_option("--max-rms", options_.pairwise.max_rms_mm,
+                    "A pairwise fit worse than this RMS (mm) is not trusted")
         ->default_val(1.0);
   }
   std::vector<fs::path> Inputs() const override {
@@ -52,7 +69,8 @@ class MergeCommand : public Command {
     if (!poses_in_.empty()) {
       in.push_back(poses_in_);
       if (sweeps_.empty()) {
-        for (const auto& p : ReadStanfordConf(poses_in_)) in.push_back(fs::path(poses_in_).parent_path() / p.file);
+        for (const auto& p : ReadStanfordConf(poses_in_))
+          in.push_back(fs::path(poses_in_).parent_path() / p.file);
       }
     }
     return in;
@@ -78,7 +96,8 @@ class MergeCommand : public Command {
       }
       for (const auto& f : files) {
         const auto name = fs::path(f).filename();
-        auto it = std::find_if(poses.begin(), poses.end(), [&](const ScanPose& p) { return fs::path(p.file).filename() == name; });
+        auto it = std::find_if(poses.begin(), poses.end(),
+                               [&](const ScanPose& p) { return fs::path(p.file).filename() == name; });
         if (it == poses.end()) ThrowBadInput(poses_in_, "has no pose for sweep '" + name.string() + "'");
         start.push_back(it->T_common_scan);
         conf_names.push_back(it->file);
@@ -89,7 +108,9 @@ class MergeCommand : public Command {
       for (const auto& f : files) conf_names.push_back(fs::path(f).filename().string());
     }
     if (!anchor_.empty()) {
-      auto it = std::find_if(files.begin(), files.end(), [&](const std::string& f) { return fs::path(f).filename() == fs::path(anchor_).filename(); });
+      auto it = std::find_if(files.begin(), files.end(), [&](const std::string& f) {
+        return fs::path(f).filename() == fs::path(anchor_).filename();
+      });
       if (it == files.end()) ThrowUsage("--anchor " + anchor_ + " is not one of the sweeps");
       options_.anchor = static_cast<std::size_t>(it - files.begin());
     }
@@ -130,7 +151,8 @@ class MergeCommand : public Command {
       WritePointCloud(staged, result.merged);
       if (!staged_poses.empty()) {
         std::vector<ScanPose> out;
-        for (std::size_t i = 0; i < files.size(); ++i) out.push_back({conf_names[i], result.T_world_sweep[i]});
+        for (std::size_t i = 0; i < files.size(); ++i)
+          out.push_back({conf_names[i], result.T_world_sweep[i]});
         ScaleTranslations(1.0 / mm_per_unit, &out);
         WriteStanfordConf(staged_poses, out);
       }

@@ -26,26 +26,41 @@ class ReconstructCommand : public Command {
   void Configure(CLI::App* app) override {
     app->add_option("cloud", input_, "Point cloud (PLY, OBJ, STL, PCD, XYZ/CSV); normals are used if present")
         ->required();
-    app->add_option("-o,--output", output_, "Surface mesh: .ply (with normals and data distance), .stl or .obj")
+    app->add_option("-o,--output", output_,
+                    "Surface mesh: .ply (with normals and data distance), .stl or .obj")
         ->required();
     app->add_option("--input-units", units_, "Unit of the cloud: mm, cm, m, in")->default_val("mm");
-    app->add_option("--spacing", options_.spacing, "Grid step of the isosurface (mm); 0 = 1.5 x point spacing")
-        ->default_val(0.0)->check(CLI::NonNegativeNumber);
-    app->add_option("--target-faces", options_.target_faces, "With --spacing 0: choose the step for about this many triangles")
-        ->default_val(0)->check(CLI::NonNegativeNumber);
-    app->add_option("--detail", options_.detail, "Spacing of the RBF centres (mm), the finest detail kept; 0 = automatic")
-        ->default_val(0.0)->check(CLI::NonNegativeNumber);
-    app->add_option("--smoothing", options_.smoothing, "Bending-energy weight of the local fits; larger = smoother")
-        ->default_val(options_.smoothing)->check(CLI::NonNegativeNumber);
+    app->add_option("--spacing", options_.spacing,
+                    "Grid step of the isosurface (mm); 0 = 1.5 x point spacing")
+        ->default_val(0.0)
+        ->check(CLI::NonNegativeNumber);
+    app->add_option("--target-faces", options_.target_faces,
+                    "With --spacing 0: choose the step for about this many triangles")
+        ->default_val(0)
+        ->check(CLI::NonNegativeNumber);
+    app->add_option("--detail", options_.detail,
+                    "Spacing of the RBF centres (mm), the finest detail kept; 0 = automatic")
+        ->default_val(0.0)
+        ->check(CLI::NonNegativeNumber);
+    app->add_option("--smoothing", options_.smoothing,
+                    "Bending-energy weight of the local fits; larger = smoother")
+        ->default_val(options_.smoothing)
+        ->check(CLI::NonNegativeNumber);
     app->add_option("--fill-holes", options_.fill_holes, "Fill holes up to this width (mm); 0 = none")
-        ->default_val(options_.fill_holes)->check(CLI::NonNegativeNumber);
+        ->default_val(options_.fill_holes)
+        ->check(CLI::NonNegativeNumber);
     app->add_option("--margin", options_.margin, "Keep surface this far (mm) beyond the data; 0 = automatic")
-        ->default_val(0.0)->check(CLI::NonNegativeNumber);
+        ->default_val(0.0)
+        ->check(CLI::NonNegativeNumber);
     app->add_option("--normal-neighbours", options_.normal_neighbours, "Neighbours per point for PCA normals")
-        ->default_val(options_.normal_neighbours)->check(CLI::Range(3, 256));
-    app->add_flag("--recompute-normals", options_.recompute_normals, "Estimate normals even if the cloud has them");
-    app->add_option("--viewpoint", viewpoint_, "Orient normals toward this scanner position x,y,z (mm) instead of by propagation")
-        ->delimiter(',')->expected(3);
+        ->default_val(options_.normal_neighbours)
+        ->check(CLI::Range(3, 256));
+    app->add_flag("--recompute-normals", options_.recompute_normals,
+                  "Estimate normals even if the cloud has them");
+    app->add_option("--viewpoint", viewpoint_,
+                    "Orient normals toward this scanner position x,y,z (mm) instead of by propagation")
+        ->delimiter(',')
+        ->expected(3);
     app->add_flag("--no-check", no_check_, "Skip the CGAL check (manifold, self-intersections)");
   }
   std::vector<fs::path> Inputs() const override { return {input_}; }
@@ -57,7 +72,8 @@ class ReconstructCommand : public Command {
       ThrowUsage("--output must end in .ply, .stl or .obj: " + output_);
     }
     options_.check = !no_check_;
-    if (!viewpoint_.empty()) options_.viewpoint = Eigen::Vector3d(viewpoint_[0], viewpoint_[1], viewpoint_[2]);
+    if (!viewpoint_.empty())
+      options_.viewpoint = Eigen::Vector3d(viewpoint_[0], viewpoint_[1], viewpoint_[2]);
 
     PointCloud cloud;
     {

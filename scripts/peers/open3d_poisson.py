@@ -38,6 +38,7 @@ def main() -> int:
         print(json.dumps({"error": f"{args.cloud}: no points"}))
         return 3
     seconds = {}
+    cpu0 = time.process_time()
     if args.estimate_normals or not pcd.has_normals():
         t = time.perf_counter()
         pcd.estimate_normals(o3d.geometry.KDTreeSearchParamKNN(args.neighbours))
@@ -53,10 +54,12 @@ def main() -> int:
         densities = np.asarray(densities)
         mesh.remove_vertices_by_mask(densities < np.quantile(densities, args.density_quantile))
         seconds["trim"] = time.perf_counter() - t
+    cpu_s = time.process_time() - cpu0  # CPU time of this process, all threads, file reading excluded
     o3d.io.write_triangle_mesh(args.output, mesh)
     print(json.dumps({
         "seconds": seconds,
         "total_s": sum(seconds.values()),
+        "surface_cpu_s": cpu_s,
         "points": len(pcd.points),
         "vertices": len(mesh.vertices),
         "faces": len(mesh.triangles),

@@ -7,7 +7,12 @@
 // synthetic chests from the virtual scanner (5 sweeps, noise 0.2 mm, holes up to 30 mm, true poses) at
 // about 100k and 1M points, whose exact surface is known.
 //
-//   build/tests/benchmarks/reconstruct_benchmark [--workdir DIR] [--datasets bunny,chest100k,chest1m]
+// Also the same-family cross-check: on a 1000-point ellipsoid ("crosscheck2000": 2000 points; PCL's dense
+// solve grows as the cube), pectus against PCL's MarchingCubesRBF (one global r^3 spline), both ways, mm.
+//
+//   build/tests/benchmarks/reconstruct_benchmark [--workdir DIR]
+//       [--datasets
+//       crosscheck,bunny,chest100k,chest100k_4sweeps,chest100k_6sweeps,chest100k_bigholes,chest1m]
 //       [--methods pectus,pectus_normals,cgal,pcl,open3d,open3d_normals] [--timeout SECONDS]
 // Internal: reconstruct_benchmark --child METHOD IN.ply OUT.ply SPACING_MM
 #include <sys/resource.h>
@@ -37,12 +42,21 @@ namespace {
 
 double Since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
+// CPU time of this process, all threads (s).
+double CpuSeconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
 // One method on one cloud, in this (child) process; prints one JSON line.
 int RunChild(const std::string& method, const std::string& in, const std::string& out, double spacing) {
   const PointCloud cloud = ReadPointCloud(in);
   nlohmann::json j{{"method", method}};
   TriangleMesh mesh;
   const auto t0 = Clock::now();
+  const double c0 = CpuSeconds();
   if (method == "pectus" || method == "pectus_normals") {
     ReconstructOptions o;
     o.spacing = spacing;
@@ -51,18 +65,24 @@ int RunChild(const std::string& method, const std::string& in, const std::string
     o.recompute_normals = method == "pectus_normals";
     ReconstructResult r = ReconstructSurface(cloud, o, in);
     j["seconds"] = Since(t0);
+    j["surface_cpu_s"] = CpuSeconds() - c0;
     for (const auto& [stage, s] : r.timings_s) j["stages"][stage] = s;
     j["fitting_accuracy_mm"] = r.accuracy.fitting_accuracy_mm;
     mesh = std::move(r.mesh);
     const MeshCheck check = CheckMesh(mesh);
-    j["check"] = {{"manifold", check.manifold}, {"self_intersecting", check.self_intersecting},
-                  {"closed", check.closed}, {"components", check.components}, {"seconds", check.seconds}};
+    j["check"] = {{"manifold", check.manifold},
+                  {"self_intersecting", check.self_intersecting},
+                  {"closed", check.closed},
+                  {"components", check.components},
+                  {"seconds", check.seconds}};
   } else if (method == "pcl") {
     mesh = PclPoissonSurface(cloud, 8);
     j["seconds"] = Since(t0);
+    j["surface_cpu_s"] = CpuSeconds() - c0;
   } else if (method == "cgal") {
     mesh = CgalPoissonSurface(cloud);
     j["seconds"] = Since(t0);
+    j["surface_cpu_s"] = CpuSeconds() - c0;
   } else {
     std::fprintf(stderr, "unknown method %s\n", method.c_str());
     return 2;
@@ -116,9 +136,12 @@ nlohmann::json Spawn(const std::vector<std::string>& args, double timeout_s) {
     if (!line.empty() && line[0] == '{') last = line;
   if (!last.empty()) j = nlohmann::json::parse(last);
   j["wall_s"] = Since(t0);
+  j["cpu_s"] = double(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+               1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
   j["peak_rss_mb"] = double(usage.ru_maxrss) / 1024.0;
   if (timed_out) j["error"] = "timeout after " + std::to_string(int(timeout_s)) + " s";
-  if (!timed_out && (!WIFEXITED(status) || WEXITSTATUS(status) != 0)) j["error"] = "exit status " + std::to_string(status);
+  if (!timed_out && (!WIFEXITED(status) || WEXITSTATUS(status) != 0))
+    j["error"] = "exit status " + std::to_string(status);
   return j;
 }
 
@@ -133,9 +156,12 @@ std::vector<std::string> Split(const std::string& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc == 6 && std::string(argv[1]) == "--child") return RunChild(argv[2], argv[3], argv[4], std::atof(argv[5]));
+  if (argc == 6 && std::string(argv[1]) == "--child")
+    return RunChild(argv[2], argv[3], argv[4], std::atof(argv[5]));
   std::string workdir = "/tmp/pectus_reconstruct_benchmark";
-  std::vector<std::string> datasets = {"bunny", "chest100k", "chest1m"};
+  std::vector<std::string> datasets = {
+      "crosscheck",         "bunny",  "chest100k", "chest100k_4sweeps", "chest100k_6sweeps",
+      "chest100k_bigholes", "chest1m"};
   std::vector<std::string> methods = {"pectus", "pectus_normals", "cgal", "pcl", "open3d", "open3d_normals"};
   double timeout = 900.0;
   for (int a = 1; a + 1 < argc; a += 2) {
@@ -148,14 +174,32 @@ int main(int argc, char** argv) {
   fs::create_directories(workdir);
   const std::string self = fs::read_symlink("/proc/self/exe").string();
   const std::string script = std::string(PECTUS_SOURCE_DIR) + "/scripts/peers/open3d_poisson.py";
+  std::printf("machine: %u threads, %s; load at start: %s\n", std::thread::hardware_concurrency(),
+              bench::CpuModel().c_str(), bench::LoadAverage().c_str());
   nlohmann::json all = nlohmann::json::array();
+  std::string crosscheck;
   for (const std::string& name : datasets) {
+    if (name.rfind("crosscheck", 0) == 0) {  // "crosscheck" (1000 points) or "crosscheckN" (N points)
+      crosscheck =
+          bench::CrossCheckMarchingCubesRbf(name.size() > 10 ? std::stoi(name.substr(10)) : 1000).dump();
+      std::printf("%s\n", crosscheck.c_str());
+      std::fflush(stdout);
+      continue;
+    }
     const auto t0 = Clock::now();
     const bench::Dataset data = bench::MakeDataset(name, workdir);
-    std::fprintf(stderr, "%s: %lld points (prepared in %.1f s)\n", name.c_str(), (long long)data.points, Since(t0));
+    std::string holes;
+    for (const auto& h : data.holes) {
+      if (h.sweep < 0) holes += (holes.empty() ? "" : ", ") + bench::Fixed(h.diameter_mm, 1) + " mm";
+    }
+    std::printf("%s: %lld points (prepared in %.1f s)%s%s\n", name.c_str(), (long long)data.points, Since(t0),
+                holes.empty() ? "" : "; holes missing from every sweep: ", holes.c_str());
+    std::fflush(stdout);
     for (const std::string& method : methods) {
       if (method == "pectus_normals" && name != "bunny") continue;  // chests: normals come with the merge
       if (method == "open3d_normals" && name != "bunny") continue;
+      const bool variant = name.find('_') != std::string::npos;  // 4 or 6 sweeps, big holes: pectus alone
+      if (variant && method != "pectus") continue;
       const std::string out = workdir + "/" + name + "_" + method + ".ply";
       std::vector<std::string> args;
       if (method.rfind("open3d", 0) == 0) {
@@ -176,5 +220,7 @@ int main(int argc, char** argv) {
     }
   }
   std::printf("\n%s", bench::MarkdownTable(all).c_str());
+  if (!crosscheck.empty()) std::printf("\nMarchingCubesRBF cross-check: %s\n", crosscheck.c_str());
+  std::printf("load at end: %s\n", bench::LoadAverage().c_str());
   return 0;
 }

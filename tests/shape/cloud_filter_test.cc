@@ -36,7 +36,8 @@ TEST(CloudFilter, BlendingMeetsInTheMiddleAndSelectRowsKeepsAttributes) {
   c.scalars["sweep"] = Eigen::VectorXd::LinSpaced(n, 0, n - 1);
   BlendAlongNormals(3.0, &c);
   for (int i = 0; i < n; ++i) {
-    const bool inside = c.positions.row(i).head(2).minCoeff() > 5.0 && c.positions.row(i).head(2).maxCoeff() < 35.0;
+    const bool inside =
+        c.positions.row(i).head(2).minCoeff() > 5.0 && c.positions.row(i).head(2).maxCoeff() < 35.0;
     if (inside) EXPECT_LT(std::abs(c.positions(i, 2)), 0.03) << "the sheets meet in the middle";
   }
   const PointCloud s = SelectRows(c, {7, 3});

@@ -9,7 +9,8 @@ namespace pectus {
 namespace {
 
 // Scattered points in a ball of radius 5 mm about (100, -50, 20) and values of a function there.
-LocalRbfProblem Problem(const std::function<double(const Eigen::Vector3d&)>& f, int constraints, int centres) {
+LocalRbfProblem Problem(const std::function<double(const Eigen::Vector3d&)>& f, int constraints,
+                        int centres) {
   std::mt19937_64 rng(4);
   std::uniform_real_distribution<double> u(-5.0, 5.0);
   LocalRbfProblem p;
@@ -44,7 +45,9 @@ TEST(LocalRbf, ReproducesAQuadricExactly) {
 
 TEST(LocalRbf, InterpolatesWithoutSmoothingAndSmoothsWithIt) {
   // A function no polynomial of degree 2 holds: the kernels must carry it.
-  auto f = [](const Eigen::Vector3d& x) { return std::sin(x.x() / 2.0) * std::cos(x.y() / 3.0) + 0.1 * x.z(); };
+  auto f = [](const Eigen::Vector3d& x) {
+    return std::sin(x.x() / 2.0) * std::cos(x.y() / 3.0) + 0.1 * x.z();
+  };
   const LocalRbfProblem p = Problem(f, 60, 60);  // one centre per constraint
   LocalRbf exact, smooth;
   ASSERT_TRUE(exact.Fit(p, 0.0));
@@ -52,7 +55,8 @@ TEST(LocalRbf, InterpolatesWithoutSmoothingAndSmoothsWithIt) {
   double worst_exact = 0, worst_smooth = 0;
   for (Eigen::Index i = 0; i < p.points.rows(); ++i) {
     worst_exact = std::max(worst_exact, std::abs(exact.Evaluate(p.points.row(i).transpose()) - p.values(i)));
-    worst_smooth = std::max(worst_smooth, std::abs(smooth.Evaluate(p.points.row(i).transpose()) - p.values(i)));
+    worst_smooth =
+        std::max(worst_smooth, std::abs(smooth.Evaluate(p.points.row(i).transpose()) - p.values(i)));
   }
   EXPECT_LT(worst_exact, 1e-6) << "Carr et al.'s interpolant (smoothing 0) passes through the data";
   EXPECT_GT(worst_smooth, 1e-3) << "smoothing trades fit for bending energy";

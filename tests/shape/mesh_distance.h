@@ -11,8 +11,8 @@
 namespace pectus::testing {
 
 // Closest point of triangle abc to p (Ericson, Real-Time Collision Detection, 5.1.5).
-inline Eigen::Vector3d ClosestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                         const Eigen::Vector3d& c) {
+inline Eigen::Vector3d ClosestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                                         const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
   const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
   const double d1 = ab.dot(ap), d2 = ac.dot(ap);
   if (d1 <= 0 && d2 <= 0) return a;
@@ -34,11 +34,14 @@ inline Eigen::Vector3d ClosestOnTriangle(const Eigen::Vector3d& p, const Eigen::
 
 // Distance (mm) from each row of `points` to the triangles of `mesh`; the closest points into `closest`
 // (#points by 3) when it is not null.
-inline Eigen::VectorXd DistancesToMesh(const Points3& points, const TriangleMesh& mesh, Points3* closest = nullptr) {
+inline Eigen::VectorXd DistancesToMesh(const Points3& points, const TriangleMesh& mesh,
+                                       Points3* closest = nullptr) {
   const Eigen::Index nf = mesh.num_faces();
   Points3 centroids(nf, 3);
   double reach = 0;  // farthest vertex from its triangle's centroid
-  auto corner = [&](Eigen::Index f, int k) { return Eigen::Vector3d(mesh.vertices.positions.row(mesh.faces(f, k))); };
+  auto corner = [&](Eigen::Index f, int k) {
+    return Eigen::Vector3d(mesh.vertices.positions.row(mesh.faces(f, k)));
+  };
   for (Eigen::Index f = 0; f < nf; ++f) {
     centroids.row(f) = ((corner(f, 0) + corner(f, 1) + corner(f, 2)) / 3.0).transpose();
     for (int k = 0; k < 3; ++k) reach = std::max(reach, (corner(f, k) - centroids.row(f).transpose()).norm());

@@ -22,7 +22,8 @@ std::vector<SweepCorrespondence> Correspondences(const std::vector<Rigid3>& trut
   auto f = [](double x, double y) { return 5.0 * std::sin(x / 9.0) * std::cos(y / 11.0) + 0.01 * x * y; };
   auto normal = [&](double x, double y) {
     const double h = 1e-5;
-    return Eigen::Vector3d(-(f(x + h, y) - f(x - h, y)) / (2 * h), -(f(x, y + h) - f(x, y - h)) / (2 * h), 1.0)
+    return Eigen::Vector3d(-(f(x + h, y) - f(x - h, y)) / (2 * h), -(f(x, y + h) - f(x, y - h)) / (2 * h),
+                           1.0)
         .normalized();
   };
   std::mt19937_64 rng(8);
@@ -50,7 +51,8 @@ std::vector<SweepCorrespondence> Correspondences(const std::vector<Rigid3>& trut
 }
 
 TEST(PoseAdjustment, RecoversPosesFromDisturbedStartsWithOutliers) {
-  const std::vector<Rigid3> truth = {Pose(10, {1, 2, 3}, {5, -3, 200}), Pose(-20, {0, 1, 0.2}, {-40, 10, 180}),
+  const std::vector<Rigid3> truth = {Pose(10, {1, 2, 3}, {5, -3, 200}),
+                                     Pose(-20, {0, 1, 0.2}, {-40, 10, 180}),
                                      Pose(35, {1, 0, 1}, {30, 30, 210})};
   const auto pairs = Correspondences(truth, 0.1);
   std::vector<Rigid3> poses = truth;

@@ -27,7 +27,9 @@ PointCloud Sphere(double r, const Eigen::Vector3d& c, int n, double noise_mm) {
 
 // A smooth hill z = f(x, y) over [-60, 60]^2 (slopes under 0.3), the kind of open patch a chest sweep
 // gives.
-double Hill(double x, double y) { return 20.0 * std::exp(-(x * x + y * y) / 5000.0) + 3.0 * std::sin(x / 15.0); }
+double Hill(double x, double y) {
+  return 20.0 * std::exp(-(x * x + y * y) / 5000.0) + 3.0 * std::sin(x / 15.0);
+}
 
 // The hill sampled every `step` mm with noise along z, without a disc of diameter hole_mm at (10, -5).
 PointCloud HillPatch(double step, double noise_mm, double hole_mm) {
@@ -74,7 +76,9 @@ TEST(Reconstruct, NoisySphereIsWatertightAndOnTheSphere) {
     sum2 += e * e;
     worst = std::max(worst, std::abs(e));
     // Normals point out of the sphere.
-    EXPECT_GT(r.mesh.vertices.normals.row(v).dot((r.mesh.vertices.positions.row(v).transpose() - c).normalized()), 0.9);
+    EXPECT_GT(
+        r.mesh.vertices.normals.row(v).dot((r.mesh.vertices.positions.row(v).transpose() - c).normalized()),
+        0.9);
   }
   EXPECT_LT(std::sqrt(sum2 / double(r.mesh.num_vertices())), 0.03) << "noise 0.05 mm is averaged down";
   EXPECT_LT(worst, 0.15);

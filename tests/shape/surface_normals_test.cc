@@ -26,7 +26,8 @@ TEST(SurfaceNormals, PropagatedNormalsPointOutOfAClosedObject) {
   const SurfaceNormalResult r = SurfaceNormals(c, tree, SurfaceNormalOptions{}, "sphere");
   EXPECT_EQ(r.source, "propagated");
   EXPECT_EQ(r.usable, c.size());
-  for (Eigen::Index i = 0; i < c.size(); ++i) EXPECT_GT(r.normals.row(i).dot(c.positions.row(i)) / 20.0, 0.99);
+  for (Eigen::Index i = 0; i < c.size(); ++i)
+    EXPECT_GT(r.normals.row(i).dot(c.positions.row(i)) / 20.0, 0.99);
 }
 
 TEST(SurfaceNormals, GivenNormalsAreKeptUnlessMostlyUnusable) {

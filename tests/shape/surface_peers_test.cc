@@ -48,7 +48,8 @@ TEST(SurfacePeers, AgreesWithPclMarchingCubesRbfOnASmallCloud) {
     if (data.NearestWithin(pcl.vertices.positions.row(v).transpose(), 4.0, &k, &d2)) near_data.push_back(v);
   }
   Points3 pcl_near(Eigen::Index(near_data.size()), 3);
-  for (std::size_t i = 0; i < near_data.size(); ++i) pcl_near.row(Eigen::Index(i)) = pcl.vertices.positions.row(near_data[i]);
+  for (std::size_t i = 0; i < near_data.size(); ++i)
+    pcl_near.row(Eigen::Index(i)) = pcl.vertices.positions.row(near_data[i]);
   const Eigen::VectorXd ours_to_pcl = testing::DistancesToMesh(ours.mesh.vertices.positions, pcl);
   const Eigen::VectorXd pcl_to_ours = testing::DistancesToMesh(pcl_near, ours.mesh);
   const double rms1 = std::sqrt(ours_to_pcl.squaredNorm() / double(ours_to_pcl.size()));

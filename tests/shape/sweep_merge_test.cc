@@ -25,7 +25,8 @@ Rigid3 Disturbance(std::mt19937_64* rng, double max_deg, double max_mm) {
 }
 
 // The disturbance applied about a point (the sweep's centroid in the world) rather than the origin.
-Rigid3 DisturbAbout(std::mt19937_64* rng, double max_deg, double max_mm, const PointCloud& sweep, const Rigid3& T_world_sweep) {
+Rigid3 DisturbAbout(std::mt19937_64* rng, double max_deg, double max_mm, const PointCloud& sweep,
+                    const Rigid3& T_world_sweep) {
   const Eigen::Vector3d c = T_world_sweep * Eigen::Vector3d(sweep.positions.colwise().mean().transpose());
   Rigid3 D = Disturbance(rng, max_deg, max_mm);
   D.translation() += c - D.linear() * c;
@@ -64,7 +65,8 @@ std::vector<PointCloud> DomeStrips(int strips, std::vector<Rigid3>* T_world_swee
     PointCloud c;
     c.positions.resize(static_cast<Eigen::Index>(pts.size()), 3);
     const Rigid3 T_sweep_world = T.inverse();
-    for (std::size_t i = 0; i < pts.size(); ++i) c.positions.row(static_cast<Eigen::Index>(i)) = (T_sweep_world * pts[i]).transpose();
+    for (std::size_t i = 0; i < pts.size(); ++i)
+      c.positions.row(static_cast<Eigen::Index>(i)) = (T_sweep_world * pts[i]).transpose();
     out.push_back(std::move(c));
     T_world_sweep->push_back(T);
   }
@@ -85,7 +87,8 @@ TEST(SweepMerge, RecoversKnownPosesOfSyntheticStrips) {
   const SweepMergeResult r = MergeSweeps(strips, start);
   ASSERT_EQ(r.T_world_sweep.size(), 4u);
   for (std::size_t s = 0; s < strips.size(); ++s) {
-    EXPECT_LT(RmsDisplacement(strips[s].positions, r.T_world_sweep[s], truth[s]), kStripTolerance) << "strip " << s;
+    EXPECT_LT(RmsDisplacement(strips[s].positions, r.T_world_sweep[s], truth[s]), kStripTolerance)
+        << "strip " << s;
     EXPECT_GT(r.correction_mm[s] + r.correction_deg[s], s == 0 ? -1.0 : 0.1) << "the start was disturbed";
   }
   EXPECT_EQ(r.pairs.size(), 3u);  // neighbouring strips overlap, others do not
@@ -117,7 +120,8 @@ TEST(SweepMerge, FarFromOriginGivesTheSameAnswer) {
   }
   const SweepMergeResult far = MergeSweeps(strips, far_start);
   for (std::size_t s = 0; s < strips.size(); ++s) {
-    EXPECT_LT(RmsDisplacement(strips[s].positions, far.T_world_sweep[s], shift * near.T_world_sweep[s]), 1e-3) << s;
+    EXPECT_LT(RmsDisplacement(strips[s].positions, far.T_world_sweep[s], shift * near.T_world_sweep[s]), 1e-3)
+        << s;
     EXPECT_LT(RmsDisplacement(strips[s].positions, far.T_world_sweep[s], far_truth[s]), kStripTolerance) << s;
   }
 }
@@ -142,7 +146,8 @@ TEST(SweepMerge, SmoothingBlendsOffsetSweepsAndDecimationSetsSpacing) {
   for (double x = 0; x < 60; x += 0.7)
     for (double y = 0; y < 60; y += 0.7) pts.emplace_back(x, y, 0);
   a.positions.resize(static_cast<Eigen::Index>(pts.size()), 3);
-  for (std::size_t i = 0; i < pts.size(); ++i) a.positions.row(static_cast<Eigen::Index>(i)) = pts[i].transpose();
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    a.positions.row(static_cast<Eigen::Index>(i)) = pts[i].transpose();
   b.positions = a.positions;
   b.positions.col(2).array() += 0.4;
   b.positions.col(0).array() += 0.35;
@@ -200,7 +205,8 @@ TEST(SweepMerge, RealBunnyFromDisturbedPosesReturnsToPublishedPlacement) {
   const Rigid3 G = BestCommonMotion(sweeps, r.T_world_sweep, truth);
   for (std::size_t s = 0; s < sweeps.size(); ++s) {
     EXPECT_LE(RmsDisplacement(sweeps[s].positions, G * r.T_world_sweep[s], truth[s]), 0.3) << poses[s].file;
-    EXPECT_GE(RmsDisplacement(sweeps[s].positions, G * start[s], truth[s]), s == 0 ? 0.0 : 0.3) << "disturbed";
+    EXPECT_GE(RmsDisplacement(sweeps[s].positions, G * start[s], truth[s]), s == 0 ? 0.0 : 0.3)
+        << "disturbed";
   }
   for (const auto& p : r.pairs) EXPECT_LT(p.rms_after_mm, 0.3) << p.i << "-" << p.j;
 }

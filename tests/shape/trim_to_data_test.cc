@@ -76,7 +76,8 @@ TEST(TrimToData, WideHolesStayOpen) {
   EXPECT_EQ(r.holes_filled, 0);
   EXPECT_EQ(r.holes_left_open, 1);
   for (Eigen::Index v = 0; v < mesh.num_vertices(); ++v) {
-    EXPECT_GT(std::hypot(mesh.vertices.positions(v, 0) - 10.0, mesh.vertices.positions(v, 1)), 15.0 - 2.0 - 1e-9);
+    EXPECT_GT(std::hypot(mesh.vertices.positions(v, 0) - 10.0, mesh.vertices.positions(v, 1)),
+              15.0 - 2.0 - 1e-9);
   }
 }
 

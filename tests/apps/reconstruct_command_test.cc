@@ -1,0 +1,117 @@
+// `pectus reconstruct` and `pectus merge` as a user meets them: a sphere cloud gives a watertight surface on
+// the sphere with the report the issue asks for; bad input (too few points, NaN, all points on a line, no
+// normals obtainable, a missing sweep) exits 3 with a message naming the file, and writes nothing.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "shape/io/mesh_io.h"
+#include "tests/support/cli_run.h"
+
+namespace pectus {
+namespace {
+namespace fs = std::filesystem;
+
+using testing_support::CliRun;
+using testing_support::Pectus;
+
+class ReconstructCommand : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / (std::string("pectus_reconstruct_") +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string P(const std::string& name) const { return (dir_ / name).string(); }
+  std::size_t CountFiles() const { return std::size_t(std::distance(fs::directory_iterator(dir_), {})); }
+
+  // n points of a sphere of radius r (Fibonacci lattice), as ASCII XYZ.
+  void WriteSphere(const std::string& name, int n, double r) const {
+    std::ofstream out(P(name));
+    const double golden = M_PI * (3.0 - std::sqrt(5.0));
+    for (int i = 0; i < n; ++i) {
+      const double z = 1.0 - 2.0 * (i + 0.5) / n, rho = std::sqrt(1.0 - z * z);
+      out << r * rho * std::cos(golden * i) << " " << r * rho * std::sin(golden * i) << " " << r * z << "\n";
+    }
+  }
+
+  // The command fails with exit code 3, names `file` and says `fragment`, and writes nothing.
+  void ExpectBadInput(const std::string& args, const std::string& file, const std::string& fragment) const {
+    const std::size_t before = CountFiles();
+    const CliRun run = Pectus(args);
+    EXPECT_EQ(run.code, 3) << run.output;
+    EXPECT_NE(run.output.find(file), std::string::npos) << run.output;
+    EXPECT_NE(run.output.find(fragment), std::string::npos) << run.output;
+    EXPECT_EQ(CountFiles(), before) << "a failed run left a file behind";
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(ReconstructCommand, SphereGivesAWatertightSurfaceOnTheSphereAndAReport) {
+  WriteSphere("sphere.xyz", 6000, 30.0);
+  const CliRun run = Pectus("reconstruct " + P("sphere.xyz") + " -o " + P("surface.ply") +
+                            " --spacing 1.5 --fill-holes 30 --quiet --report " + P("r.json"));
+  ASSERT_EQ(run.code, 0) << run.output;
+  const TriangleMesh mesh = ReadMesh(P("surface.ply"));
+  ASSERT_GT(mesh.num_faces(), 1000);
+  const Eigen::ArrayXd radius = mesh.vertices.positions.rowwise().norm().array();
+  EXPECT_LT((radius - 30.0).abs().maxCoeff(), 0.1);
+  std::ifstream in(P("r.json"));
+  const nlohmann::json report = nlohmann::json::parse(in);
+  EXPECT_EQ(report["faces"].get<long long>(), mesh.num_faces());
+  EXPECT_EQ(report["vertices"].get<long long>(), mesh.num_vertices());
+  EXPECT_GE(report["fitting_accuracy_mm"].get<double>(), 0.0);
+  EXPECT_LT(report["fitting_accuracy_mm"].get<double>(), 0.5);
+  EXPECT_TRUE(report["watertight"].get<bool>());
+  EXPECT_TRUE(report["check"]["manifold"].get<bool>());
+  EXPECT_FALSE(report["check"]["self_intersecting"].get<bool>());
+  // STL and OBJ are written too.
+  for (const char* ext : {"stl", "obj"}) {
+    const std::string out = P(std::string("surface.") + ext);
+    ASSERT_EQ(Pectus("reconstruct " + P("sphere.xyz") + " -o " + out + " --spacing 1.5 --quiet").code, 0)
+        << ext;
+    EXPECT_EQ(ReadMesh(out).num_faces(), mesh.num_faces()) << ext;
+  }
+}
+
+TEST_F(ReconstructCommand, BadInputExitsThreeNamesTheFileAndWritesNothing) {
+  WriteSphere("few.xyz", 10, 30.0);
+  ExpectBadInput("reconstruct " + P("few.xyz") + " -o " + P("out.ply"), "few.xyz", "at least 16");
+
+  {
+    std::ofstream out(P("line.xyz"));
+    for (int i = 0; i < 300; ++i) out << 0.5 * i << " " << 2.0 * i << " " << -1.0 * i << "\n";
+  }
+  ExpectBadInput("reconstruct " + P("line.xyz") + " -o " + P("out.ply"), "line.xyz", "one line");
+
+  {
+    std::ofstream out(P("nan.xyz"));
+    for (int i = 0; i < 300; ++i) out << 0.5 * i << " " << (i == 77 ? "nan" : "1.0") << " " << i % 17 << "\n";
+  }
+  ExpectBadInput("reconstruct " + P("nan.xyz") + " -o " + P("out.ply"), "nan.xyz", "");
+
+  {  // scan lines 20 mm apart, points 0.2 mm apart along them: every neighbourhood is a line
+    std::ofstream out(P("lines.xyz"));
+    for (int l = 0; l < 10; ++l)
+      for (int i = 0; i < 500; ++i) out << 0.2 * i << " " << 20.0 * l << " " << 0.01 * l * l << "\n";
+  }
+  ExpectBadInput("reconstruct " + P("lines.xyz") + " -o " + P("out.ply"), "lines.xyz",
+                 "no normals obtainable");
+}
+
+TEST_F(ReconstructCommand, MergeOfAMissingSweepExitsThreeAndWritesNothing) {
+  WriteSphere("a.xyz", 2000, 30.0);
+  ExpectBadInput("merge " + P("a.xyz") + " " + P("missing.xyz") + " -o " + P("merged.ply") + " --poses-out " +
+                     P("aligned.conf"),
+                 "missing.xyz", "");
+}
+
+}  // namespace
+}  // namespace pectus
