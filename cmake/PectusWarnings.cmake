@@ -6,6 +6,11 @@ function(pectus_target_defaults target)
   elseif(CMAKE_CXX_COMPILER_ID MATCHES "GNU")
     target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow=local
                            -Wnon-virtual-dtor -Wno-deprecated-copy)
+    # GCC 12's -Wrestrict misfires inside libstdc++ on plain string assignments and concatenations
+    # (GCC bug 105329, fixed in 13): silence it there only.
+    if(CMAKE_CXX_COMPILER_VERSION VERSION_LESS 13)
+      target_compile_options(${target} PRIVATE -Wno-restrict)
+    endif()
   endif()
   if(PECTUS_SANITIZE)
     target_compile_options(${target} PRIVATE -fsanitize=${PECTUS_SANITIZE} -fno-omit-frame-pointer

@@ -119,11 +119,11 @@ struct RbfImplicit::Impl {
       problem.weights(r) = rl.counts(i) * Wendland(std::sqrt(rows[std::size_t(r)].second) / radius);
     }
     Eigen::Index row = nr;
-    for (Eigen::Index j = 0; j < m; ++j) {
-      const auto i = Eigen::Index(centres[std::size_t(j)].first);
-      problem.centres.row(j) = cl.positions.row(i);
+    for (Eigen::Index centre = 0; centre < m; ++centre) {
+      const auto i = Eigen::Index(centres[std::size_t(centre)].first);
+      problem.centres.row(centre) = cl.positions.row(i);
       const double w = options.off_surface_weight * cl.counts(i) *
-                       Wendland(std::sqrt(centres[std::size_t(j)].second) / radius);
+                       Wendland(std::sqrt(centres[std::size_t(centre)].second) / radius);
       for (int side = 0; side < 2; ++side) {
         const double eps = side == 0 ? cl.eps_plus(i) : -cl.eps_minus(i);
         if (eps == 0.0 || w <= 0.0) continue;

@@ -77,7 +77,7 @@ struct FemDatasetWriter::File {
 FemDatasetWriter::FemDatasetWriter(const std::filesystem::path& path, const GenericRibcage& generic,
                                    std::vector<BarLoad> loads)
     : file_(std::make_unique<File>()), path_(path), loads_(std::move(loads)) {
-  temp_ = path_.parent_path() / ("." + path_.filename().string() + ".partial");
+  temp_ = output_.Stage(path_);  // HDF5 writes to a file name: staged, renamed into place by Commit()
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported through pectus::Error
   file_->id = Check(H5Fcreate(temp_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), path_, "the file");
   const hid_t root = file_->id;
@@ -129,11 +129,7 @@ FemDatasetWriter::FemDatasetWriter(const std::filesystem::path& path, const Gene
 }
 
 FemDatasetWriter::~FemDatasetWriter() {
-  file_.reset();
-  if (!committed_) {
-    std::error_code ignored;
-    std::filesystem::remove(temp_, ignored);
-  }
+  file_.reset();  // closed before output_ removes the staged file of an uncommitted dataset
 }
 
 void FemDatasetWriter::AddPatient(const PatientRibcage& ribcage, const std::vector<BarResult>& results,
@@ -188,10 +184,7 @@ void FemDatasetWriter::AddPatient(const PatientRibcage& ribcage, const std::vect
 
 void FemDatasetWriter::Commit() {
   file_.reset();
-  std::error_code error;
-  std::filesystem::rename(temp_, path_, error);
-  if (error) ThrowFailure("could not move the dataset into place: " + error.message(), path_.string());
-  committed_ = true;
+  output_.CommitAll();
 }
 
 }  // namespace pectus::planner

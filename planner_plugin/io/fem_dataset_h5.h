@@ -24,6 +24,7 @@
 
 #include "planner_plugin/ribcage/generic_ribcage.h"
 #include "planner_plugin/ribcage/ribcage_fem.h"
+#include "shape/core/atomic_file.h"
 
 namespace pectus::planner {
 
@@ -51,11 +52,11 @@ class FemDatasetWriter {
 
  private:
   struct File;
-  std::unique_ptr<File> file_;
+  OutputTransaction output_;    // the staged file; removed if never committed
+  std::unique_ptr<File> file_;  // the open HDF5 file (closed before output_ commits or removes it)
   std::filesystem::path path_, temp_;
   std::vector<BarLoad> loads_;
   std::vector<std::int32_t> surface_nodes_;
-  bool committed_ = false;
 };
 
 }  // namespace pectus::planner

@@ -1,13 +1,13 @@
 #include "shape/model/statismo_io.h"
 
 #include <hdf5.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <ctime>
 #include <string>
 #include <vector>
 
+#include "shape/core/atomic_file.h"
 #include "shape/core/error.h"
 #include "shape/model/shape_grid.h"
 
@@ -164,16 +164,8 @@ void WriteStatismoModel(const std::filesystem::path& path, const ShapeModel& mod
     ThrowUsage("a model without modes cannot be written as a statismo file: " + path.string());
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors become pectus::Error, not prints
   const File f{path.string()};
-  const std::filesystem::path temp =
-      path.parent_path() / ("." + path.filename().string() + ".tmp" + std::to_string(::getpid()));
-  struct RemoveTemp {
-    const std::filesystem::path& p;
-    bool keep = false;
-    ~RemoveTemp() {
-      std::error_code ec;
-      if (!keep) std::filesystem::remove(p, ec);
-    }
-  } cleanup{temp};
+  OutputTransaction output;  // HDF5 writes to a file name: a staged file, renamed into place at the end
+  const std::filesystem::path temp = output.Stage(path);
   {
     Id file(H5Fcreate(temp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
     if (!file.ok()) f.Fail("create the file");
@@ -239,10 +231,7 @@ void WriteStatismoModel(const std::filesystem::path& path, const ShapeModel& mod
     }
     if (H5Fflush(root, H5F_SCOPE_GLOBAL) < 0) f.Fail("flush the file");
   }
-  std::error_code ec;
-  std::filesystem::rename(temp, path, ec);
-  if (ec) ThrowFailure("cannot rename the temporary file into place: " + ec.message(), path.string());
-  cleanup.keep = true;
+  output.CommitAll();
 }
 
 ShapeModel ReadStatismoModel(const std::filesystem::path& path, nlohmann::json* info) {

@@ -57,10 +57,13 @@ const Table& TableOf(Colormap map) {
   return viridis;
 }
 
-// Fewest decimals that tell ticks `step` apart: 0 for a step of 1 or more, 1 for 0.1..1, and so on.
+// Fewest decimals that write every multiple of `step` exactly: 0 for 5, 1 for 2.5 or 0.5, 2 for 0.25.
 std::string FormatTick(double v, double step) {
+  int decimals = 0;
+  for (double scaled = step; decimals < 6 && std::abs(scaled - std::round(scaled)) > 1e-9 * scaled; ++decimals) {
+    scaled *= 10.0;
+  }
   char buf[32];
-  const int decimals = step >= 1 ? 0 : std::min(6, static_cast<int>(std::ceil(-std::log10(step) - 1e-9)));
   std::snprintf(buf, sizeof buf, "%.*f", decimals, std::abs(v) < 0.5 * step ? 0.0 : v);
   return buf;
 }

@@ -38,7 +38,9 @@ TEST(CloudFilter, BlendingMeetsInTheMiddleAndSelectRowsKeepsAttributes) {
   for (int i = 0; i < n; ++i) {
     const bool inside =
         c.positions.row(i).head(2).minCoeff() > 5.0 && c.positions.row(i).head(2).maxCoeff() < 35.0;
-    if (inside) EXPECT_LT(std::abs(c.positions(i, 2)), 0.03) << "the sheets meet in the middle";
+    if (inside) {
+      EXPECT_LT(std::abs(c.positions(i, 2)), 0.03) << "the sheets meet in the middle";
+    }
   }
   const PointCloud s = SelectRows(c, {7, 3});
   ASSERT_EQ(s.size(), 2);
