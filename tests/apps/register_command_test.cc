@@ -24,21 +24,9 @@ namespace fs = std::filesystem;
 using testing_support::CliRun;
 using testing_support::Pectus;
 
-// Landmarks on the analytic chest (phi in radians, h in mm), moved by T, with Gaussian noise per axis.
+// Landmarks on the analytic chest, moved by T, with Gaussian noise per axis.
 LandmarkSet ChestLandmarks(const Rigid3& T, double noise_mm, std::uint64_t seed) {
-  const testing::ChestSurface s;
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g(0.0, noise_mm);
-  LandmarkSet set;
-  for (const auto& [label, phi, h] :
-       std::vector<std::tuple<std::string, double, double>>{{"sternal_notch", 0.0, 300.0},
-                                                            {"xiphoid", 0.0, 130.0},
-                                                            {"nipple_left", -0.6, 200.0},
-                                                            {"nipple_right", 0.6, 205.0},
-                                                            {"umbilicus", 0.05, 20.0}}) {
-    set.items.push_back({label, T * s.Point(phi, h) + Eigen::Vector3d(g(rng), g(rng), g(rng)), ""});
-  }
-  return set;
+  return testing::ChestLandmarks(Similarity3::FromRigid(T), noise_mm, seed);
 }
 
 class RegisterCommand : public ::testing::Test {

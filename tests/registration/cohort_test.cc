@@ -20,22 +20,6 @@ Similarity3 Then(const Similarity3& a, const Similarity3& b) {  // a after b
   return c;
 }
 
-LandmarkSet Landmarks(const Similarity3& T, double noise_mm, std::uint64_t seed) {
-  const testing::ChestSurface s;
-  const std::vector<std::tuple<std::string, double, double>> where = {
-      {"notch", 0.0, 300.0}, {"xiphoid", 0.0, 130.0}, {"nipple_l", -0.6, 200.0}, {"nipple_r", 0.6, 205.0},
-      {"umbilicus", 0.05, 20.0}};
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g(0.0, noise_mm);
-  LandmarkSet set;
-  for (const auto& [label, phi, h] : where) {
-    Eigen::Vector3d p = T * s.Point(phi, h);
-    if (noise_mm > 0.0) p += Eigen::Vector3d(g(rng), g(rng), g(rng));
-    set.items.push_back({label, p, ""});
-  }
-  return set;
-}
-
 // Exact landmark sets placed by known similarities: GPA recovers T_mean_shape = T_ref T_i^-1 (to 1e-9),
 // with and without scale, and the mean is the reference shape.
 TEST(GeneralisedProcrustes, RecoversKnownTransforms) {
@@ -47,7 +31,7 @@ TEST(GeneralisedProcrustes, RecoversKnownTransforms) {
       Similarity3 t = Similarity3::FromRigid(testing::RandomPose(&rng, 30.0, 200.0));
       if (scale) t.scale = 0.9 + 0.05 * i;
       T.push_back(t);
-      shapes.push_back(Landmarks(t, 0.0, 0));
+      shapes.push_back(testing::ChestLandmarks(t, 0.0, 0));
     }
     ProcrustesOptions o;
     o.estimate_scale = scale;
@@ -72,16 +56,17 @@ TEST(GeneralisedProcrustes, RecoversKnownTransforms) {
 // With noise the mean lies closer to the noise-free shape than any single noisy shape does on average.
 TEST(GeneralisedProcrustes, MeanAveragesNoise) {
   std::vector<LandmarkSet> shapes;
-  for (int i = 0; i < 20; ++i) shapes.push_back(Landmarks({}, 3.0, 100 + static_cast<std::uint64_t>(i)));
+  for (int i = 0; i < 20; ++i)
+    shapes.push_back(testing::ChestLandmarks({}, 3.0, 100 + static_cast<std::uint64_t>(i)));
   const ProcrustesResult r = GeneralisedProcrustes(shapes);
-  const LandmarkSet truth = Landmarks({}, 0.0, 0);
+  const LandmarkSet truth = testing::ChestLandmarks({}, 0.0, 0);
   std::vector<LandmarkSet> mean_only = {r.mean, truth};
   const ProcrustesResult fit = GeneralisedProcrustes(mean_only);
   EXPECT_LT(fit.rms_mm, 1.5);  // single shapes: about 3 * sqrt(3) = 5.2 mm from the truth
 }
 
 TEST(GeneralisedProcrustes, TooFewCommonLabelsIsAClearError) {
-  LandmarkSet a = Landmarks({}, 0.0, 0), b = a;
+  LandmarkSet a = testing::ChestLandmarks({}, 0.0, 0), b = a;
   b.items.resize(2);
   try {
     GeneralisedProcrustes({a, b});
@@ -97,12 +82,15 @@ std::vector<CohortScan> Cohort(std::vector<Rigid3>* poses) {
   std::vector<CohortScan> scans;
   std::mt19937_64 rng(81);
   for (int i = 0; i < 4; ++i) {
-    const Rigid3 T = i == 0 ? Rigid3(Rigid3::Identity()) : testing::RandomPose(&rng, 20.0, 100.0);  // scan -> world
+    const Rigid3 T =
+        i == 0 ? Rigid3(Rigid3::Identity()) : testing::RandomPose(&rng, 20.0, 100.0);  // scan -> world
     poses->push_back(T);
     CohortScan s;
     s.name = "scan" + std::to_string(i);
-    s.cloud = testing::Transformed(testing::SampleChest(15000, 90 + static_cast<std::uint64_t>(i), 0.2), T.inverse());
-    s.landmarks = Landmarks(Similarity3::FromRigid(T.inverse()), 3.0, 95 + static_cast<std::uint64_t>(i));
+    s.cloud = testing::Transformed(testing::SampleChest(15000, 90 + static_cast<std::uint64_t>(i), 0.2),
+                                   T.inverse());
+    s.landmarks =
+        testing::ChestLandmarks(Similarity3::FromRigid(T.inverse()), 3.0, 95 + static_cast<std::uint64_t>(i));
     scans.push_back(std::move(s));
   }
   return scans;
@@ -118,7 +106,8 @@ TEST(AlignCohort, ToReference) {
   ASSERT_TRUE(r.all_succeeded());
   for (std::size_t i = 0; i < scans.size(); ++i) {
     const Similarity3 expected = Similarity3::FromRigid(poses[1].inverse() * poses[i]);
-    const PoseError e = ComparePoses(r.T_frame_scan[i], expected, scans[i].cloud.positions.row(0).transpose());
+    const PoseError e =
+        ComparePoses(r.T_frame_scan[i], expected, scans[i].cloud.positions.row(0).transpose());
     EXPECT_LT(e.rotation_deg, 0.05) << scans[i].name;
     EXPECT_LT(e.translation_mm, 0.1) << scans[i].name;
   }
@@ -154,8 +143,9 @@ TEST(AlignCohort, GroupwiseWithAndWithoutLandmarks) {
       EXPECT_LT(e.rotation_deg, 0.05) << i;
       EXPECT_LT(e.translation_mm, 0.1) << i;
     }
-    const PoseError frame = ComparePoses(r.T_frame_scan[0], Similarity3::FromRigid(poses[0].inverse() * poses[0]),
-                                         Eigen::Vector3d(0, 100, 160));
+    const PoseError frame =
+        ComparePoses(r.T_frame_scan[0], Similarity3::FromRigid(poses[0].inverse() * poses[0]),
+                     Eigen::Vector3d(0, 100, 160));
     EXPECT_LT(frame.translation_mm, 1e-9);
     EXPECT_LT(frame.rotation_deg, 1e-9);
   }

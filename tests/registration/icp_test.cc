@@ -48,15 +48,20 @@ PoseError ErrorOf(const Pair& p, const Rigid3& T) {
 constexpr double kMaxRotationDeg = 0.05;
 constexpr double kMaxTranslationMm = 0.1;
 
+// The result is a converged success within the tolerances of the pair's known pose.
+void ExpectRecovered(const Pair& p, const IcpResult& r) {
+  ASSERT_TRUE(r.success) << r.message;
+  EXPECT_TRUE(r.converged);
+  const PoseError e = ErrorOf(p, r.T_target_source);
+  EXPECT_LT(e.rotation_deg, kMaxRotationDeg) << r.BriefReport();
+  EXPECT_LT(e.translation_mm, kMaxTranslationMm) << r.BriefReport();
+}
+
 TEST(AlignIcp, PointToPlaneRecoversKnownPoseBothDirections) {
   const Pair p = MakePair(1);
   const IcpTarget target(p.target.positions, p.target.normals);
   const IcpResult forward = AlignIcp(target, p.source.positions, Points3(), Disturbed(p, 8.0, 25.0, 2));
-  ASSERT_TRUE(forward.success) << forward.message;
-  EXPECT_TRUE(forward.converged);
-  const PoseError e = ErrorOf(p, forward.T_target_source);
-  EXPECT_LT(e.rotation_deg, kMaxRotationDeg);
-  EXPECT_LT(e.translation_mm, kMaxTranslationMm);
+  ExpectRecovered(p, forward);
   EXPECT_LT(forward.rms_mm, 0.4);  // two 0.2 mm noises: sqrt(2) * 0.2 = 0.28 mm
   EXPECT_GT(forward.inlier_fraction, 0.6);
 
@@ -67,10 +72,7 @@ TEST(AlignIcp, PointToPlaneRecoversKnownPoseBothDirections) {
   q.T_true = p.T_true.inverse();
   const IcpTarget target2(q.target.positions, q.target.normals);
   const IcpResult backward = AlignIcp(target2, q.source.positions, Points3(), Disturbed(q, 8.0, 25.0, 3));
-  ASSERT_TRUE(backward.success) << backward.message;
-  const PoseError e2 = ErrorOf(q, backward.T_target_source);
-  EXPECT_LT(e2.rotation_deg, kMaxRotationDeg);
-  EXPECT_LT(e2.translation_mm, kMaxTranslationMm);
+  ExpectRecovered(q, backward);
 }
 
 TEST(AlignIcp, SymmetricRecoversKnownPose) {
@@ -79,10 +81,7 @@ TEST(AlignIcp, SymmetricRecoversKnownPose) {
   IcpOptions o;
   o.method = IcpMethod::kSymmetric;
   const IcpResult r = AlignIcp(target, p.source.positions, p.source.normals, Disturbed(p, 8.0, 25.0, 5), o);
-  ASSERT_TRUE(r.success) << r.message;
-  const PoseError e = ErrorOf(p, r.T_target_source);
-  EXPECT_LT(e.rotation_deg, kMaxRotationDeg);
-  EXPECT_LT(e.translation_mm, kMaxTranslationMm);
+  ExpectRecovered(p, r);
 }
 
 TEST(AlignIcp, SymmetricNeedsSourceNormals) {
@@ -103,10 +102,7 @@ TEST(AlignIcp, FarFromOrigin) {
   p.T_true = far * p.T_true * far.inverse();
   const IcpTarget target(p.target.positions, p.target.normals);
   const IcpResult r = AlignIcp(target, p.source.positions, Points3(), Disturbed(p, 8.0, 25.0, 7));
-  ASSERT_TRUE(r.success) << r.message;
-  const PoseError e = ErrorOf(p, r.T_target_source);
-  EXPECT_LT(e.rotation_deg, kMaxRotationDeg);
-  EXPECT_LT(e.translation_mm, kMaxTranslationMm);
+  ExpectRecovered(p, r);
 }
 
 // 20 % of the source replaced by clutter 5 to 50 mm off the surface: the robust loss ignores it.

@@ -17,23 +17,25 @@ using ::testing::HasSubstr;
 // Five chest-like landmarks (mm): sternal notch, xiphoid, left and right nipples, umbilicus.
 Points3 ChestLandmarks() {
   Points3 x(5, 3);
-  x << 0, 120, 300,  //
-      0, 95, 120,    //
-      -95, 115, 200, //
-      92, 118, 205,  //
+  x << 0, 120, 300,   //
+      0, 95, 120,     //
+      -95, 115, 200,  //
+      92, 118, 205,   //
       2, 100, 0;
   return x;
 }
 
 Points3 Apply(const Similarity3& T, const Points3& x) {
   Points3 y(x.rows(), 3);
-  for (Eigen::Index i = 0; i < x.rows(); ++i) y.row(i) = (T * Eigen::Vector3d(x.row(i).transpose())).transpose();
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    y.row(i) = (T * Eigen::Vector3d(x.row(i).transpose())).transpose();
   return y;
 }
 
 LandmarkSet ToSet(const Points3& x, const std::vector<std::string>& labels) {
   LandmarkSet s;
-  for (Eigen::Index i = 0; i < x.rows(); ++i) s.items.push_back({labels[static_cast<std::size_t>(i)], x.row(i).transpose(), ""});
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    s.items.push_back({labels[static_cast<std::size_t>(i)], x.row(i).transpose(), ""});
   return s;
 }
 

@@ -16,7 +16,8 @@ namespace {
 Points3 Plane(int side, double spacing, const Eigen::Vector3d& offset) {
   Points3 p(side * side, 3);
   for (int i = 0; i < side; ++i) {
-    for (int j = 0; j < side; ++j) p.row(i * side + j) = Eigen::RowVector3d(i * spacing, j * spacing, 0.0) + offset.transpose();
+    for (int j = 0; j < side; ++j)
+      p.row(i * side + j) = Eigen::RowVector3d(i * spacing, j * spacing, 0.0) + offset.transpose();
   }
   return p;
 }

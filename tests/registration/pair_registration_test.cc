@@ -17,33 +17,16 @@ namespace {
 
 using ::testing::HasSubstr;
 
-// Landmarks on the analytic chest (phi in radians, h in mm), moved by `T` and disturbed by Gaussian
-// noise of `noise_mm` per axis.
-LandmarkSet ChestLandmarks(const Similarity3& T, double noise_mm, std::uint64_t seed) {
-  const testing::ChestSurface s;
-  const std::vector<std::tuple<std::string, double, double>> where = {
-      {"notch", 0.0, 300.0}, {"xiphoid", 0.0, 130.0}, {"nipple_l", -0.6, 200.0}, {"nipple_r", 0.6, 205.0},
-      {"umbilicus", 0.05, 20.0}};
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g(0.0, noise_mm);
-  LandmarkSet set;
-  for (const auto& [label, phi, h] : where) {
-    Eigen::Vector3d p = T * s.Point(phi, h);
-    if (noise_mm > 0.0) p += Eigen::Vector3d(g(rng), g(rng), g(rng));
-    set.items.push_back({label, p, ""});
-  }
-  return set;
-}
-
 // Landmarks (3 mm noise) then ICP recover a rigid pose to 0.05 degrees and 0.1 mm, in both directions.
 TEST(RegisterPair, LandmarksThenIcpBothDirections) {
   const PointCloud fixed = testing::SampleChest(30000, 31, 0.2, -1.3, 0.9);
   std::mt19937_64 rng(32);
   const Rigid3 T = testing::RandomPose(&rng, 40.0, 300.0);
-  const PointCloud moving = testing::Transformed(testing::SampleChest(30000, 33, 0.2, -0.9, 1.3), T.inverse());
+  const PointCloud moving =
+      testing::Transformed(testing::SampleChest(30000, 33, 0.2, -0.9, 1.3), T.inverse());
   const Similarity3 truth = Similarity3::FromRigid(T);
-  const LandmarkSet fixed_lm = ChestLandmarks({}, 3.0, 34);
-  const LandmarkSet moving_lm = ChestLandmarks(truth.Inverse(), 3.0, 35);
+  const LandmarkSet fixed_lm = testing::ChestLandmarks({}, 3.0, 34);
+  const LandmarkSet moving_lm = testing::ChestLandmarks(truth.Inverse(), 3.0, 35);
 
   const PairRegistrationResult r = RegisterPair(fixed, moving, &fixed_lm, &moving_lm);
   ASSERT_TRUE(r.success) << r.message;
@@ -72,8 +55,8 @@ TEST(RegisterPair, SimilarityBothDirections) {
   truth.scale = 1.0 / 1.06;  // moving -> fixed
   PointCloud moving = testing::SampleChest(30000, 43, 0.0);
   TransformInPlace(truth.Inverse(), &moving);
-  const LandmarkSet fixed_lm = ChestLandmarks({}, 0.0, 0);
-  const LandmarkSet moving_lm = ChestLandmarks(truth.Inverse(), 0.0, 0);
+  const LandmarkSet fixed_lm = testing::ChestLandmarks({}, 0.0, 0);
+  const LandmarkSet moving_lm = testing::ChestLandmarks(truth.Inverse(), 0.0, 0);
   PairRegistrationOptions o;
   o.landmarks.estimate_scale = true;
   const PairRegistrationResult r = RegisterPair(fixed, moving, &fixed_lm, &moving_lm, {}, o);
@@ -96,7 +79,7 @@ TEST(RegisterPair, SimilarityBothDirections) {
 TEST(RegisterPair, LandmarksOnlyAndPatches) {
   const PointCloud fixed = testing::SampleChest(20000, 51, 0.2);
   const PointCloud moving = testing::SampleChest(20000, 52, 0.2);
-  const LandmarkSet lm = ChestLandmarks({}, 0.0, 0);
+  const LandmarkSet lm = testing::ChestLandmarks({}, 0.0, 0);
   PairRegistrationOptions o;
   o.refine = false;
   const PairRegistrationResult only = RegisterPair(fixed, moving, &lm, &lm, {}, o);
@@ -113,7 +96,7 @@ TEST(RegisterPair, LandmarksOnlyAndPatches) {
   EXPECT_LT(e.rotation_deg, 0.1);
   EXPECT_LT(e.translation_mm, 0.2);
 
-  EXPECT_THROW(RegisterPair(fixed, moving, &lm, nullptr), Error);        // landmarks on one side only
+  EXPECT_THROW(RegisterPair(fixed, moving, &lm, nullptr), Error);             // landmarks on one side only
   EXPECT_THROW(RegisterPair(fixed, moving, nullptr, nullptr, {}, o), Error);  // patches need landmarks
 }
 
@@ -121,7 +104,7 @@ TEST(RegisterPair, LandmarksOnlyAndPatches) {
 TEST(RegisterPair, SwappedLandmarksAreAFailure) {
   const PointCloud fixed = testing::SampleChest(20000, 61, 0.2);
   const PointCloud moving = testing::SampleChest(20000, 62, 0.2);
-  const LandmarkSet fixed_lm = ChestLandmarks({}, 0.0, 0);
+  const LandmarkSet fixed_lm = testing::ChestLandmarks({}, 0.0, 0);
   LandmarkSet moving_lm = fixed_lm;
   std::swap(moving_lm.items[0].label, moving_lm.items[4].label);  // notch <-> umbilicus
   const PairRegistrationResult r = RegisterPair(fixed, moving, &fixed_lm, &moving_lm);
@@ -156,17 +139,21 @@ TEST_P(BunnyPairs, BackToPublishedPlacement) {
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     std::mt19937_64 rng(seed);
     const Rigid3 start = testing::RandomPose(&rng, 5.0, 10.0, centre) * published;
-    const PairRegistrationResult r =
-        RegisterPair(target, moving, nullptr, nullptr, Similarity3::FromRigid(start), PairRegistrationOptions());
+    const PairRegistrationResult r = RegisterPair(target, moving, nullptr, nullptr,
+                                                  Similarity3::FromRigid(start), PairRegistrationOptions());
     ASSERT_TRUE(r.success) << moving_name << " seed " << seed << ": " << r.message;
-    const double rms = RmsDisplacement(moving.positions, r.T_target_source, Similarity3::FromRigid(published));
+    const double rms =
+        RmsDisplacement(moving.positions, r.T_target_source, Similarity3::FromRigid(published));
     EXPECT_LE(rms, 0.3) << moving_name << " -> " << fixed_name << " seed " << seed;
-    EXPECT_GT(RmsDisplacement(moving.positions, Similarity3::FromRigid(start), Similarity3::FromRigid(published)), 5.0);
+    EXPECT_GT(
+        RmsDisplacement(moving.positions, Similarity3::FromRigid(start), Similarity3::FromRigid(published)),
+        5.0);
   }
 }
 
 INSTANTIATE_TEST_SUITE_P(Stanford, BunnyPairs,
-                         ::testing::Values(std::pair{"bun000.ply", "bun045.ply"}, std::pair{"bun270.ply", "bun315.ply"}));
+                         ::testing::Values(std::pair{"bun000.ply", "bun045.ply"},
+                                           std::pair{"bun270.ply", "bun315.ply"}));
 
 }  // namespace
 }  // namespace pectus

@@ -5,8 +5,12 @@
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <string>
+#include <tuple>
+#include <vector>
 
 #include "shape/core/geometry.h"
+#include "shape/core/landmarks.h"
 
 namespace pectus::testing {
 
@@ -17,8 +21,10 @@ struct ChestSurface {
 
   /// Radial offset d(phi, h) (mm): dent, bump, twist.
   double Offset(double phi, double h) const {
-    const double dent = -25.0 * std::exp(-phi * phi / (2 * 0.25 * 0.25) - (h - 150.0) * (h - 150.0) / (2 * 50.0 * 50.0));
-    const double bump = 8.0 * std::exp(-(phi - 0.6) * (phi - 0.6) / 0.08 - (h - 200.0) * (h - 200.0) / (2 * 40.0 * 40.0));
+    const double dent =
+        -25.0 * std::exp(-phi * phi / (2 * 0.25 * 0.25) - (h - 150.0) * (h - 150.0) / (2 * 50.0 * 50.0));
+    const double bump =
+        8.0 * std::exp(-(phi - 0.6) * (phi - 0.6) / 0.08 - (h - 200.0) * (h - 200.0) / (2 * 40.0 * 40.0));
     const double twist = 5.0 * std::sin(2.0 * phi + 0.5) * (h / 320.0);
     return dent + bump + twist;
   }
@@ -79,6 +85,26 @@ inline PointCloud Transformed(const PointCloud& c, const Rigid3& T) {
     if (c.has_normals()) out.normals.row(i) = (T.linear() * c.normals.row(i).transpose()).transpose();
   }
   return out;
+}
+
+/// Five landmarks on the chest (notch, xiphoid, both nipples, umbilicus) moved by `T` and disturbed by
+/// Gaussian noise of `noise_mm` per axis (seeded; no noise when noise_mm is 0).
+inline LandmarkSet ChestLandmarks(const Similarity3& T = {}, double noise_mm = 0.0, std::uint64_t seed = 0) {
+  const ChestSurface s;
+  const std::vector<std::tuple<std::string, double, double>> where = {{"notch", 0.0, 300.0},
+                                                                      {"xiphoid", 0.0, 130.0},
+                                                                      {"nipple_l", -0.6, 200.0},
+                                                                      {"nipple_r", 0.6, 205.0},
+                                                                      {"umbilicus", 0.05, 20.0}};
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0.0, noise_mm);
+  LandmarkSet set;
+  for (const auto& [label, phi, h] : where) {
+    Eigen::Vector3d p = T * s.Point(phi, h);
+    if (noise_mm > 0.0) p += Eigen::Vector3d(g(rng), g(rng), g(rng));
+    set.items.push_back({label, p, ""});
+  }
+  return set;
 }
 
 }  // namespace pectus::testing

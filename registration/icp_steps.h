@@ -1,0 +1,110 @@
+// pectus: the steps of one ICP iteration (registration/icp.cc): correspondences with certified reuse,
+// robust scale, normal equations, pose update. Internal to pectus::registration; the method and its
+// equations: docs/registration.md.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "registration/icp.h"
+
+namespace pectus::icp_detail {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDegPerRad = 180.0 / kPi;
+constexpr std::uint32_t kNoMatch = std::numeric_limits<std::uint32_t>::max();
+// Correspondences are summed in blocks of this many, then the blocks in order: the same sums for any
+// number of threads.
+constexpr std::size_t kBlock = 512;
+// Steps 1 and 3 run on several threads only for at least this many sample points: a coarse level's few
+// thousand points take less time than waking the threads, and on a busy machine every fork and join may
+// wait for a time slice.
+constexpr std::int64_t kMinParallelPoints = 16384;
+// Step 1 searches this many times the gate, so that a certificate holds while a point moves a little.
+constexpr double kSearchRadiusOverGate = 1.5;
+// Step 2 estimates the robust scale from at most this many residuals.
+constexpr std::size_t kScaleSamples = 16384;
+// Step 4a extrapolates when two successive steps have at least this cosine, by at most this factor.
+constexpr double kExtrapolationCosine = 0.8;
+constexpr double kMaxExtrapolation = 4.0;
+
+using Matrix6 = Eigen::Matrix<double, 6, 6>;
+using Vector6 = Eigen::Matrix<double, 6, 1>;
+
+// The normal equations of one block of correspondences.
+struct BlockSum {
+  Matrix6 H = Matrix6::Zero();
+  Vector6 g = Vector6::Zero();
+  double weighted_r2 = 0.0;
+  double weight = 0.0;
+  double arm2 = 0.0;  // sum of |p|^2 (mm^2): the lever of the rotation, for Conditioning
+  std::int64_t count = 0;
+};
+
+// The correspondences of one level at the current pose (arrays indexed like the level's points).
+struct Pairs {
+  std::vector<std::uint32_t> target;  // kNoMatch when dropped
+  std::vector<Eigen::Vector3d> p;     // transformed source point (target's centred frame)
+  std::vector<Eigen::Vector3d> n;     // normal of the residual (target's, or the symmetric one)
+  std::vector<double> r;              // signed residual along n (mm)
+  std::vector<double> abs_r;          // scratch of step 2
+  void Resize(std::size_t m) {
+    target.resize(m);
+    p.resize(m);
+    n.resize(m);
+    r.resize(m);
+  }
+};
+
+// Everything one alignment needs, shared by the steps below.
+struct Problem {
+  const IcpTarget* target;
+  const Points3* source;          // original positions
+  const Points3* source_normals;  // may be empty
+  Eigen::Vector3d source_origin;  // subtracted from source positions before the pose is applied
+  const IcpOptions* options;
+  double cos_max_normal_angle;  // -1 when the normal test is off
+  double max_tangential2;       // squared tangential reach (mm^2); infinity when off
+};
+
+// The correspondence certificates of one level: per sample point, where it was when last searched, its
+// nearest target row there (kNoMatch: none within `radius`) and the distances to the nearest and second
+// nearest target points (mm; `radius` when missing). A point that has since moved by less than half the
+// gap between them provably keeps the same nearest point, so step 1 searches the tree only for the points
+// whose certificate has expired: exact nearest neighbours at a fraction of the searches.
+struct NearestCache {
+  double radius = 0.0;  // search radius (mm), above the gate
+  std::vector<Eigen::Vector3d> at;
+  std::vector<std::uint32_t> nearest;
+  std::vector<double> d1, d2;
+  std::vector<std::uint8_t> valid;
+  void Reset(std::size_t m, double search_radius) {
+    radius = search_radius;
+    at.resize(m);
+    nearest.resize(m);
+    d1.resize(m);
+    d2.resize(m);
+    valid.assign(m, 0);
+  }
+};
+
+// Step 1: nearest target point of every sample point within `gate`, and the residual along the normal;
+// reuses `cache` certificates when given (nullptr: search every point). Returns the number of tree searches.
+std::int64_t FindPairs(const Problem& pb, const std::vector<std::uint32_t>& sample, const Rigid3& T,
+                       double gate, NearestCache* cache, Pairs* pairs);
+// Step 2: the robust scale (MAD of the residuals) and the trimming threshold. Returns how many pairs.
+std::int64_t RobustScale(const IcpOptions& options, Pairs* pairs, double* scale, double* trim_threshold);
+// Step 3: the weighted normal equations H x = -g of the linearised residuals.
+BlockSum Accumulate(const Problem& pb, const Pairs& pairs, double scale, double trim_threshold);
+// Smallest over largest eigenvalue of H with the rotation rows scaled by `length` (mm).
+double Conditioning(const Matrix6& H, double length);
+// The spread of the pose implied by the residuals at `at` (see PoseSpread in icp_steps.cc).
+void PoseSpread(const BlockSum& sum, const Eigen::Vector3d& at, double* rotation_sd_deg,
+                double* translation_sd_mm);
+// Step 4: the incremental pose from the solution x of the normal equations.
+Rigid3 Increment(const Vector6& x, IcpMethod method);
+// Step 4a: Aitken extrapolation of linearly converging steps.
+Vector6 Extrapolated(const Vector6& x, const Vector6& previous, double length);
+
+}  // namespace pectus::icp_detail
