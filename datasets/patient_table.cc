@@ -1,109 +1,13 @@
 #include "datasets/patient_table.h"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
-#include <fstream>
-#include <map>
 #include <random>
-#include <sstream>
-
-#include "shape/core/error.h"
 
 namespace pectus::datasets {
-namespace {
 
-std::vector<std::string> SplitCsv(const std::string& line) {
-  std::vector<std::string> cells;
-  std::string cell;
-  std::stringstream in(line);
-  while (std::getline(in, cell, ',')) {
-    const auto first = cell.find_first_not_of(" \t\r");
-    const auto last = cell.find_last_not_of(" \t\r");
-    cells.push_back(first == std::string::npos ? std::string() : cell.substr(first, last - first + 1));
-  }
-  return cells;
-}
-
-double ParseNumber(const std::string& text, const std::string& file, int line, const std::string& column) {
-  double value = 0.0;
-  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (ec != std::errc() || end != text.data() + text.size() || !std::isfinite(value)) {
-    ThrowBadInput(file, "column " + column + ": '" + text + "' is not a number", line);
-  }
-  return value;
-}
-
-}  // namespace
-
-std::vector<PatientRow> ReadPatientTable(const std::filesystem::path& path) {
-  const std::string file = path.string();
-  std::ifstream in(path);
-  if (!in) ThrowBadInput(file, "cannot open the patient table");
-  std::string line;
-  int number = 0;
-  std::map<std::string, std::size_t> column;
-  const char* needed[] = {"patient",           "haller_index", "width_mm",
-                          "sternal_length_mm", "depth_mm",     "depression_mm"};
-  std::vector<PatientRow> rows;
-  while (std::getline(in, line)) {
-    ++number;
-    if (line.find_first_not_of(" \t\r") == std::string::npos || line[0] == '#') continue;
-    const std::vector<std::string> cells = SplitCsv(line);
-    if (column.empty()) {
-      for (std::size_t c = 0; c < cells.size(); ++c) column[cells[c]] = c;
-      for (const char* name : needed) {
-        if (!column.count(name))
-          ThrowBadInput(file, std::string("the header has no column '") + name + "'", number);
-      }
-      continue;
-    }
-    auto cell = [&](const char* name) {
-      const std::size_t c = column[name];
-      if (c >= cells.size()) ThrowBadInput(file, std::string("missing value of column ") + name, number);
-      return ParseNumber(cells[c], file, number, name);
-    };
-    PatientRow row;
-    row.line = number;
-    const double patient = cell("patient");
-    if (patient != std::floor(patient) || patient < 1 || patient > 1e6) {
-      ThrowBadInput(file, "patient number must be a positive whole number", number);
-    }
-    row.patient = static_cast<int>(patient);
-    row.haller_index = cell("haller_index");
-    row.width_mm = cell("width_mm");
-    row.sternal_length_mm = cell("sternal_length_mm");
-    row.depth_mm = cell("depth_mm");
-    row.depression_mm = cell("depression_mm");
-    if (row.width_mm < 120 || row.width_mm > 500 || row.depth_mm < 60 || row.depth_mm > 400 ||
-        row.sternal_length_mm < 60 || row.sternal_length_mm > 300 || row.depression_mm < 0 ||
-        row.depression_mm > 60) {
-      ThrowBadInput(
-          file, "measurements out of range (width 120-500, depth 60-400, length 60-300, depression 0-60 mm)",
-          number);
-    }
-    for (const PatientRow& r : rows) {
-      if (r.patient == row.patient) {
-        ThrowBadInput(file,
-                      "patient " + std::to_string(row.patient) + " already on line " + std::to_string(r.line),
-                      number);
-      }
-    }
-    rows.push_back(row);
-  }
-  if (column.empty()) ThrowBadInput(file, "empty patient table");
-  return rows;
-}
-
-const PatientRow& FindPatient(const std::vector<PatientRow>& rows, int number, const std::string& table) {
-  for (const PatientRow& r : rows) {
-    if (r.patient == number) return r;
-  }
-  ThrowBadInput(table, "has no patient " + std::to_string(number));
-}
-
-PatientChest MakePatientChest(const PatientRow& row, std::uint64_t seed, const PopulationModel& population,
-                              const PatientFitOptions& options) {
+PatientChest MakePatientChest(const PatientTableRow& row, std::uint64_t seed,
+                              const PopulationModel& population, const PatientFitOptions& options) {
   PatientChest out;
   ChestParameters& p = out.parameters;
   p = population.mean;

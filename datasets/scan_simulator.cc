@@ -36,15 +36,6 @@ class Wander {
   double omega_[3], phase_[3];
 };
 
-Eigen::Vector3d RandomUnit(std::mt19937_64* rng) {
-  std::normal_distribution<double> normal(0.0, 1.0);
-  Eigen::Vector3d a;
-  do {
-    a = Eigen::Vector3d(normal(*rng), normal(*rng), normal(*rng));
-  } while (a.norm() < 1e-6);
-  return a.normalized();
-}
-
 ScanHole MakeHole(const ChestSurface& surface, std::mt19937_64* rng, const ScanOptions& o, double u0,
                   double u1, double v0, double v1, int sweep, const char* cause) {
   std::uniform_real_distribution<double> u(u0, u1), v(v0, v1), d(o.hole_min_mm, o.hole_max_mm);

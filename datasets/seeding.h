@@ -2,7 +2,9 @@
 // output does not depend on the number of threads or on the order of work.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
+#include <random>
 
 namespace pectus::datasets {
 
@@ -25,6 +27,16 @@ enum class SeedStream : std::uint64_t {
 /// The seed of item `index` of `stream` under `seed`.
 inline std::uint64_t DeriveSeed(std::uint64_t seed, SeedStream stream, std::uint64_t index) {
   return Mix64(Mix64(seed ^ Mix64(static_cast<std::uint64_t>(stream))) + index);
+}
+
+/// A direction drawn uniformly on the unit sphere (a normalised standard normal 3-vector).
+inline Eigen::Vector3d RandomUnit(std::mt19937_64* rng) {
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Eigen::Vector3d a;
+  do {
+    a = Eigen::Vector3d(normal(*rng), normal(*rng), normal(*rng));
+  } while (a.norm() < 1e-6);
+  return a.normalized();
 }
 
 }  // namespace pectus::datasets

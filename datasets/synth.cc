@@ -23,15 +23,6 @@ bool Fail(std::string* why, const std::string& message) {
   return false;
 }
 
-Eigen::Vector3d RandomUnit(std::mt19937_64* rng) {
-  std::normal_distribution<double> normal(0.0, 1.0);
-  Eigen::Vector3d a;
-  do {
-    a = Eigen::Vector3d(normal(*rng), normal(*rng), normal(*rng));
-  } while (a.norm() < 1e-6);
-  return a.normalized();
-}
-
 // Streams of a subject's own draws beyond the population sample (kept apart so that turning pectus or pose
 // on does not change the shape).
 enum class SubjectDraw : std::uint64_t { kPectus = 11, kPose = 12 };
@@ -134,7 +125,7 @@ SyntheticSubject MakeSubjectWithPectus(const SubjectOptions& options, std::uint6
   return s;
 }
 
-SyntheticSubject MakePatientSubject(const PatientRow& row, std::uint64_t seed,
+SyntheticSubject MakePatientSubject(const PatientTableRow& row, std::uint64_t seed,
                                     const SubjectOptions& options) {
   CheckOptions(options);
   SyntheticSubject s;

@@ -74,7 +74,8 @@ SyntheticSubject MakeSubjectWithPectus(const SubjectOptions& options, std::uint6
 
 /// A patient's chest from a row of the CT table (MakePatientChest), named "patient_<n>"; extra holds the row
 /// and the measurement of the result's chest wall and skin.
-SyntheticSubject MakePatientSubject(const PatientRow& row, std::uint64_t seed, const SubjectOptions& options);
+SyntheticSubject MakePatientSubject(const PatientTableRow& row, std::uint64_t seed,
+                                    const SubjectOptions& options);
 
 /// The same subject after growth (Grow), named `name`; extra holds the growth.
 SyntheticSubject GrowSubject(const SyntheticSubject& subject, const GrowthOptions& growth,

@@ -84,7 +84,7 @@ class PlanCommand : public Command {
   }
   std::string Example() const override {
     return "  pectus plan --patient-table nuss_ct_parameters.csv --patient 57 --model average.h5 \\\n"
-           "      --bar-position 0.85 --force 1700 --out plan57/ --report r.json\n"
+           "      --bar-position 0.85 --force 200 --out plan57/ --report r.json\n"
            "    (scenario B is 20 mm nearer the notch unless --compare-position is given; the best placement "
            "is\n"
            "     searched unless --no-search; open plan57/report.html)\n"
@@ -105,8 +105,10 @@ class PlanCommand : public Command {
                     "Where the bar meets the sternum: fraction of the sternal length "
                     "from the notch (0.85) or millimetres (140mm)")
         ->default_val("0.85");
-    app->add_option("--force", force_n_, "The bar's push, N")
-        ->default_val(1700.0)
+    app->add_option("--force", force_n_,
+                    "The bar's push, N (about 175 N in adolescents, over 200 N in adults, Weber 2006; "
+                    "the report gives the force that lifts the sternum by its depression)")
+        ->default_val(200.0)
         ->check(CLI::PositiveNumber);
     app->add_option("--compare-position", compare_,
                     "Scenario B's bar position (default: 20 mm nearer the notch)");
@@ -114,6 +116,12 @@ class PlanCommand : public Command {
     app->add_flag("!--no-search", search_, "Skip the search for the best bar position and force");
     app->add_option("--search-positions", search_options_.positions, "Bar positions in the search grid")
         ->default_val(10);
+    app->add_option("--search-from", search_options_.position_from,
+                    "First bar position searched, fraction of the sternal length from the notch")
+        ->default_val(0.5);
+    app->add_option("--search-to", search_options_.position_to,
+                    "Last bar position searched (default 0.95: lower would be the tip of the xiphoid)")
+        ->default_val(0.95);
     app->add_option("--search-forces", search_options_.forces, "Forces in the search grid")->default_val(31);
     app->add_option("--search-max-force", search_options_.force_max_n, "Largest force searched, N")
         ->default_val(3000);
@@ -124,9 +132,10 @@ class PlanCommand : public Command {
         ->default_val("similarity")
         ->check(CLI::IsMember({"similarity", "rigid"}));
     app->add_option("--cartilage-modulus", cartilage_mpa_,
-                    "Young's modulus of the costal cartilage, MPa (default "
-                    "20, dissertation Table 1)");
-    app->add_option("--cell-mm", cell_mm_, "Mesh: cell length along ribs and cartilages, mm (default 6)");
+                    "Young's modulus of the costal cartilage, MPa (default 80: calibrated to the "
+                    "force measured in vivo; 20: the dissertation's Table 1; docs/planner.md)");
+    app->add_option("--cell-mm", cell_mm_,
+                    "Mesh: cell length along the ribs, 2 to 20 mm (default 6; cartilages 4 to 6)");
     app->add_option("--soft-tissue-mm", soft_tissue_mm_,
                     "Skin: soft-tissue thickness over the bones, mm (default 15)");
     app->add_option("--dataset", dataset_, "Write the FE dataset of every patient of the table (HDF5)");
@@ -182,7 +191,7 @@ class PlanCommand : public Command {
   std::string table_, patient_, model_, model_landmarks_, position_ = "0.85", compare_, out_, dataset_,
                                                           plugin_path_;
   std::string registration_ = "similarity";
-  double force_n_ = 1700, cartilage_mpa_ = 0, cell_mm_ = 0, soft_tissue_mm_ = -1;
+  double force_n_ = 200, cartilage_mpa_ = 0, cell_mm_ = 0, soft_tissue_mm_ = -1;
   bool search_ = true;
   PlacementSearchOptions search_options_;
   PectusPlannerOptions options_{};
@@ -212,6 +221,14 @@ void PlanCommand::Plan(const PlannerPlugin& plugin, Context* context) {
     planner = std::make_unique<PlannerClient>(plugin, patient, options_);
   }
   report["patient"] = patient.id;
+  const PectusPlannerOptions& o = planner->options();
+  report["materials"] = {
+      {"sternum",
+       {{"youngs_modulus_mpa", o.sternum_youngs_modulus_mpa}, {"poisson_ratio", o.sternum_poisson_ratio}}},
+      {"rib", {{"youngs_modulus_mpa", o.rib_youngs_modulus_mpa}, {"poisson_ratio", o.rib_poisson_ratio}}},
+      {"costal_cartilage",
+       {{"youngs_modulus_mpa", o.cartilage_youngs_modulus_mpa},
+        {"poisson_ratio", o.cartilage_poisson_ratio}}}};
   report["ribcage"] = MeasurementsJson(patient, planner->measurements());
   report["average_chest"] = {
       {"model", model_}, {"vertices", average.mesh.num_vertices()}, {"landmarks", average.landmark_source}};
@@ -224,25 +241,36 @@ void PlanCommand::Plan(const PlannerPlugin& plugin, Context* context) {
       WriteNussPlan(plan, *planner, average, plugin.description(), out_,
                     [&](const fs::path& target) { return StageOutput(context, *this, target); });
   for (const fs::path& file : written) report["outputs"].push_back(file.string());
-  // A linear model far outside its range says so: a lift of many times the depression.
-  const double depression = planner->measurements().depression_mm;
+  // A linear model far outside its range says so (and the report marks it): a lift beyond twice the
+  // depression.
+  const double depression = plan.depression_mm;
   for (const PlanScenario& s : plan.scenarios) {
     const double lift = s.solved.figures.sternum_lift_mm;
-    if (depression > 1.0 && lift > 2.0 * depression) {
+    if (lift > LinearRangeLiftMm(depression)) {
       char text[400];
       std::snprintf(
           text, sizeof(text),
           "scenario %s (%s) lifts the sternum by %.0f mm, %.1f times its depression of %.1f mm: the "
-          "linear model is far outside its range (the force to lift by the depression there is %.0f N; "
-          "docs/planner.md, 'Force to lift')",
-          s.name.c_str(), s.solved.bar.Name().c_str(), lift, lift / depression, depression,
+          "linear model is far outside its range (the force to lift by the depression there is "
+          "%.0f N; docs/planner.md, 'Force to lift')",
+          s.name.c_str(), s.solved.bar.Name().c_str(), lift, lift / std::max(depression, 1e-9), depression,
           depression / lift * s.solved.bar.force_n);
       Warn(text);
     }
   }
+  if (plan.search && !SearchEdgeNote(*plan.search).empty()) Warn("search: " + SearchEdgeNote(*plan.search));
   const PlanScenario& a = plan.scenarios.front();
-  Info("plan for patient " + std::string(patient.id) + ": scenario A (" + a.solved.bar.Name() + ") RMS " +
-       std::to_string(a.score.roi.rms) + " mm; report " + (fs::path(out_) / "report.html").string());
+  char summary[300];
+  std::snprintf(summary, sizeof(summary), "scenario A (%s) RMS %.1f mm", a.solved.bar.Name().c_str(),
+                a.score.roi.rms);
+  std::string line = "plan for patient " + std::string(patient.id) + ": " + summary;
+  if (plan.search) {
+    const PlanScenario& best = plan.scenarios.back();
+    std::snprintf(summary, sizeof(summary), "; best (%s) RMS %.1f mm", best.solved.bar.Name().c_str(),
+                  best.score.roi.rms);
+    line += summary;
+  }
+  Info(line + "; report " + (fs::path(out_) / "report.html").string());
 }
 
 PECTUS_REGISTER_COMMAND(PlanCommand, 120);

@@ -244,12 +244,12 @@ class SynthCommand : public Command {
 
   std::vector<ds::SyntheticSubject> PatientSubjects(Report* report) {
     if (rows_.empty() && !all_rows_) ThrowUsage("synth patient: give --row N (repeatable) or --all");
-    const std::vector<ds::PatientRow> table = ds::ReadPatientTable(table_);
-    std::vector<ds::PatientRow> chosen;
+    const std::vector<PatientTableRow> table = pectus::ReadPatientTable(table_);
+    std::vector<PatientTableRow> chosen;
     if (all_rows_) {
       chosen = table;
     } else {
-      for (int r : rows_) chosen.push_back(ds::FindPatient(table, r, table_.string()));
+      for (int r : rows_) chosen.push_back(pectus::FindPatient(table, r, table_.string()));
     }
     std::vector<ds::SyntheticSubject> subjects(chosen.size());
 #pragma omp parallel for schedule(dynamic)

@@ -66,10 +66,10 @@ typedef struct PectusPlannerOptions {
   double sternum_poisson_ratio;        /**< default 0.3 */
   double rib_youngs_modulus_mpa;       /**< default 5000 */
   double rib_poisson_ratio;            /**< default 0.3 */
-  double cartilage_youngs_modulus_mpa; /**< default 20: the one to set per patient (stiffer with age) */
+  double cartilage_youngs_modulus_mpa; /**< default 80, calibrated in vivo (Table 1: 20); set per patient */
   double cartilage_poisson_ratio;      /**< default 0.4 */
   double contact_width_mm;             /**< cranio-caudal width of the bar's contact patch, default 12 */
-  double rib_cell_length_mm;           /**< mesh: cell length along ribs and cartilages, default 6 */
+  double rib_cell_length_mm;           /**< mesh: cell length along ribs, 2 to 20, default 6 */
   int32_t sternum_cells_along;         /**< mesh: cells along the sternum, default 34 */
   double soft_tissue_mm;               /**< skin: soft-tissue thickness over the bones, default 15 */
   int32_t skin_rows;                   /**< skin grid rows (top to bottom), default 64 */

@@ -1,4 +1,5 @@
-// pectus planner: linear isotropic elastic materials (dissertation §4.1.2, Table 1).
+// pectus planner: linear isotropic elastic materials (dissertation §4.1.2, Table 1; the cartilage default
+// calibrated to in vivo forces).
 #pragma once
 
 #include <Eigen/Core>
@@ -23,12 +24,22 @@ struct IsotropicMaterial {
   ElasticityMatrix Elasticity() const;
 };
 
-/// The three materials of the ribcage (dissertation Table 1). Cartilage varies most between patients
-/// (and with age), so it is the one a caller usually overrides.
+/// Costal cartilage's Young's modulus in the dissertation's Table 1, MPa.
+inline constexpr double kDissertationCartilageModulusMpa = 20.0;
+/// The default costal cartilage modulus, MPa: an effective modulus calibrated so that the model needs the
+/// force measured in vivo to lift a sternum by its depression (about 175 N in adolescents, Weber et al.,
+/// J Thorac Cardiovasc Surg 2006). The model has only bone and cartilage, so this modulus also stands for
+/// what it lacks (intercostal muscles, diaphragm slips, transversus thoracis, pleura, skin). Evidence and
+/// figures: docs/planner.md, "Force to lift the sternum".
+inline constexpr double kCalibratedCartilageModulusMpa = 80.0;
+
+/// The three materials of the ribcage: sternum and ribs as in the dissertation's Table 1; the costal
+/// cartilage, which varies most between patients (and with age), calibrated to in vivo forces
+/// (kCalibratedCartilageModulusMpa; kDissertationCartilageModulusMpa gives Table 1).
 struct RibcageMaterials {
   IsotropicMaterial sternum{"sternum", 11500.0, 0.3};
   IsotropicMaterial rib{"rib", 5000.0, 0.3};
-  IsotropicMaterial cartilage{"costal_cartilage", 20.0, 0.4};
+  IsotropicMaterial cartilage{"costal_cartilage", kCalibratedCartilageModulusMpa, 0.4};
 };
 
 }  // namespace pectus::planner

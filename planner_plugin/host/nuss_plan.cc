@@ -54,10 +54,14 @@ nlohmann::json NussPlan::ToJson() const {
                        {"landmark_rms_mm", registration.landmark_rms_mm},
                        {"T_average_patient", rows}};
   j["before"] = before.ToJson();
+  j["depression_mm"] = depression_mm;
+  j["linear_range_lift_mm"] = LinearRangeLiftMm(depression_mm);
   for (const PlanScenario& s : scenarios) {
+    const double lift = s.solved.figures.sternum_lift_mm;
     j["scenarios"].push_back({{"name", s.name},
                               {"bar", BarJson(s.solved.bar)},
-                              {"sternum_lift_mm", s.solved.figures.sternum_lift_mm},
+                              {"sternum_lift_mm", lift},
+                              {"beyond_linear_range", lift > LinearRangeLiftMm(depression_mm)},
                               {"max_displacement_mm", s.solved.figures.max_displacement_mm},
                               {"bar_level_z_mm", s.solved.figures.bar_level_z_mm},
                               {"contact_area_mm2", s.solved.figures.contact_area_mm2},
@@ -71,6 +75,7 @@ nlohmann::json NussPlan::ToJson() const {
 NussPlan MakeNussPlan(const PlannerClient& planner, const AverageChest& average,
                       const NussPlanOptions& options, Report* report) {
   NussPlan plan;
+  plan.depression_mm = planner.measurements().depression_mm;
   const double length = planner.measurements().sternal_length_mm;
   const BarPlacement& a = options.scenario_a;
   const double a_mm = a.position_in_mm ? a.position : a.position * length;

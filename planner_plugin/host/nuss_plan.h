@@ -44,6 +44,7 @@ struct NussPlan {
   PlanScore before;                     ///< the unoperated chest against the average
   std::vector<PlanScenario> scenarios;  ///< A, B, and "best" if searched
   std::optional<PlacementSearchResult> search;
+  double depression_mm = 0;     ///< the patient's sternal depression, as the generated ribcage measures it
   bool relative = true;         ///< the skin model scored (PlanScoreOptions::relative)
   double common_limit_mm = 0;   ///< colour scale of the scenarios A and B: their worst difference (Fig. 77)
   double outcome_limit_mm = 0;  ///< colour scale of the unoperated chest and the best placement

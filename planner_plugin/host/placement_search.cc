@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 
@@ -36,6 +37,11 @@ nlohmann::json PlacementSearchResult::ToJson() const {
   }
   return {
       {"best", {{"position", best.position}, {"force_n", best.force_n}, {"objective_mm", best_objective_mm}}},
+      {"best_position_at_edge", position_at_edge < 0   ? "first"
+                                : position_at_edge > 0 ? "last"
+                                                       : "no"},
+      {"best_force_at_limit", force_at_limit},
+      {"edge_note", SearchEdgeNote(*this)},
       {"best_score", best_score.ToJson()},
       {"positions", positions},
       {"forces_n", forces_n},
@@ -44,6 +50,33 @@ nlohmann::json PlacementSearchResult::ToJson() const {
       {"evaluations", evaluations},
       {"solves", solves},
       {"seconds", seconds}};
+}
+
+std::string SearchEdgeNote(const PlacementSearchResult& result) {
+  if (result.positions.empty()) return "";
+  char text[600];
+  std::string note;
+  if (result.position_at_edge != 0) {
+    const bool last = result.position_at_edge > 0;
+    std::snprintf(
+        text, sizeof(text),
+        "The best position, %.3g L, is the %s end of the positions searched (%.3g-%.3g L): the RMS "
+        "still falls towards it. %s",
+        result.best.position, last ? "caudal" : "cranial", result.positions.front(), result.positions.back(),
+        last && result.positions.back() >= 0.95
+            ? "The search goes no lower: the sternal body ends at about 0.90 L, and below 0.95 L the "
+              "bar would sit on the tip of the xiphoid."
+            : "A wider range may place it better (--search-from/--search-to).");
+    note = text;
+  }
+  if (result.force_at_limit) {
+    std::snprintf(text, sizeof(text),
+                  "%sThe best force, %.0f N, is the largest searched: more would lift the sternum beyond "
+                  "the linear model's range (twice the depression) or above --search-max-force.",
+                  note.empty() ? "" : " ", result.best.force_n);
+    note += text;
+  }
+  return note;
 }
 
 namespace {
@@ -192,6 +225,12 @@ PlacementSearchResult SearchBestPlacement(const PlannerClient& planner, const Av
       &position, &best);
   out.best = {position, false, force};
   out.best_objective_mm = evaluate(position, force, &out.best_score);
+  // On an edge: the refinements move the best only to a strictly lower objective, so a best still on an
+  // edge of the grid means the objective falls towards that edge.
+  const double position_tolerance = 1e-9 * (options.position_to - options.position_from);
+  if (position <= options.position_from + position_tolerance) out.position_at_edge = -1;
+  if (position >= options.position_to - position_tolerance) out.position_at_edge = 1;
+  out.force_at_limit = force >= out.force_limit_n * (1 - 1e-9);
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

@@ -16,7 +16,8 @@ namespace pectus::planner {
 /// The search space and its resolution.
 struct PlacementSearchOptions {
   /// Bar positions searched: fractions of the sternal length from the notch. Defaults 0.5 to 0.95 in
-  /// 10 steps: the sternal body, where the bar goes.
+  /// 10 steps: the sternal body (which ends at about 0.90, the xiphisternal joint), where the bar goes,
+  /// and the upper half of the xiphoid. Not beyond 0.95: the bar would sit on the xiphoid's tip.
   double position_from = 0.5, position_to = 0.95;
   int positions = 10;
   /// Forces searched: `forces` steps up to the largest force worth trying: force_max_n (N), or, if less,
@@ -45,12 +46,21 @@ struct PlacementSearchResult {
   Eigen::MatrixXd objective_mm;   ///< #positions by #forces: the objective on the grid
   BarPlacement best;              ///< after refinement
   double best_objective_mm = 0;
+  /// Where the best lies on the edge of the space searched, where the objective still falls towards the
+  /// edge: -1 at position_from, +1 at position_to, 0 inside; and whether its force is the largest
+  /// searched (force_limit_n). SearchEdgeNote() says what that means.
+  int position_at_edge = 0;
+  bool force_at_limit = false;
   PlanScore best_score;
   int evaluations = 0;  ///< chests scored
   int solves = 0;       ///< positions solved by the plugin
   double seconds = 0;
   nlohmann::json ToJson() const;
 };
+
+/// A sentence for the user when the best placement lies on the edge of the space searched (empty if it
+/// does not): which edge, and why the search does not go beyond it.
+std::string SearchEdgeNote(const PlacementSearchResult& result);
 
 /// Searches the bar placement minimising the objective. Throws Error(kUsage) for invalid options.
 /// Every candidate is scored in the frame of `registration` (see ScorePlan).

@@ -50,7 +50,7 @@ std::string PlanReportHtml(const PlanReportInput& in) {
     << "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:4px "
        "10px;text-align:right}"
     << "th{background:#eee}figure{display:inline-block;margin:0.5em}img{max-width:100%}"
-    << "p.note{color:#555}</style></head><body>\n";
+    << "p.note{color:#555}.warn{color:#b00}</style></head><body>\n";
   h << "<h1>Nuss procedure plan: patient " << Escape(p.id) << "</h1>\n";
   h << "<p class=\"note\">Planner: " << Escape(in.plugin) << ". Average chest: " << Escape(in.average_chest)
     << ". Lengths in mm, forces in N.</p>\n";
@@ -103,15 +103,30 @@ std::string PlanReportHtml(const PlanReportInput& in) {
     << " mm (the worse of the two, as in the dissertation's Fig. 77); the unoperated chest and the best "
        "placement "
     << "share &plusmn;" << Num(in.outcome_limit_mm) << " mm.</p>\n<table>"
-    << Row({"scenario", "bar", "sternal lift", "RMS", "max |d|", "mean", "central RMS", "central max |d|"},
+    << Row({"scenario", "bar", "sternal lift", "lift / depression", "RMS", "max |d|", "mean", "central RMS",
+            "central max |d|"},
            true)
-    << Row({"before", "none", "0", Num(in.before.rms), Num(in.before.max_abs), Num(in.before.mean), "", ""});
+    << Row({"before", "none", "0", "0", Num(in.before.rms), Num(in.before.max_abs), Num(in.before.mean), "",
+            ""});
+  std::string beyond;
   for (const ReportScenario& s : in.scenarios) {
-    h << Row({Escape(s.name), Escape(s.bar.Name()), Num(s.figures.sternum_lift_mm), Num(s.roi.rms),
-              Num(s.roi.max_abs), Num(s.roi.mean), Num(s.central.rms), Num(s.central.max_abs)});
+    const double lift = s.figures.sternum_lift_mm, depression = s.sternum_lift_needed_mm;
+    std::string ratio = depression > 0 ? Num(lift / depression) : "-";
+    if (lift > LinearRangeLiftMm(depression)) {
+      ratio = "<b class=\"warn\">" + ratio + ": beyond the model</b>";
+      beyond += (beyond.empty() ? "" : ", ") + Escape(s.name);
+    }
+    h << Row({Escape(s.name), Escape(s.bar.Name()), Num(lift), ratio, Num(s.roi.rms), Num(s.roi.max_abs),
+              Num(s.roi.mean), Num(s.central.rms), Num(s.central.max_abs)});
   }
-  h << "</table>\n"
-    << Picture(in.comparison_png, "predicted chest minus average chest, scenarios side by side")
+  h << "</table>\n";
+  if (!beyond.empty()) {
+    h << "<p class=\"warn\">Scenario " << beyond << " lifts the sternum by more than "
+      << Num(LinearRangeLiftMm(in.scenarios.front().sternum_lift_needed_mm), "%.0f")
+      << " mm (twice the depression, at least 20 mm): the linear model is far outside its range there, so "
+         "its chest is not a prediction. Use a force near the force to lift above.</p>\n";
+  }
+  h << Picture(in.comparison_png, "predicted chest minus average chest, scenarios side by side")
     << (in.search == nullptr ? Picture(in.before_png, "before the operation") : "")
     << Picture(in.ribcage_png, in.search != nullptr ? "the deformed ribcage, best placement"
                                                     : "the deformed ribcage, scenario A");
@@ -121,9 +136,12 @@ std::string PlanReportHtml(const PlanReportInput& in) {
     h << "<h2>Best bar placement</h2>\n<p>The placement minimising the RMS difference to the average chest "
          "over "
       << s.positions.size() << " positions x " << s.forces_n.size() << " forces, refined: <b>"
-      << Escape(s.best.Name()) << "</b>, RMS " << Num(s.best_objective_mm, "%.2f") << " mm, max |d| "
+      << Escape(s.best.Name()) << "</b>, RMS " << Num(s.best_objective_mm) << " mm, max |d| "
       << Num(s.best_score.roi.max_abs) << " mm (" << s.evaluations << " chests scored, " << s.solves
       << " solves on the one factorisation, " << Num(s.seconds, "%.1f") << " s).</p>\n"
+      << (s.position_at_edge != 0 || s.force_at_limit
+              ? "<p class=\"warn\">" + Escape(SearchEdgeNote(s)) + "</p>\n"
+              : std::string())
       << Picture(in.search_png, "RMS difference over bar position and force; the cross marks the best")
       << Picture(in.best_png, "before the operation and with the best placement, on one scale");
   }

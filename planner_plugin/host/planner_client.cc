@@ -1,5 +1,6 @@
 #include "planner_plugin/host/planner_client.h"
 
+#include <algorithm>
 #include <cstdio>
 
 #include "shape/core/error.h"
@@ -21,6 +22,8 @@ std::string BarPlacement::Name() const {
   std::snprintf(text, sizeof(text), position_in_mm ? "%.1f mm, %.0f N" : "%.3g L, %.0f N", position, force_n);
   return text;
 }
+
+double LinearRangeLiftMm(double depression_mm) { return 2.0 * std::max(10.0, depression_mm); }
 
 namespace {
 

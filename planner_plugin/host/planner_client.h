@@ -24,10 +24,16 @@ void ThrowIfFailed(std::int32_t code, const PectusPlannerStatus& status);
 struct BarPlacement {
   double position = 0.85;
   bool position_in_mm = false;
-  double force_n = 1700;
-  /// "0.85 L, 1700 N" or "140 mm, 1700 N".
+  double force_n = 200;  ///< N; about the force measured in vivo (docs/planner.md)
+  /// "0.85 L, 200 N" or "140 mm, 200 N".
   std::string Name() const;
 };
+
+/// The largest sternal lift the linear model is trusted with, mm: twice the depression, and at least 20 mm
+/// (for a flat chest). Beyond it a plan over-corrects grossly and the small-displacement model no longer
+/// holds: plans flag such scenarios (the placement search's forces end at PlacementSearchOptions::lift_limit
+/// times the largest force to lift).
+double LinearRangeLiftMm(double depression_mm);
 
 /// One solved placement as the host sees it.
 struct PlannedCase {

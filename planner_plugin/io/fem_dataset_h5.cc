@@ -3,6 +3,7 @@
 #include <hdf5.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <system_error>
 
 #include "shape/core/error.h"
@@ -75,7 +76,7 @@ struct FemDatasetWriter::File {
 };
 
 FemDatasetWriter::FemDatasetWriter(const std::filesystem::path& path, const GenericRibcage& generic,
-                                   std::vector<BarLoad> loads)
+                                   std::vector<BarLoad> loads, const RibcageMaterials& materials)
     : file_(std::make_unique<File>()), path_(path), loads_(std::move(loads)) {
   temp_ = output_.Stage(path_);  // HDF5 writes to a file name: staged, renamed into place by Commit()
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported through pectus::Error
@@ -89,6 +90,15 @@ FemDatasetWriter::FemDatasetWriter(const std::filesystem::path& path, const Gene
   WriteAttribute(root, "units", "mm, N, MPa", path_);
   WriteAttribute(root, "frame", "LPS (x left, y posterior, z superior), origin at the sternal notch", path_);
   WriteAttribute(root, "load_case_order", "as /load_cases: bar position major, force minor", path_);
+  std::string listed;
+  for (const IsotropicMaterial* m : {&materials.sternum, &materials.rib, &materials.cartilage}) {
+    char text[96];
+    std::snprintf(text, sizeof(text), "%s%s E %g MPa nu %g", listed.empty() ? "" : ", ", m->name.c_str(),
+                  m->youngs_modulus_mpa, m->poisson_ratio);
+    listed += text;
+  }
+  WriteAttribute(root, "materials", listed, path_);
+  WriteAttribute(root, "cartilage_youngs_modulus_mpa", materials.cartilage.youngs_modulus_mpa, path_);
   // Load cases.
   std::vector<double> position, force;
   for (const BarLoad& l : loads_) {

@@ -36,7 +36,7 @@ class FemDatasetWriter {
   /// @param[in] loads    the load cases, the same for every patient (positions as fractions)
   /// Throws Error(kFailure) naming the file if HDF5 cannot create it.
   FemDatasetWriter(const std::filesystem::path& path, const GenericRibcage& generic,
-                   std::vector<BarLoad> loads);
+                   std::vector<BarLoad> loads, const RibcageMaterials& materials = {});
   ~FemDatasetWriter();
   FemDatasetWriter(const FemDatasetWriter&) = delete;
   FemDatasetWriter& operator=(const FemDatasetWriter&) = delete;

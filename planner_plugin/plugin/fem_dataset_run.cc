@@ -3,8 +3,8 @@
 #include <chrono>
 
 #include "planner_plugin/io/fem_dataset_h5.h"
-#include "planner_plugin/ribcage/patient_table.h"
 #include "shape/core/error.h"
+#include "shape/io/patient_table_io.h"
 
 namespace pectus::planner {
 
@@ -12,8 +12,7 @@ FemDatasetSummary RunFemDataset(const std::filesystem::path& table, const std::f
                                 const PlannerSettings& settings,
                                 const std::function<void(std::int64_t, std::int64_t)>& progress) {
   const auto start = std::chrono::steady_clock::now();
-  const std::vector<PatientRow> rows = ReadPatientTable(table);
-  if (rows.empty()) ThrowBadInput(table.string(), "the patient table has no patients");
+  const std::vector<PatientTableRow> rows = ReadPatientTable(table);
   const GenericRibcage generic = BuildGenericRibcage(settings.generic);
   const std::vector<BarLoad> loads = DissertationLoadCases();
   std::vector<BarLoad> positions;
@@ -21,11 +20,11 @@ FemDatasetSummary RunFemDataset(const std::filesystem::path& table, const std::f
     if (positions.empty() || positions.back().position != load.position)
       positions.push_back({load.position, false, 1.0});
   }
-  FemDatasetWriter writer(output, generic, loads);
+  FemDatasetWriter writer(output, generic, loads, settings.fem.materials);
   const auto total = static_cast<std::int64_t>(rows.size());
   for (std::int64_t i = 0; i < total; ++i) {
-    const PatientRow& row = rows[static_cast<std::size_t>(i)];
-    const PatientRibcage ribcage = MakePatientRibcage(generic, row.measurements, settings.patient);
+    const PatientTableRow& row = rows[static_cast<std::size_t>(i)];
+    const PatientRibcage ribcage = MakePatientRibcage(generic, MeasurementsOf(row), settings.patient);
     if (!ribcage.converged && ribcage.residual_mm > 1.0) {
       ThrowFailure("the generated ribcage does not reproduce the CT measurements: " + ribcage.message,
                    table.string());

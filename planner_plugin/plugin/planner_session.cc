@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 
 #include "planner_plugin/fem/tet_mesh.h"
@@ -44,8 +45,10 @@ PlannerSettings SettingsFrom(const PectusPlannerOptions* options) {
   s.skin.columns = o.skin_columns;
   std::string why;
   if (!(o.rib_cell_length_mm >= 2 && o.rib_cell_length_mm <= 20)) {
-    ThrowUsage("planner options: rib_cell_length_mm must be 2 to 20 mm, got " +
-               std::to_string(o.rib_cell_length_mm));
+    char text[160];
+    std::snprintf(text, sizeof(text), "planner options: rib_cell_length_mm must be 2 to 20 mm, got %g",
+                  o.rib_cell_length_mm);
+    ThrowUsage(text);
   }
   if (!s.generic.IsValid(&why)) ThrowUsage("planner options (mesh): " + why);
   if (!s.fem.IsValid(&why)) ThrowUsage("planner options: " + why);

@@ -9,8 +9,8 @@
 #include "planner_plugin/api/planner_api.h"
 #include "planner_plugin/plugin/fem_dataset_run.h"
 #include "planner_plugin/plugin/planner_session.h"
-#include "planner_plugin/ribcage/patient_table.h"
 #include "shape/core/error.h"
+#include "shape/io/patient_table_io.h"
 
 #ifndef PECTUS_VERSION
 #define PECTUS_VERSION "unknown"
@@ -67,9 +67,9 @@ std::int32_t ReadPatient(const char* table_path, const char* patient, PectusPlan
     Require(table_path, "table_path");
     Require(patient, "patient");
     Require(out, "out");
-    const auto rows = pectus::planner::ReadPatientTable(table_path);
-    const pectus::planner::PatientRow& row = pectus::planner::FindPatient(rows, patient);
-    *out = pectus::planner::PatientFrom(row.measurements, row.haller_index);
+    const auto rows = pectus::ReadPatientTable(table_path);
+    const pectus::PatientTableRow& row = pectus::FindPatient(rows, std::string_view(patient), table_path);
+    *out = pectus::planner::PatientFrom(pectus::planner::MeasurementsOf(row), row.haller_index);
   });
 }
 

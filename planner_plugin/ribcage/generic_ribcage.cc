@@ -302,8 +302,14 @@ class Builder {
     }
     const int rib_cells =
         std::max(4, static_cast<int>(std::lround(PolylineLength(rib_line) / o_.rib_cell_length_mm)));
+    // Cartilage cells are 4 mm to the cartilage's height over rib_cells_height (6 mm) long, whatever the
+    // ribs' cells. Longer ones
+    // make a false rib's joint (rib_cells_height cells of the cartilage above) taller than the cartilage
+    // that arrives there, and ribs 9 and 10 folded from 10 mm cells on; shorter ones make the last cell
+    // before a sternal joint thinner than the sternum's face is uneven, and rib 1 folded below 2.7 mm.
+    const double cartilage_cell_mm = std::clamp(o_.rib_cell_length_mm, 4.0, kCartilageHeight / nu);
     const int cartilage_cells =
-        std::max(4, static_cast<int>(std::lround(PolylineLength(cartilage_line) / o_.rib_cell_length_mm)));
+        std::max(4, static_cast<int>(std::lround(PolylineLength(cartilage_line) / cartilage_cell_mm)));
     std::vector<Eigen::Vector3d> centres = ResampleByArcLength(rib_line, rib_cells);
     const std::vector<Eigen::Vector3d> cartilage = ResampleByArcLength(cartilage_line, cartilage_cells);
     centres.insert(centres.end(), cartilage.begin() + 1, cartilage.end());

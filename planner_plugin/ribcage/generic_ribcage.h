@@ -37,7 +37,9 @@ struct GenericRibcageOptions {
   /// quadratic tetrahedra, two cells across a beam bend within about 1 % of beam theory.
   int rib_cells_height = 2;
   int rib_cells_thickness = 2;
-  /// Target length of a cell along a rib or cartilage, mm. Default 6.
+  /// Target length of a cell along a rib, mm. Default 6. Costal cartilages take it clamped to 4 mm ..
+  /// 12 mm / rib_cells_height (6 mm by default): their joints fold otherwise. Every value from 2 to 20 mm
+  /// builds (tested).
   double rib_cell_length_mm = 6.0;
   /// How far the anterior surface of the vertebral bodies lies in front of the rib heads, mm (sets the
   /// spine line used by the Haller index). Default 20.

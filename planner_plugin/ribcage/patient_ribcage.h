@@ -14,6 +14,7 @@
 #include "planner_plugin/ribcage/ribcage_measurements.h"
 #include "planner_plugin/ribcage/sternum_skinning.h"
 #include "shape/core/landmarks.h"
+#include "shape/io/patient_table_io.h"
 
 namespace pectus::planner {
 
@@ -40,6 +41,10 @@ struct PatientMeasurements {
   double TrueDepression() const { return depression_mm / magnification; }
   double SternalLength() const;
 };
+
+/// The measurements of a row of the patient table (read by pectus::ReadPatientTable, which has already
+/// checked the same ranges as PatientMeasurements::IsValid), named by the patient's number.
+PatientMeasurements MeasurementsOf(const PatientTableRow& row);
 
 /// Options of the patient fit.
 struct PatientRibcageOptions {

@@ -6,7 +6,7 @@
 // Prints JSON.
 //
 //   fem_benchmark [--patient 57] [--all] [--dataset fem_dataset.h5] [--table nuss_ct_parameters.csv]
-//                 [--threads N] [--cell-mm 6] [--ccx /usr/bin/ccx] [--cartilage-sweep]
+//                 [--threads N] [--cell-mm 6] [--cartilage-mpa 80] [--ccx /usr/bin/ccx] [--cartilage-sweep]
 #include <omp.h>
 
 #include <algorithm>
@@ -24,15 +24,17 @@
 #include "planner_plugin/io/fem_dataset_h5.h"
 #include "planner_plugin/ribcage/generic_ribcage.h"
 #include "planner_plugin/ribcage/patient_ribcage.h"
-#include "planner_plugin/ribcage/patient_table.h"
 #include "planner_plugin/ribcage/ribcage_fem.h"
 #include "shape/core/error.h"
 #include "shape/core/log.h"
+#include "shape/io/patient_table_io.h"
 
 namespace {
 
 using namespace pectus::planner;
+using pectus::PatientTableRow;
 using pectus::Points3;
+using pectus::ReadPatientTable;
 using Clock = std::chrono::steady_clock;
 
 double CpuSeconds() {
@@ -55,13 +57,14 @@ struct Stopwatch {
   }
 };
 
-nlohmann::json RunPatient(const GenericRibcage& generic, const PatientRow& row, FemDatasetWriter* dataset) {
+nlohmann::json RunPatient(const GenericRibcage& generic, const PatientTableRow& row,
+                          const RibcageFemOptions& options, FemDatasetWriter* dataset) {
   nlohmann::json out;
-  out["patient"] = row.measurements.patient;
+  out["patient"] = row.patient;
   Stopwatch total, stage;
-  const PatientRibcage ribcage = MakePatientRibcage(generic, row.measurements);
+  const PatientRibcage ribcage = MakePatientRibcage(generic, MeasurementsOf(row));
   out["timings"]["ribcage_fit_and_mesh"] = stage.Lap();
-  const RibcageFem fem(ribcage);
+  const RibcageFem fem(ribcage, options);
   out["timings"]["assembly_and_factorisation"] = stage.Lap();
   const std::vector<BarResult> results = fem.Solve(DissertationLoadCases());
   out["timings"]["solve_24_load_cases"] = stage.Lap();
@@ -100,17 +103,18 @@ nlohmann::json RunPatient(const GenericRibcage& generic, const PatientRow& row, 
 }
 
 // CalculiX on the identical mesh, materials, constraints and one load case (0.85 L, 100 N).
-nlohmann::json RunCalculixPeer(const GenericRibcage& generic, const PatientRow& row, const std::string& ccx) {
-  const PatientRibcage ribcage = MakePatientRibcage(generic, row.measurements);
+nlohmann::json RunCalculixPeer(const GenericRibcage& generic, const PatientTableRow& row,
+                               const RibcageFemOptions& options, const std::string& ccx) {
+  const PatientRibcage ribcage = MakePatientRibcage(generic, MeasurementsOf(row));
   Stopwatch ours;
-  const RibcageFem fem(ribcage);
+  const RibcageFem fem(ribcage, options);
   const LoadCase load{"bar", fem.NodalForces({0.85, false, 100.0}), {}};
   const Points3 u = fem.solver().Solve({load}).front();
   const nlohmann::json ours_time = ours.Lap();
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "pectus_fem_benchmark_ccx";
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
-  const RibcageMaterials m;
+  const RibcageMaterials& m = options.materials;
   WriteCalculixInput(dir / "ribcage.inp", ribcage.mesh, {m.sternum, m.rib, m.cartilage},
                      fem.solver().partition().prescribed, load);
   Stopwatch theirs;
@@ -129,8 +133,8 @@ nlohmann::json RunCalculixPeer(const GenericRibcage& generic, const PatientRow& 
 }
 
 // Force to lift the sternum by its depression at 0.65/0.75/0.85 L for cartilage moduli from 5 to 640 MPa.
-nlohmann::json CartilageSweep(const GenericRibcage& generic, const PatientRow& row) {
-  const PatientRibcage ribcage = MakePatientRibcage(generic, row.measurements);
+nlohmann::json CartilageSweep(const GenericRibcage& generic, const PatientTableRow& row) {
+  const PatientRibcage ribcage = MakePatientRibcage(generic, MeasurementsOf(row));
   nlohmann::json out = nlohmann::json::array();
   for (double e : {5.0, 10.0, 20.0, 40.0, 80.0, 160.0, 320.0, 640.0}) {
     RibcageFemOptions options;
@@ -154,6 +158,7 @@ int main(int argc, char** argv) {
   std::string patient = "57", dataset_path, ccx;
   bool all = false, sweep = false;
   GenericRibcageOptions generic_options;
+  RibcageFemOptions fem_options;  // materials: sternum and ribs of Table 1, the calibrated cartilage
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -179,10 +184,12 @@ int main(int argc, char** argv) {
       sweep = true;
     } else if (a == "--cell-mm") {
       generic_options.rib_cell_length_mm = std::stod(next());
+    } else if (a == "--cartilage-mpa") {
+      fem_options.materials.cartilage.youngs_modulus_mpa = std::stod(next());
     } else {
       std::cerr
           << "usage: fem_benchmark [--patient ID | --all] [--dataset OUT.h5] [--table CSV] [--threads N] "
-             "[--cell-mm MM] [--ccx CCX] [--cartilage-sweep]\n";
+             "[--cell-mm MM] [--cartilage-mpa E] [--ccx CCX] [--cartilage-sweep]\n";
       return 2;
     }
   }
@@ -191,23 +198,27 @@ int main(int argc, char** argv) {
     report["command"] = std::string(argv[0]);
     for (int i = 1; i < argc; ++i) report["command"] = report["command"].get<std::string>() + " " + argv[i];
     report["threads"] = omp_get_max_threads();
+    report["cartilage_mpa"] = fem_options.materials.cartilage.youngs_modulus_mpa;
     Stopwatch total;
-    const std::vector<PatientRow> rows = ReadPatientTable(table);
+    const std::vector<PatientTableRow> rows = ReadPatientTable(table);
     const GenericRibcage generic = BuildGenericRibcage(generic_options);
     report["generic_ribcage"] = {
         {"corner_nodes", generic.nodes.rows()}, {"tets", generic.tets.rows()}, {"build", total.Lap()}};
-    if (!ccx.empty()) report["calculix_peer"] = RunCalculixPeer(generic, FindPatient(rows, patient), ccx);
-    if (sweep) report["cartilage_sweep"] = CartilageSweep(generic, FindPatient(rows, patient));
+    if (!ccx.empty())
+      report["calculix_peer"] = RunCalculixPeer(generic, FindPatient(rows, patient, table), fem_options, ccx);
+    if (sweep) report["cartilage_sweep"] = CartilageSweep(generic, FindPatient(rows, patient, table));
     if (!all) {
-      report["patients"].push_back(RunPatient(generic, FindPatient(rows, patient), nullptr));
+      report["patients"].push_back(
+          RunPatient(generic, FindPatient(rows, patient, table), fem_options, nullptr));
     } else {
       std::unique_ptr<FemDatasetWriter> dataset;
       if (!dataset_path.empty())
-        dataset = std::make_unique<FemDatasetWriter>(dataset_path, generic, DissertationLoadCases());
+        dataset = std::make_unique<FemDatasetWriter>(dataset_path, generic, DissertationLoadCases(),
+                                                     fem_options.materials);
       pectus::Progress progress("FE of " + std::to_string(rows.size()) + " patients",
                                 static_cast<std::int64_t>(rows.size()));
-      for (const PatientRow& row : rows) {
-        report["patients"].push_back(RunPatient(generic, row, dataset.get()));
+      for (const PatientTableRow& row : rows) {
+        report["patients"].push_back(RunPatient(generic, row, fem_options, dataset.get()));
         progress.Advance();
       }
       // Summary over the patients: time per patient and force to lift at each position.

@@ -121,7 +121,7 @@ void Convergence(const fs::path& images) {
 }
 
 void Patients() {
-  const std::vector<PatientRow> rows =
+  const std::vector<PatientTableRow> rows =
       ReadPatientTable(std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv");
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<double> err(rows.size() * 3);

@@ -1,16 +1,13 @@
-// Tests of datasets/patient_table: the real CT table parses, and a chest made from a row gives back that
-// row's width, depth and depression (within 2 mm, the acceptance tolerance), measured independently on its
-// surface.
+// Tests of datasets/patient_table: a chest made from a row of the real CT table (read by shape/io's
+// ReadPatientTable, tested in tests/shape/io/patient_table_io_test.cc) gives back that row's width, depth and
+// depression (within 2 mm, the acceptance tolerance), measured independently on its surface.
 #include "datasets/patient_table.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <filesystem>
-#include <fstream>
 
 #include "datasets/synth.h"
-#include "shape/core/error.h"
 
 namespace pectus::datasets {
 namespace {
@@ -60,50 +57,21 @@ SliceMeasure MeasureSlice(const ChestSurface& wall, double v) {
   return m;
 }
 
-TEST(PatientTable, ReadsTheSixtyTwoPatients) {
-  const std::vector<PatientRow> rows = ReadPatientTable(kTable);
-  ASSERT_EQ(rows.size(), 62u);
-  const PatientRow& p57 = FindPatient(rows, 57, kTable);
-  EXPECT_EQ(p57.width_mm, 231.0);
-  EXPECT_EQ(p57.sternal_length_mm, 168.0);
-  EXPECT_EQ(p57.depth_mm, 123.0);
-  EXPECT_EQ(p57.depression_mm, 21.0);
-  EXPECT_THROW(FindPatient(rows, 99, kTable), Error);
-}
-
-TEST(PatientTable, MalformedTableNamesTheFileAndLine) {
-  const std::filesystem::path path = std::filesystem::temp_directory_path() / "pectus_bad_patients.csv";
-  {
-    std::ofstream out(path);
-    out << "patient,haller_index,width_mm,sternal_length_mm,depth_mm,depression_mm\n1,4.3,232,180,126,14\n2,"
-           "4.3,2x3,145,153,25\n";
-  }
-  try {
-    ReadPatientTable(path);
-    FAIL() << "no error";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::kBadInput);
-    EXPECT_EQ(e.line(), 3);
-    EXPECT_NE(std::string(e.what()).find("pectus_bad_patients.csv"), std::string::npos);
-  }
-  std::filesystem::remove(path);
-}
-
 // Acceptance: rows spanning the table (deepest depression 40 mm, flattest, narrowest, the validation patient
 // 57).
 TEST(PatientTable, SubjectFromARowGivesBackWidthDepthAndDepressionWithin2mm) {
-  const std::vector<PatientRow> rows = ReadPatientTable(kTable);
+  const std::vector<PatientTableRow> rows = ReadPatientTable(kTable);
   std::vector<int> chosen = {57, 3};
   auto extreme = [&](auto key) {
     return std::min_element(rows.begin(), rows.end(),
                             [&](const auto& a, const auto& b) { return key(a) < key(b); })
         ->patient;
   };
-  chosen.push_back(extreme([](const PatientRow& r) { return r.depression_mm; }));
-  chosen.push_back(extreme([](const PatientRow& r) { return r.width_mm; }));
-  chosen.push_back(extreme([](const PatientRow& r) { return -r.depth_mm; }));
+  chosen.push_back(extreme([](const PatientTableRow& r) { return r.depression_mm; }));
+  chosen.push_back(extreme([](const PatientTableRow& r) { return r.width_mm; }));
+  chosen.push_back(extreme([](const PatientTableRow& r) { return -r.depth_mm; }));
   for (int number : chosen) {
-    const PatientRow& row = FindPatient(rows, number, kTable);
+    const PatientTableRow& row = FindPatient(rows, number, kTable);
     const SyntheticSubject s = MakePatientSubject(row, 7, SubjectOptions{});
     const ChestSurface wall = s.ChestWall();
     // The slice of deepest depression over the sternal body (notch to xiphoid), every 0.5 % of the sternum.

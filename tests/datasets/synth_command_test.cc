@@ -103,7 +103,11 @@ TEST_F(SynthCommand, BadOptionsAndBadTableFailCleanly) {
   const CliRun bad = Pectus("synth patient --row 1 --table " + P("bad.csv") + " --out " + P("x") + kSmall);
   EXPECT_EQ(bad.code, 3);
   EXPECT_NE(bad.output.find("bad.csv"), std::string::npos);
-  EXPECT_EQ(Pectus("synth patient --row 99 --table " + kTable + " --out " + P("x") + kSmall).code, 3);
+  // A patient the table does not have: a usage error listing the patients it has.
+  const CliRun absent = Pectus("synth patient --row 99 --table " + kTable + " --out " + P("x") + kSmall);
+  EXPECT_EQ(absent.code, 2);
+  EXPECT_NE(absent.output.find("patient 99 is not in"), std::string::npos) << absent.output;
+  EXPECT_NE(absent.output.find("(patients 1-62)"), std::string::npos) << absent.output;
   EXPECT_FALSE(fs::exists(dir_ / "x" / "synth.json"));
   EXPECT_FALSE(fs::exists(dir_ / "x" / "sweep_00.ply"));
 }

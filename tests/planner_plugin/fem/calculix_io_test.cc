@@ -11,13 +11,14 @@
 
 #include "planner_plugin/fem/hex_block.h"
 #include "planner_plugin/fem/surface_load.h"
-#include "planner_plugin/ribcage/patient_table.h"
 #include "planner_plugin/ribcage/ribcage_fem.h"
 #include "shape/core/atomic_file.h"
 #include "shape/core/error.h"
 
 namespace pectus::planner {
 namespace {
+
+const std::string kTable = std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv";
 namespace fs = std::filesystem;
 
 // Runs ccx on `mesh` with `load` in a fresh temporary folder; returns its displacements.
@@ -97,9 +98,8 @@ TEST(Calculix, PatientRibcageMatchesCcxC3D10) {
   o.sternum_cells_along = 28;
   o.rib_cell_length_mm = 10.0;
   const GenericRibcage generic = BuildGenericRibcage(o);
-  const auto rows =
-      ReadPatientTable(std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv");
-  const PatientRibcage patient = MakePatientRibcage(generic, FindPatient(rows, "57").measurements);
+  const auto rows = ReadPatientTable(kTable);
+  const PatientRibcage patient = MakePatientRibcage(generic, MeasurementsOf(FindPatient(rows, 57, kTable)));
   const RibcageFem fem(patient);
   const BarLoad bar{0.85, false, 100.0};
   const LoadCase load{"bar", fem.NodalForces(bar), {}};

@@ -87,6 +87,33 @@ TEST(NussPlan, TheSearchFindsTheKnownPlacementOfAnAverageChestMadeFromItAndTheFi
   EXPECT_GT(plan.force_to_lift[0].force_n, plan.force_to_lift[2].force_n);
   EXPECT_DOUBLE_EQ(plan.force_to_lift[3].force_n, plan.force_to_lift[2].force_n);
   EXPECT_TRUE(plan.ToJson().contains("search"));
+  // The truth lies inside the space searched: the best is not on an edge.
+  EXPECT_EQ(plan.search->position_at_edge, 0);
+  EXPECT_FALSE(plan.search->force_at_limit);
+  EXPECT_EQ(SearchEdgeNote(*plan.search), "");
+  // 1700 N lifts the sternum far beyond twice its depression: both scenarios are flagged, the best is not.
+  const nlohmann::json json = plan.ToJson();
+  EXPECT_DOUBLE_EQ(json["linear_range_lift_mm"].get<double>(), 2 * planner.measurements().depression_mm);
+  EXPECT_TRUE(json["scenarios"][0]["beyond_linear_range"].get<bool>());
+  EXPECT_TRUE(json["scenarios"][1]["beyond_linear_range"].get<bool>());
+  EXPECT_FALSE(json["scenarios"][2]["beyond_linear_range"].get<bool>());
+
+  // A space that stops short of the truth (positions to 0.7, forces to half the true one): the best is
+  // the corner nearest the truth, and the search says it lies on both edges.
+  PlacementSearchOptions short_options = plan_options.search_options;
+  short_options.position_to = 0.7;
+  short_options.force_max_n = 0.5 * truth.force_n;
+  const PlacementSearchResult edge =
+      SearchBestPlacement(planner, average, plan.registration, plan_options.score, short_options);
+  EXPECT_EQ(edge.best.position, edge.positions.back()) << edge.ToJson().dump();
+  EXPECT_NEAR(edge.best.position, 0.7, 1e-12);
+  EXPECT_EQ(edge.position_at_edge, 1);
+  EXPECT_TRUE(edge.force_at_limit);
+  EXPECT_DOUBLE_EQ(edge.best.force_n, 0.5 * truth.force_n);
+  const std::string note = SearchEdgeNote(edge);
+  EXPECT_NE(note.find("caudal end of the positions searched (0.5-0.7 L)"), std::string::npos) << note;
+  EXPECT_NE(note.find("largest searched"), std::string::npos) << note;
+  EXPECT_EQ(edge.ToJson()["best_position_at_edge"], "last");
 
   // The files.
   const auto written = WriteNussPlan(plan, planner, average, plugin.description(), dir / "plan",
@@ -104,7 +131,8 @@ TEST(NussPlan, TheSearchFindsTheKnownPlacementOfAnAverageChestMadeFromItAndTheFi
   std::ifstream html(dir / "plan" / "report.html");
   std::stringstream text;
   text << html.rdbuf();
-  for (const char* expected : {"patient 57", "Best bar placement", "comparison.png", "search.png", "Weber"}) {
+  for (const char* expected :
+       {"patient 57", "Best bar placement", "comparison.png", "search.png", "Weber", "beyond the model"}) {
     EXPECT_NE(text.str().find(expected), std::string::npos) << expected;
   }
   fs::remove_all(dir);

@@ -11,7 +11,6 @@
 #include <vector>
 
 #include "planner_plugin/plugin/fem_dataset_run.h"
-#include "planner_plugin/ribcage/patient_table.h"
 
 namespace pectus::planner {
 namespace {

@@ -72,6 +72,17 @@ TEST_F(PluginEntry, ExportsOneVersionedTableThatCAndCppLayOutAlike) {
             nullptr);
 }
 
+TEST_F(PluginEntry, DefaultMaterialsAreTableOneWithTheCartilageCalibratedToInVivoForces) {
+  PectusPlannerOptions o{};
+  api_->default_options(&o);
+  EXPECT_EQ(o.sternum_youngs_modulus_mpa, 11500.0);  // dissertation Table 1
+  EXPECT_EQ(o.sternum_poisson_ratio, 0.3);
+  EXPECT_EQ(o.rib_youngs_modulus_mpa, 5000.0);
+  EXPECT_EQ(o.rib_poisson_ratio, 0.3);
+  EXPECT_EQ(o.cartilage_youngs_modulus_mpa, 80.0);  // calibrated (docs/planner.md); Table 1 says 20
+  EXPECT_EQ(o.cartilage_poisson_ratio, 0.4);
+}
+
 TEST_F(PluginEntry, FailuresComeBackAsStatusesNamingWhatIsWrong) {
   PectusPlannerStatus status{};
   PectusPlannerPatient patient{};

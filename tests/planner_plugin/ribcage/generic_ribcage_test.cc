@@ -87,6 +87,30 @@ TEST(GenericRibcage, MeasuresAsAFlatAverageChest) {
   EXPECT_LT(m.haller_index, 3.25);
 }
 
+// Every rib cell length the planner accepts (2 to 20 mm) meshes without a folded tetrahedron (10 mm folded
+// ribs 9-10 at their joint with the cartilage above, 2.6 mm folded rib 1 at the sternum, before the
+// cartilages kept their own 4-6 mm cells), and the cartilages' cells do stay 4 to 6 mm: the cartilage's
+// share of the mesh is the same at every rib cell length from 6 mm up, and from 4 mm down.
+TEST(GenericRibcage, EveryRibCellLengthFromTwoToTwentyMillimetresMeshesWithoutFolds) {
+  auto cartilage_tets = [](double cell_mm, int along) {
+    GenericRibcageOptions o;
+    o.rib_cell_length_mm = cell_mm;
+    o.sternum_cells_along = along;
+    const GenericRibcage g = BuildGenericRibcage(o);  // throws Error naming the part if a tetrahedron folds
+    return (g.regions.array() == kCartilageRegion).count();
+  };
+  for (int along : {28, 34}) {
+    const Eigen::Index at_6 = cartilage_tets(6.0, along), at_4 = cartilage_tets(4.0, along);
+    EXPECT_GT(at_4, at_6 * 13 / 10) << along;  // 6 mm / 4 mm = 1.5 times as many cells, less the rounding
+    for (double cell = 2.0; cell <= 20.0; cell += 0.5) {
+      SCOPED_TRACE("rib cells " + std::to_string(cell) + " mm, sternum cells " + std::to_string(along));
+      const Eigen::Index n = cartilage_tets(cell, along);
+      if (cell >= 6.0) EXPECT_EQ(n, at_6);
+      if (cell <= 4.0) EXPECT_EQ(n, at_4);
+    }
+  }
+}
+
 TEST(GenericRibcage, RejectsOptionsThatCannotBeMeshed) {
   GenericRibcageOptions o;
   o.rib_pairs = 12;

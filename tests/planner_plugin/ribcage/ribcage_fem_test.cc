@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include "planner_plugin/fem/surface_load.h"
-#include "planner_plugin/ribcage/patient_table.h"
 #include "shape/core/error.h"
 
 namespace pectus::planner {
@@ -20,7 +19,8 @@ class RibcageFemTest : public ::testing::Test {
     o.rib_cell_length_mm = 10.0;
     generic_ = new GenericRibcage(BuildGenericRibcage(o));
     const auto rows = ReadPatientTable(kTable);
-    patient_ = new PatientRibcage(MakePatientRibcage(*generic_, FindPatient(rows, "57").measurements));
+    patient_ =
+        new PatientRibcage(MakePatientRibcage(*generic_, MeasurementsOf(FindPatient(rows, 57, kTable))));
     fem_ = new RibcageFem(*patient_);
   }
   static void TearDownTestSuite() {
@@ -75,22 +75,23 @@ TEST_F(RibcageFemTest, ForceToLiftTheSternumByItsDepression) {
       fem_->ForceToLiftSternum({{0.65, false, 1}, {0.75, false, 1}, {0.85, false, 1}});
   ASSERT_EQ(f.size(), 3u);
   for (const ForceToLift& x : f) {
-    // 21 mm of depression; in vivo about 175-200 N (Weber 2006); the dissertation's model about 1000 N.
-    EXPECT_GT(x.force_n, 20.0);
-    EXPECT_LT(x.force_n, 2000.0);
+    // 21 mm of depression. The default cartilage is calibrated to in vivo forces: about 175 N in
+    // adolescents, above 200 N in adults (Weber 2006); the full mesh gives 171-240 N (docs/planner.md).
+    EXPECT_GT(x.force_n, 140.0);
+    EXPECT_LT(x.force_n, 300.0);
     EXPECT_NEAR(x.force_n * x.lift_per_newton_mm, patient_->measured.depression_mm, 1e-9);
   }
   // Pushing nearer the deepest point (the lower sternum) lifts it with less force.
   EXPECT_LT(f[2].force_n, f[1].force_n);
   EXPECT_LT(f[1].force_n, f[0].force_n);
-  // The cartilage carries the load: twice as stiff a cartilage needs more force, but less than twice
-  // (the ribs and sternum bend too).
-  RibcageFemOptions stiffer;
-  stiffer.materials.cartilage.youngs_modulus_mpa *= 2;
-  const RibcageFem fem2(*patient_, stiffer);
-  const ForceToLift g = fem2.ForceToLiftSternum({{0.75, false, 1}}).front();
-  EXPECT_GT(g.force_n / f[1].force_n, 1.2);
-  EXPECT_LT(g.force_n / f[1].force_n, 2.0);
+  // The cartilage carries the load: the dissertation's four times softer cartilage (Table 1, 20 MPa)
+  // needs less force, but more than a quarter (the ribs and sternum bend too): the full mesh needs 71 N.
+  RibcageFemOptions table1;
+  table1.materials.cartilage.youngs_modulus_mpa = kDissertationCartilageModulusMpa;
+  const RibcageFem fem20(*patient_, table1);
+  const ForceToLift g = fem20.ForceToLiftSternum({{0.75, false, 1}}).front();
+  EXPECT_LT(g.force_n / f[1].force_n, 0.5);
+  EXPECT_GT(g.force_n / f[1].force_n, 0.25);
 }
 
 // The push is spread with a smooth profile, so moving the bar by a fraction of a millimetre changes the

@@ -2,21 +2,21 @@
 
 #include <gtest/gtest.h>
 
-#include "planner_plugin/ribcage/patient_table.h"
 #include "planner_plugin/ribcage/ribcage_fem.h"
 #include "shape/core/error.h"
 
 namespace pectus::planner {
 namespace {
 
+const std::string kTable = std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv";
+
 TEST(SkinSurface, LiesOverTheChestWallAndFollowsTheRibcage) {
   GenericRibcageOptions o;
   o.sternum_cells_along = 28;
   o.rib_cell_length_mm = 8.0;
   const GenericRibcage generic = BuildGenericRibcage(o);
-  const auto rows =
-      ReadPatientTable(std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv");
-  const PatientRibcage patient = MakePatientRibcage(generic, FindPatient(rows, "57").measurements);
+  const auto rows = ReadPatientTable(kTable);
+  const PatientRibcage patient = MakePatientRibcage(generic, MeasurementsOf(FindPatient(rows, 57, kTable)));
   SkinSurfaceOptions options;
   options.rows = 24;
   options.columns = 32;
@@ -32,7 +32,7 @@ TEST(SkinSurface, LiesOverTheChestWallAndFollowsTheRibcage) {
   // The depression shows on the skin: the same patient without a depression has the skin over the
   // xiphoid as far forward of the depressed one as the bone is, within 10 % (the skin keeps its
   // thickness; it follows a Gaussian-weighted neighbourhood of bone nodes, not one point).
-  PatientMeasurements flat = FindPatient(rows, "57").measurements;
+  PatientMeasurements flat = MeasurementsOf(FindPatient(rows, 57, kTable));
   flat.depression_mm = 0;
   const PatientRibcage flat_patient = MakePatientRibcage(generic, flat);
   const SkinSurface flat_skin = BuildSkinSurface(flat_patient, options);
