@@ -114,7 +114,6 @@ class PipelineCommand : public Command {
       });
     }
     for (const auto& [stage, t] : result.seconds) context->report.AddTime(stage, t);
-    Info(result.message);
 
     // 9. Files: the model, tables, meshes per subject, and the report with its figures.
     auto t = context->report.Stage("write");

@@ -60,6 +60,14 @@ class ResampleCommand : public Command {
     app->add_option("--smoothing", options_.fit.smoothing, "Spline roughness penalty weight")
         ->default_val(1e-3);
     app->add_option("--sections", sections_, "Section planes: rows, columns or both")->default_val("both");
+    app->add_option("--hole-fill", hole_fill_,
+                    "Holes: inpaint (2D), inpaint-inside (2D inside, profiles at the border) or profiles")
+        ->default_val("inpaint-inside");
+    app->add_option("--inpaint-order", options_.holes.inpainting.order, "2D fill: derivative order, 2 or 3")
+        ->default_val(options_.holes.inpainting.order);
+    app->add_option("--inpaint-stretch", options_.holes.inpainting.stretch,
+                    "2D fill: lateral stretch (> 1 follows the sternal direction more)")
+        ->default_val(options_.holes.inpainting.stretch);
     app->add_option("--fit-margin", options_.fit_margin_mm, "Profile data used beyond the ROI, mm")
         ->default_val(25.0);
     app->add_option("--notch-label", roi_.notch_label, "Label of the sternal notch")
@@ -98,6 +106,7 @@ class ResampleCommand : public Command {
     options_.grid = ParseGridSize(grid_);
     options_.fit.kind = ParseProfileFitKind(fit_);
     options_.directions = ParseSectionDirections(sections_);
+    options_.holes.mode = ParseGridHoleFill(hole_fill_);
     if (!anterior_.empty()) roi_.anterior_hint = ParseTriple(anterior_, "--anterior");
     std::string why;
     if (!options_.IsValid(&why) || !roi_.IsValid(&why)) ThrowUsage(why);
@@ -125,7 +134,10 @@ class ResampleCommand : public Command {
     context->report["roi"] = roi.ToJson();
     context->report["grid"] = {{"lateral", options_.grid.lateral}, {"sternal", options_.grid.sternal}};
     context->report["fit"] = {{"kind", ToString(options_.fit.kind)},
-                              {"sections", ToString(options_.directions)}};
+                              {"sections", ToString(options_.directions)},
+                              {"hole_fill", ToString(options_.holes.mode)},
+                              {"inpaint_order", options_.holes.inpainting.order},
+                              {"inpaint_stretch", options_.holes.inpainting.stretch}};
 
     // 3. Resample (or validate).
     CrossSectionResult result;
@@ -178,6 +190,7 @@ class ResampleCommand : public Command {
     context->report["fit_rms_mm"] = result.fit_rms_mm;
     context->report["max_data_gap_mm"] = result.max_data_gap_mm;
     context->report["supported_fraction"] = result.supported_fraction;
+    context->report["vertices_inpainted"] = result.vertices_inpainted;
     context->report["shape_vector_size"] = result.shape_vector.size();
 
     // 4. Write the grid and the shape vector.
@@ -201,7 +214,7 @@ class ResampleCommand : public Command {
   }
 
  private:
-  std::string input_, landmarks_, output_, vector_, grid_, fit_, sections_, anterior_, units_;
+  std::string input_, landmarks_, output_, vector_, grid_, fit_, sections_, anterior_, units_, hole_fill_;
   std::string error_png_, error_ply_;
   std::vector<std::string> holes_;
   bool validate_ = false;

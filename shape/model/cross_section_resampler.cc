@@ -137,7 +137,7 @@ bool CrossSectionOptions::IsValid(std::string* why) const {
     return fail("front envelope bin and depth must be > 0 mm");
   }
   if (min_profile_points < 2) return fail("a profile needs at least 2 points");
-  return true;
+  return holes.IsValid(why);
 }
 
 CrossSectionResult ResampleCrossSections(const TriangleMesh& surface, const ChestRoi& roi,
@@ -261,44 +261,10 @@ CrossSectionResult ResampleCrossSections(const TriangleMesh& surface, const Ches
       known[k] = true;
     }
   }
-  // 5. Vertices that no fitted section passes through (a corner beyond the data in both directions): a
-  //    new profile through the grid values already found along their row, then column, extrapolates them.
-  const int min_known = std::min({options.min_profile_points, grid.lateral, grid.sternal});
-  for (bool progress = true; progress;) {
-    progress = false;
-    for (int pass = 0; pass < 2; ++pass) {
-      const bool by_rows = pass == 0;
-      const int lines = by_rows ? grid.sternal : grid.lateral, along = by_rows ? grid.lateral : grid.sternal;
-      const Eigen::VectorXd& t_all = by_rows ? u : v;
-      for (int line = 0; line < lines; ++line) {
-        auto index = [&](int a) { return by_rows ? grid.Index(line, a) : grid.Index(a, line); };
-        std::vector<double> t, y;
-        std::vector<int> known_at;
-        for (int a = 0; a < along; ++a) {
-          if (known[index(a)]) t.push_back(t_all[a]), y.push_back(depth[index(a)]), known_at.push_back(a);
-        }
-        if (static_cast<int>(t.size()) == along || static_cast<int>(t.size()) < min_known) continue;
-        const ProfileCurve c =
-            FitProfile(Eigen::Map<const Eigen::VectorXd>(t.data(), static_cast<Eigen::Index>(t.size())),
-                       Eigen::Map<const Eigen::VectorXd>(y.data(), static_cast<Eigen::Index>(y.size())),
-                       t_all[0], t_all[along - 1], options.fit);
-        if (!c.valid()) continue;
-        for (int a = 0; a < along; ++a) {
-          const Eigen::Index k = index(a);
-          if (known[k]) continue;
-          depth[k] = c(t_all[a]);
-          // The gap grows by the distance to the nearest vertex that had a value.
-          int nearest = known_at.front();
-          for (int b : known_at) {
-            if (std::abs(b - a) < std::abs(nearest - a)) nearest = b;
-          }
-          gap[k] = gap[index(nearest)] + std::abs(t_all[a] - t_all[nearest]);
-          known[k] = true;
-          progress = true;
-        }
-      }
-    }
-  }
+  // 5. Vertices that no fitted section passes through (a corner beyond the data in both directions).
+  ExtrapolateAlongGridLines(grid, u, v, options.fit,
+                            std::min({options.min_profile_points, grid.lateral, grid.sternal}), &known,
+                            &depth, &gap);
   Eigen::Index missing = 0, first_missing = -1;
   for (Eigen::Index k = 0; k < m; ++k) {
     if (!known[k] && missing++ == 0) first_missing = k;
@@ -311,10 +277,15 @@ CrossSectionResult ResampleCrossSections(const TriangleMesh& surface, const Ches
                             std::to_string(i) + ", column " + std::to_string(j) +
                             "); the surface does not reach that part of the ROI");
   }
-  const double spacing = std::max(roi.width() / (grid.lateral - 1), roi.height() / (grid.sternal - 1));
+  const double spacing_u = roi.width() / (grid.lateral - 1), spacing_v = roi.height() / (grid.sternal - 1);
+  const double spacing = std::max(spacing_u, spacing_v);
   const Eigen::Index supported = (gap.array() <= 2.0 * spacing).count();
 
-  // 6. Grid vertices back in the surface's frame.
+  // 6. Vertices far from every profile's data: filled in 2D from the vertices around them, which sees a
+  //    feature narrower than the hole (the sternal groove) from all sides (docs/model.md).
+  result.vertices_inpainted = FillGridHoles(grid, spacing_u, spacing_v, gap, options.holes, &depth);
+
+  // 7. Grid vertices back in the surface's frame.
   Points3 grid_uvw(m, 3);
   for (int i = 0; i < grid.sternal; ++i) {
     for (int j = 0; j < grid.lateral; ++j)
@@ -330,7 +301,7 @@ CrossSectionResult ResampleCrossSections(const TriangleMesh& surface, const Ches
   std::ostringstream msg;
   msg << grid.lateral << "x" << grid.sternal << " grid from " << result.profiles_fitted << " profiles ("
       << ToString(options.fit.kind) << "), fit RMS " << result.fit_rms_mm << " mm, largest data gap "
-      << result.max_data_gap_mm << " mm";
+      << result.max_data_gap_mm << " mm, " << result.vertices_inpainted << " vertices filled in 2D";
   result.message = msg.str();
   return result;
 }

@@ -9,6 +9,7 @@
 
 #include "shape/core/geometry.h"
 #include "shape/core/landmarks.h"
+#include "shape/model/grid_inpainting.h"
 #include "shape/model/profile_fit.h"
 #include "shape/model/roi.h"
 #include "shape/model/shape_grid.h"
@@ -41,6 +42,10 @@ struct CrossSectionOptions {
   double envelope_depth_mm = 15.0;
   /// A profile with fewer points is not fitted (>= 2).
   int min_profile_points = 8;
+  /// Grid vertices far from every profile's data (holes, and past the scan's edge) are filled in 2D from
+  /// the vertices around them (biharmonic inpainting of the depths), not by 1D profiles that bridge the
+  /// hole in one direction only.
+  GridHoleFillOptions holes;
 
   /// False, with the reason, for a value out of range.
   bool IsValid(std::string* why) const;
@@ -55,14 +60,15 @@ struct CrossSectionResult {
   /// vertex to the nearest profile data point along the profile that supports it best: 0 on data,
   /// > 0 in holes and beyond the data).
   TriangleMesh mesh;
-  Eigen::VectorXd shape_vector;     ///< ToShapeVector(mesh.vertices.positions), 3m numbers, mm
-  int profiles_fitted = 0;          ///< section profiles with a curve
-  int profiles_unfitted = 0;        ///< section profiles with too few points
-  Eigen::Index profile_points = 0;  ///< points in all fitted profiles
-  double fit_rms_mm = 0.0;          ///< RMS residual of all profile fits, mm
-  double max_data_gap_mm = 0.0;     ///< largest "data_gap_mm" over the grid
-  double supported_fraction = 0.0;  ///< fraction of grid vertices with data_gap_mm <= 2 grid spacings
-  std::string message;              ///< one line summary
+  Eigen::VectorXd shape_vector;         ///< ToShapeVector(mesh.vertices.positions), 3m numbers, mm
+  int profiles_fitted = 0;              ///< section profiles with a curve
+  int profiles_unfitted = 0;            ///< section profiles with too few points
+  Eigen::Index profile_points = 0;      ///< points in all fitted profiles
+  double fit_rms_mm = 0.0;              ///< RMS residual of all profile fits, mm
+  double max_data_gap_mm = 0.0;         ///< largest "data_gap_mm" over the grid
+  double supported_fraction = 0.0;      ///< fraction of grid vertices with data_gap_mm <= 2 grid spacings
+  Eigen::Index vertices_inpainted = 0;  ///< grid vertices filled in 2D (CrossSectionOptions::holes)
+  std::string message;                  ///< one line summary
 };
 
 /// Resamples `surface` (a triangle mesh, or a point cloud when it has no faces; mm, in the frame of

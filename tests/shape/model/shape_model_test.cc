@@ -8,20 +8,13 @@
 #include <random>
 
 #include "shape/core/error.h"
+#include "toy_shapes.h"
 
 namespace pectus {
 namespace {
 
-// Four one-point "shapes" (3 numbers each): +-a along x and +-b along y, a = 3, b = 1. Mean 0; by hand the
-// covariance is diag(2a^2/3, 2b^2/3, 0) = diag(6, 2/3, 0).
-Eigen::MatrixXd Toy() {
-  Eigen::MatrixXd s(4, 3);
-  s << 3, 0, 0, -3, 0, 0, 0, 1, 0, 0, -1, 0;
-  return s;
-}
-
 TEST(ShapeModel, HandCheckedFourSubjectExample) {
-  const ShapeModel m = BuildShapeModel(Toy());
+  const ShapeModel m = BuildShapeModel(testing::ToyShapes());
   EXPECT_TRUE(m.mean.isZero(1e-15));
   ASSERT_EQ(m.num_modes(), 2);
   EXPECT_NEAR(m.variances[0], 6.0, 1e-12);
@@ -66,7 +59,7 @@ TEST(ShapeModel, GramRouteEqualsTheSvdOfTheCentredData) {
 }
 
 TEST(ShapeModel, ProjectionOfANewShapeReportsTheResidual) {
-  const ShapeModel m = BuildShapeModel(Toy());
+  const ShapeModel m = BuildShapeModel(testing::ToyShapes());
   // (1, 2, 4): modes give (1, 2); the z = 4 part is outside the model.
   const ShapeProjection p = ProjectShape(m, Eigen::Vector3d(1, 2, 4));
   EXPECT_TRUE(p.scores.isApprox(Eigen::Vector2d(1, 2), 1e-12));
@@ -82,11 +75,11 @@ TEST(ShapeModel, ProjectionOfANewShapeReportsTheResidual) {
 TEST(ShapeModel, OptionsAndBadInput) {
   ShapeModelOptions o;
   o.max_modes = 1;
-  EXPECT_EQ(BuildShapeModel(Toy(), o).num_modes(), 1);
-  EXPECT_NEAR(BuildShapeModel(Toy(), o).total_variance, 6.0 + 2.0 / 3.0, 1e-12);
+  EXPECT_EQ(BuildShapeModel(testing::ToyShapes(), o).num_modes(), 1);
+  EXPECT_NEAR(BuildShapeModel(testing::ToyShapes(), o).total_variance, 6.0 + 2.0 / 3.0, 1e-12);
   EXPECT_THROW(BuildShapeModel(Eigen::MatrixXd::Zero(1, 3)), Error);
   EXPECT_THROW(BuildShapeModel(Eigen::MatrixXd::Zero(3, 4)), Error);
-  Eigen::MatrixXd nan = Toy();
+  Eigen::MatrixXd nan = testing::ToyShapes();
   nan(1, 1) = std::nan("");
   EXPECT_THROW(BuildShapeModel(nan), Error);
   o.noise_variance = -1.0;
