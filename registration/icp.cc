@@ -57,8 +57,17 @@ std::vector<std::vector<std::uint32_t>> LevelSamples(const Points3& source,
                                                      const std::vector<IcpLevel>& levels) {
   std::size_t most = 0;
   for (const IcpLevel& l : levels) most = std::max(most, static_cast<std::size_t>(l.points));
-  const std::vector<std::uint32_t> shuffled =
-      most > 0 ? RandomSample(rows, most) : std::vector<std::uint32_t>();
+  std::vector<std::uint32_t> shuffled = most > 0 ? RandomSample(rows, most) : std::vector<std::uint32_t>();
+  // Each level's new points in row order: scans store neighbours near each other, so successive queries
+  // walk the same branches of the tree (fewer cache misses); the samples stay nested.
+  std::vector<std::size_t> ends = {0, shuffled.size()};
+  for (const IcpLevel& l : levels)
+    ends.push_back(std::min(shuffled.size(), static_cast<std::size_t>(l.points)));
+  std::sort(ends.begin(), ends.end());
+  for (std::size_t k = 1; k < ends.size(); ++k) {
+    std::sort(shuffled.begin() + static_cast<std::ptrdiff_t>(ends[k - 1]),
+              shuffled.begin() + static_cast<std::ptrdiff_t>(ends[k]));
+  }
   std::vector<std::vector<std::uint32_t>> samples(levels.size());
   for (std::size_t l = levels.size(); l-- > 0;) {
     const std::vector<std::uint32_t>& finer = l + 1 < levels.size() ? samples[l + 1] : rows;
@@ -189,7 +198,11 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
     report.voxel_size_mm = level.voxel_size_mm;
     report.max_distance_mm = level.max_distance_mm;
     report.source_points = static_cast<std::int64_t>(sample.size());
-    cache.Reset(sample.size(), kSearchRadiusOverGate * level.max_distance_mm);
+    // Random levels are nested (each sample a prefix of the next): their certificates carry over.
+    const std::vector<std::uint32_t>* coarser = l > 0 ? &samples[l - 1] : nullptr;
+    const bool nested = coarser != nullptr && coarser->size() <= sample.size() &&
+                        std::equal(coarser->begin(), coarser->end(), sample.begin());
+    cache.Reset(sample.size(), kSearchRadiusOverGate * level.max_distance_mm, nested ? coarser->size() : 0);
     Rigid3 previous = T;
     Vector6 x_previous = Vector6::Zero();
     for (int it = 0; it < level.max_iterations; ++it) {

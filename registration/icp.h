@@ -52,13 +52,13 @@ struct IcpOptions {
   /// Coarse to fine. Empty = automatic: one level per entry of `auto_level_points`, a random sample of
   /// that many source points (nested: every level's sample contains the coarser ones; 0 or more than the
   /// source has = every point), the gate starting at `initial_max_distance_mm` and shrinking fourfold per
-  /// level, down to `final_max_distance_mm`. The last level uses every point by default: the
-  /// precision of the pose grows with the number of points (docs/registration.md), and correspondences
-  /// are searched again only where they may have changed, so the full level costs little more than one
-  /// pass over the source.
+  /// level, down to `final_max_distance_mm`. The last level uses 30000 points by default: the pose's
+  /// error shrinks as 1/sqrt(points) (docs/registration.md), and on two 100k-point chest scans with
+  /// 0.2 mm noise 30000 leave a median 0.02 mm (every point: 0.011 mm) at 3.5 times less search. Use 0
+  /// for every point.
   std::vector<IcpLevel> levels;
-  std::vector<int> auto_level_points = {1000, 3000, 10000, 0};  ///< source points per automatic level
-  double initial_max_distance_mm = 20.0;                        ///< gate of the first automatic level (mm)
+  std::vector<int> auto_level_points = {1000, 3000, 10000, 30000};  ///< source points per automatic level
+  double initial_max_distance_mm = 20.0;  ///< gate of the first automatic level (mm)
   /// Smallest gate of the automatic levels (mm); 0 = 3 times the target's point spacing, right for two
   /// scans of one surface. Scans of different people differ by millimetres: use about 10 mm.
   double final_max_distance_mm = 0.0;

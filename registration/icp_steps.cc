@@ -23,7 +23,8 @@ bool Nearest(const KdTree3& tree, const Eigen::Vector3d& p, double gate, std::si
   }
   if (cache->valid[s]) {
     const double moved = (p - cache->at[s]).norm();
-    if (cache->nearest[s] == kNoMatch ? moved <= cache->radius - gate
+    // With no match, d1 holds the radius the certificate was searched with.
+    if (cache->nearest[s] == kNoMatch ? moved <= cache->d1[s] - gate
                                       : 2.0 * moved < cache->d2[s] - cache->d1[s]) {
       *j = cache->nearest[s];
       return false;

@@ -3,6 +3,7 @@
 // equations: docs/registration.md.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -79,13 +80,18 @@ struct NearestCache {
   std::vector<std::uint32_t> nearest;
   std::vector<double> d1, d2;
   std::vector<std::uint8_t> valid;
-  void Reset(std::size_t m, double search_radius) {
+  /// Certificates for `m` points searched within `search_radius`, keeping those of the first `kept`
+  /// points (a coarser level's sample that is a prefix of this one): a certificate stays exact whatever
+  /// the radius it was made with, since a missing point records that radius as its distance.
+  void Reset(std::size_t m, double search_radius, std::size_t kept = 0) {
     radius = search_radius;
+    kept = std::min(kept, valid.size());
     at.resize(m);
     nearest.resize(m);
     d1.resize(m);
     d2.resize(m);
-    valid.assign(m, 0);
+    valid.resize(m);
+    std::fill(valid.begin() + static_cast<std::ptrdiff_t>(std::min(kept, m)), valid.end(), 0);
   }
 };
 
