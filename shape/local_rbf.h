@@ -50,8 +50,8 @@ class LocalRbf {
   Eigen::Index num_centres() const { return centres_.rows(); }
 
  private:
-  Points3 centres_;                                                           // #centres by 3, local frame
-  Eigen::VectorXd alpha_;                                                     // #centres
+  Eigen::Matrix<double, Eigen::Dynamic, 3> centres_;  // #centres by 3, local frame, one column per axis
+  Eigen::VectorXd alpha_;                             // #centres
   Eigen::Matrix<double, 10, 1> beta_ = Eigen::Matrix<double, 10, 1>::Zero();  // p(x') coefficients
   int terms_ = 4;                                                             // 4 or 10 monomials
   Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();

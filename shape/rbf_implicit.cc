@@ -16,17 +16,6 @@
 #include "shape/sparse_grid.h"
 
 namespace pectus {
-namespace {
-
-// Wendland's C2 function, support [0, 1].
-inline double Wendland(double r) {
-  if (r >= 1.0) return 0.0;
-  const double a = 1.0 - r;
-  const double a2 = a * a;
-  return a2 * a2 * (4.0 * r + 1.0);
-}
-
-}  // namespace
 
 bool RbfImplicitOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& text) {
@@ -47,12 +36,12 @@ bool RbfImplicitOptions::IsValid(std::string* why) const {
     return fail("max fill distance must be >= 0 mm");
   }
   if (max_centres < 4 || max_centres > 400) return fail("max centres must be in [4, 400]");
+  if (!(max_hole_size >= 0.0) || !std::isfinite(max_hole_size)) return fail("max hole size must be >= 0 mm");
   return true;
 }
 
 struct RbfImplicit::Impl {
   RbfImplicitOptions options;
-  Points3 positions;                 // input points (for the fitting accuracy)
   std::deque<RbfLevel> levels;       // [0] constraints at centre_spacing / 2, [1] centres, coarser after
   Eigen::Vector3d grid_origin;       // corner of cell (0, 0, 0)
   GridKeyMap<std::int32_t> cell_of;  // cell key -> index into fits, -1 = undefined
@@ -74,7 +63,23 @@ struct RbfImplicit::Impl {
     // tangent plane (a cell just above or below the data has none; one over a hole, the hole's radius).
     const Eigen::Vector3d offset = c - levels[0].positions.row(nearest).transpose();
     const Eigen::Vector3d normal = levels[0].normals.row(nearest).transpose();
-    const double along = (offset - normal.dot(offset) * normal).norm();
+    const Eigen::Vector3d tangential = offset - normal.dot(offset) * normal;
+    const double along = tangential.norm();
+    // Over a hole at most max_hole_size wide, the far rim lies within max_hole_size - along of the cell,
+    // beyond it as seen from the nearest data point p; beyond the edge of the data nothing does (every
+    // data point x has (x - c).(c - p) < 0), and the cell is left undefined rather than fitted and then
+    // trimmed away.
+    const double edge_test = std::max(0.5 * options.cell_size, 0.2 * options.max_hole_size);
+    if (options.max_hole_size > 0.0 && along > edge_test) {
+      const double reach = options.max_hole_size - along + 0.5 * options.cell_size;
+      if (reach <= 0.0) return std::nullopt;
+      std::vector<std::pair<std::uint32_t, double>> around;
+      levels[0].tree->Radius(c, reach, &around, false);
+      const bool far_side = std::any_of(around.begin(), around.end(), [&](const auto& hit) {
+        return (levels[0].positions.row(hit.first).transpose() - c).dot(offset) > 0.0;
+      });
+      if (!far_side) return std::nullopt;
+    }
     const double radius = options.fit_radius_factor * options.cell_size + options.hole_context * along;
     // Centres: the finest level with at most 4 max_centres in the ball, thinned evenly (the k-d tree
     // returns them in leaf order, so every n-th is spread over the ball) to at most max_centres.
@@ -100,42 +105,8 @@ struct RbfImplicit::Impl {
       if (rows.size() <= 8 * max_centres) break;
     }
     if (j + 1 == k) levels[j].tree->Radius(c, radius, &rows, false);
-    const RbfLevel& cl = levels[k];
-    const RbfLevel& rl = levels[j];
-    const Eigen::Index m = Eigen::Index(centres.size());
-    const Eigen::Index nr = Eigen::Index(rows.size());
-
-    LocalRbfProblem problem;
-    problem.origin = c;
-    problem.scale = radius;
-    problem.centres.resize(m, 3);
-    problem.points.resize(nr + 2 * m, 3);
-    problem.values.resize(nr + 2 * m);
-    problem.weights.resize(nr + 2 * m);
-    for (Eigen::Index r = 0; r < nr; ++r) {
-      const auto i = Eigen::Index(rows[std::size_t(r)].first);
-      problem.points.row(r) = rl.positions.row(i);
-      problem.values(r) = 0.0;
-      problem.weights(r) = rl.counts(i) * Wendland(std::sqrt(rows[std::size_t(r)].second) / radius);
-    }
-    Eigen::Index row = nr;
-    for (Eigen::Index centre = 0; centre < m; ++centre) {
-      const auto i = Eigen::Index(centres[std::size_t(centre)].first);
-      problem.centres.row(centre) = cl.positions.row(i);
-      const double w = options.off_surface_weight * cl.counts(i) *
-                       Wendland(std::sqrt(centres[std::size_t(centre)].second) / radius);
-      for (int side = 0; side < 2; ++side) {
-        const double eps = side == 0 ? cl.eps_plus(i) : -cl.eps_minus(i);
-        if (eps == 0.0 || w <= 0.0) continue;
-        problem.points.row(row) = cl.positions.row(i) + eps * cl.normals.row(i);
-        problem.values(row) = eps;
-        problem.weights(row) = w;
-        ++row;
-      }
-    }
-    problem.points.conservativeResize(row, 3);
-    problem.values.conservativeResize(row);
-    problem.weights.conservativeResize(row);
+    const LocalRbfProblem problem =
+        LocalProblem(levels[j], rows, levels[k], centres, c, radius, options.off_surface_weight);
     LocalRbf fit;
     if (!fit.Fit(problem, options.smoothing)) return std::nullopt;
     return fit;
@@ -205,7 +176,7 @@ struct RbfImplicit::Impl {
           if (!GridIndexInRange(a + dx, b + dy, c + dz)) continue;
           const std::int32_t* cell = cell_of.Find(PackGridKey(a + dx, b + dy, c + dz));
           if (cell == nullptr || *cell < 0) continue;
-          const double w = Wendland((x - fit_centres[std::size_t(*cell)]).norm() / h);
+          const double w = WendlandC2((x - fit_centres[std::size_t(*cell)]).norm() / h);
           if (w <= 0.0) continue;
           sum += w * fits[std::size_t(*cell)].Evaluate(x);
           weight += w;
@@ -215,14 +186,20 @@ struct RbfImplicit::Impl {
 };
 
 RbfImplicit::RbfImplicit(const Points3& positions, const Points3& normals, const RbfImplicitOptions& options)
+    : RbfImplicit(positions, normals, Eigen::VectorXd::Ones(positions.rows()), options) {}
+
+RbfImplicit::RbfImplicit(const Points3& positions, const Points3& normals, const Eigen::VectorXd& counts,
+                         const RbfImplicitOptions& options)
     : impl_(std::make_unique<Impl>()) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage("RBF implicit: " + why);
   if (normals.rows() != positions.rows()) ThrowUsage("RBF implicit: one normal per point is needed");
+  if (counts.size() != positions.rows() || !(counts.array() > 0.0).all()) {
+    ThrowUsage("RBF implicit: one positive count per point is needed");
+  }
   if (positions.rows() < 4) ThrowBadInput("", "RBF implicit: at least 4 points are needed");
   Impl& im = *impl_;
   im.options = options;
-  im.positions = positions;
   const Bounds3 bounds = ComputeBounds(positions);
   const double margin = options.max_fill_distance + 2.0 * options.cell_size;
   CheckGridFits(bounds.extent().maxCoeff() + 2.0 * margin, options.cell_size, "RBF cell grid");
@@ -230,9 +207,8 @@ RbfImplicit::RbfImplicit(const Points3& positions, const Points3& normals, const
 
   // Level 0 (constraints) at half the centre spacing, level 1 (centres) at the centre spacing, then
   // doubled until a level is small enough to hold every hole cell's centres.
-  const Eigen::VectorXd ones = Eigen::VectorXd::Ones(positions.rows());
   im.levels.emplace_back();
-  AverageByVoxel(positions, normals, ones, 0.5 * options.centre_spacing, &im.levels.back());
+  AverageByVoxel(positions, normals, counts, 0.5 * options.centre_spacing, &im.levels.back());
   for (double spacing = options.centre_spacing;; spacing *= 2.0) {
     // In place: a level's k-d tree refers to its positions (a deque never moves its elements).
     im.levels.emplace_back();
@@ -257,7 +233,8 @@ void RbfImplicit::Evaluate(const Points3& queries, Eigen::VectorXd* values) {
 RbfFittingAccuracy RbfImplicit::FittingAccuracy() {
   RbfFittingAccuracy acc;
   Eigen::VectorXd s;
-  Evaluate(impl_->positions, &s);
+  const Points3& constraints = impl_->levels[0].positions;  // the on-surface constraints of the fits
+  Evaluate(constraints, &s);
   std::vector<double> abs_values;
   abs_values.reserve(std::size_t(s.size()));
   double sum2 = 0.0;

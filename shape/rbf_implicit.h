@@ -37,6 +37,11 @@ struct RbfImplicitOptions {
   /// Cells whose centre is farther than this from every data point are undefined (mm): the surface
   /// ends there. Holes up to about twice this wide get a surface.
   double max_fill_distance = 20.0;
+  /// Widest hole to be filled (mm). A cell more than half a cell from the data along the surface is
+  /// fitted only if data lies ahead of it (away from its nearest data) within this width, i.e. it is over
+  /// a hole; beyond the edge of an open scan it is undefined (the surface there would be trimmed away).
+  /// 0 = every cell within max_fill_distance is fitted.
+  double max_hole_size = 0.0;
   /// At most this many kernels per local fit.
   int max_centres = 60;
 
@@ -47,11 +52,11 @@ struct RbfImplicitOptions {
 /// How well the implicit matches its constraints (dissertation Eq. 11).
 struct RbfFittingAccuracy {
   double fitting_accuracy_mm = 0.0;  ///< max |s(x_i) - f_i| over on- and off-surface constraints
-  double on_surface_max_mm = 0.0;    ///< max |s(p_i)| over the input points
-  double on_surface_rms_mm = 0.0;    ///< RMS of s(p_i) over the input points
+  double on_surface_max_mm = 0.0;    ///< max |s(p_i)| over the on-surface constraints
+  double on_surface_rms_mm = 0.0;    ///< RMS of s(p_i) over the on-surface constraints
   double on_surface_p95_mm = 0.0;    ///< 95th percentile of |s(p_i)|
   double off_surface_max_mm = 0.0;   ///< max |s(y_j +- eps n_j) -+ eps| over the off-surface constraints
-  std::int64_t num_on_surface = 0;   ///< input points checked
+  std::int64_t num_on_surface = 0;   ///< on-surface constraints checked
   std::int64_t num_off_surface = 0;  ///< off-surface constraints checked
 };
 
@@ -64,6 +69,10 @@ class RbfImplicit {
   /// @param[in] positions  #points by 3 input points (mm), copied
   /// @param[in] normals    #points by 3 unit normals pointing out of the object (toward the scanner)
   RbfImplicit(const Points3& positions, const Points3& normals, const RbfImplicitOptions& options);
+  /// The same for weighted points (e.g. points already averaged per cube).
+  /// @param[in] counts  #points, > 0: the input points each stands for
+  RbfImplicit(const Points3& positions, const Points3& normals, const Eigen::VectorXd& counts,
+              const RbfImplicitOptions& options);
   ~RbfImplicit();
   RbfImplicit(const RbfImplicit&) = delete;
   RbfImplicit& operator=(const RbfImplicit&) = delete;
@@ -73,7 +82,8 @@ class RbfImplicit {
   /// @param[out] values   #queries
   void Evaluate(const Points3& queries, Eigen::VectorXd* values);
 
-  /// Evaluates s at the input points and the off-surface constraints.
+  /// Evaluates s at the constraints of the fits: the on-surface points (the input points averaged per
+  /// cube of half the centre spacing) and the off-surface points.
   RbfFittingAccuracy FittingAccuracy();
 
   /// The averaged points at the centre spacing (#centres by 3, mm): near the surface everywhere there

@@ -1,6 +1,7 @@
 #include "shape/rbf_levels.h"
 
 #include <algorithm>
+#include <cmath>
 #include <utility>
 #include <vector>
 
@@ -11,6 +12,7 @@ namespace pectus {
 void AverageByVoxel(const Points3& positions, const Points3& normals, const Eigen::VectorXd& counts,
                     double spacing, RbfLevel* level) {
   const Eigen::Index n = positions.rows();
+  const bool with_normals = normals.rows() == n;
   const Bounds3 b = ComputeBounds(positions);
   CheckGridFits(b.extent().maxCoeff() + spacing, spacing, "RBF centre grid");
   std::vector<std::pair<GridKey, std::uint32_t>> keyed(static_cast<std::size_t>(n));
@@ -29,6 +31,19 @@ void AverageByVoxel(const Points3& positions, const Points3& normals, const Eige
   for (std::size_t s = 0; s < keyed.size();) {
     std::size_t e = s;
     while (e < keyed.size() && keyed[e].first == keyed[s].first) ++e;
+    if (!with_normals) {
+      Eigen::Vector3d sp = Eigen::Vector3d::Zero();
+      double sc = 0.0;
+      for (std::size_t t = s; t < e; ++t) {
+        const Eigen::Index i = keyed[t].second;
+        sp += counts(i) * positions.row(i).transpose();
+        sc += counts(i);
+      }
+      pos.push_back(sp / sc);
+      cnt.push_back(sc);
+      s = e;
+      continue;
+    }
     const Eigen::Vector3d ref = normals.row(keyed[s].second).transpose();
     for (int side = 0; side < 2; ++side) {
       Eigen::Vector3d sp = Eigen::Vector3d::Zero(), sn = Eigen::Vector3d::Zero();
@@ -51,11 +66,11 @@ void AverageByVoxel(const Points3& positions, const Points3& normals, const Eige
   }
   level->spacing = spacing;
   level->positions.resize(Eigen::Index(pos.size()), 3);
-  level->normals.resize(Eigen::Index(pos.size()), 3);
+  level->normals.resize(Eigen::Index(nor.size()), 3);
   level->counts.resize(Eigen::Index(pos.size()));
   for (std::size_t i = 0; i < pos.size(); ++i) {
     level->positions.row(Eigen::Index(i)) = pos[i].transpose();
-    level->normals.row(Eigen::Index(i)) = nor[i].transpose();
+    if (with_normals) level->normals.row(Eigen::Index(i)) = nor[i].transpose();
     level->counts(Eigen::Index(i)) = cnt[i];
   }
   level->tree = std::make_unique<KdTree3>(level->positions);
@@ -82,6 +97,47 @@ void SetOffSurfaceDistances(const RbfLevel& fine, double eps_mm, RbfLevel* level
       (side == 0 ? level->eps_plus : level->eps_minus)(i) = tries < 4 ? eps : 0.0;
     }
   }
+}
+
+LocalRbfProblem LocalProblem(const RbfLevel& row_level, const LevelNeighbours& rows,
+                             const RbfLevel& centre_level, const LevelNeighbours& centres,
+                             const Eigen::Vector3d& origin, double radius, double off_surface_weight) {
+  const RbfLevel& rl = row_level;
+  const RbfLevel& cl = centre_level;
+  const Eigen::Index m = Eigen::Index(centres.size());
+  const Eigen::Index nr = Eigen::Index(rows.size());
+  LocalRbfProblem problem;
+  problem.origin = origin;
+  problem.scale = radius;
+  problem.centres.resize(m, 3);
+  problem.points.resize(nr + 2 * m, 3);
+  problem.values.resize(nr + 2 * m);
+  problem.weights.resize(nr + 2 * m);
+  for (Eigen::Index r = 0; r < nr; ++r) {
+    const auto i = Eigen::Index(rows[std::size_t(r)].first);
+    problem.points.row(r) = rl.positions.row(i);
+    problem.values(r) = 0.0;
+    problem.weights(r) = rl.counts(i) * WendlandC2(std::sqrt(rows[std::size_t(r)].second) / radius);
+  }
+  Eigen::Index row = nr;
+  for (Eigen::Index centre = 0; centre < m; ++centre) {
+    const auto i = Eigen::Index(centres[std::size_t(centre)].first);
+    problem.centres.row(centre) = cl.positions.row(i);
+    const double w = off_surface_weight * cl.counts(i) *
+                     WendlandC2(std::sqrt(centres[std::size_t(centre)].second) / radius);
+    for (int side = 0; side < 2; ++side) {
+      const double eps = side == 0 ? cl.eps_plus(i) : -cl.eps_minus(i);
+      if (eps == 0.0 || w <= 0.0) continue;
+      problem.points.row(row) = cl.positions.row(i) + eps * cl.normals.row(i);
+      problem.values(row) = eps;
+      problem.weights(row) = w;
+      ++row;
+    }
+  }
+  problem.points.conservativeResize(row, 3);
+  problem.values.conservativeResize(row);
+  problem.weights.conservativeResize(row);
+  return problem;
 }
 
 }  // namespace pectus

@@ -1,11 +1,15 @@
 // pectus: the point levels of the RBF implicit (shape/rbf_implicit.h): input points averaged per cube at
-// a spacing, with counts, k-d tree and off-surface distances.
+// a spacing, with counts, k-d tree and off-surface distances, and the local problem a cell fits from them.
 #pragma once
 
+#include <cstdint>
 #include <memory>
+#include <utility>
+#include <vector>
 
 #include "registration/kdtree.h"
 #include "shape/core/geometry.h"
+#include "shape/local_rbf.h"
 
 namespace pectus {
 
@@ -21,7 +25,8 @@ struct RbfLevel {
 };
 
 /// Averages weighted points per cube of side `spacing` into `level` (its tree included).
-/// @param[in] positions, normals  #points by 3 (mm, unit)
+/// @param[in] positions, normals  #points by 3 (mm, unit); normals may be empty (0 rows): then every
+///                                cube gives one point and `level` has no normals
 /// @param[in] counts              weight of each point (the input points it stands for)
 void AverageByVoxel(const Points3& positions, const Points3& normals, const Eigen::VectorXd& counts,
                     double spacing, RbfLevel* level);
@@ -30,5 +35,24 @@ void AverageByVoxel(const Points3& positions, const Points3& normals, const Eige
 /// nearer to other data than to its own point): eps, halved up to three times until the point y +- eps n
 /// is at least 0.7 eps from every point of `fine`, else 0 (no constraint on that side).
 void SetOffSurfaceDistances(const RbfLevel& fine, double eps_mm, RbfLevel* level);
+
+/// Wendland's C2 function (1 - r)^4 (4 r + 1), support [0, 1].
+inline double WendlandC2(double r) {
+  if (r >= 1.0) return 0.0;
+  const double a = 1.0 - r;
+  const double a2 = a * a;
+  return a2 * a2 * (4.0 * r + 1.0);
+}
+
+/// (index, squared distance) pairs, as KdTree3::Radius returns them.
+using LevelNeighbours = std::vector<std::pair<std::uint32_t, double>>;
+
+/// The local fit of one cell: on-surface constraints (value 0) at the `rows` of `row_level`, kernels at
+/// the `centres` of `centre_level` with their off-surface pairs (value +-eps), each weighted by its count
+/// times WendlandC2(distance / radius), the off-surface ones by off_surface_weight more.
+/// @param[in] origin, radius  the cell's fitting ball (mm): the local frame of the fit
+LocalRbfProblem LocalProblem(const RbfLevel& row_level, const LevelNeighbours& rows,
+                             const RbfLevel& centre_level, const LevelNeighbours& centres,
+                             const Eigen::Vector3d& origin, double radius, double off_surface_weight);
 
 }  // namespace pectus

@@ -4,17 +4,24 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <sstream>
 
 #include "registration/kdtree.h"
+#include "shape/cloud_scales.h"
 #include "shape/core/error.h"
 #include "shape/marching_cubes.h"
+#include "shape/rbf_levels.h"
 #include "shape/surface_normals.h"
 
 namespace pectus {
 namespace {
 
 constexpr Eigen::Index kMinPoints = 16;
+// Default centre spacing: at least this many point spacings (so that a centre averages several points
+// of a sparse cloud) and this many noise levels (so that it averages the noise of a dense one).
+constexpr double kCentrePointSpacings = 4.0;
+constexpr double kCentreNoiseLevels = 22.0;
 
 class StageClock {
  public:
@@ -29,25 +36,6 @@ class StageClock {
   std::vector<std::pair<std::string, double>>* out_;
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
-
-// Side of the square each point covers: from the radius r of the k nearest neighbours, pi r^2 = k s^2,
-// median over up to 512 evenly picked points. Unlike the nearest-neighbour distance it does not shrink
-// where overlapping sweeps interleave.
-double PointSpacing(const Points3& points, const KdTree3& tree) {
-  constexpr int k = 16;
-  const Eigen::Index n = points.rows();
-  const Eigen::Index samples = std::min<Eigen::Index>(n, 512);
-  std::vector<double> s(static_cast<std::size_t>(samples));
-#pragma omp parallel for schedule(static)
-  for (Eigen::Index i = 0; i < samples; ++i) {
-    std::uint32_t idx[k + 1];
-    double d2[k + 1];
-    const int found = tree.Knn(points.row(i * n / samples).transpose(), k + 1, idx, d2);
-    s[static_cast<std::size_t>(i)] = std::sqrt(d2[found - 1] * M_PI / double(found - 1));
-  }
-  std::nth_element(s.begin(), s.begin() + samples / 2, s.end());
-  return s[static_cast<std::size_t>(samples / 2)];
-}
 
 // Rejects clouds that cannot bound a surface: all points on a line or at one place.
 void CheckNotDegenerate(const Points3& p, const std::string& what) {
@@ -115,53 +103,83 @@ ReconstructResult ReconstructSurface(const PointCloud& cloud, const ReconstructO
                             std::to_string(kMinPoints));
   }
   CheckNotDegenerate(cloud.positions, what);
-  const KdTree3 tree(cloud.positions);
-  result.point_spacing_mm = PointSpacing(cloud.positions, tree);
+  result.point_spacing_mm = PointSpacing(cloud.positions);
   if (!(result.point_spacing_mm > 0.0)) {
     ThrowBadInput(what, "has no two distinct points among the neighbours sampled (all duplicates?)");
   }
 
-  // 2. Oriented normals: given, toward the scanner, or by propagation (Hoppe et al. 1992).
+  // 2. Scales: grid step, centre spacing (the finest detail followed), cell size, off-surface distance.
+  // The detail follows the grid step and the noise, not the density: a surface needs the same
+  // resolution however many points sample it, and noisier points need larger centres to average over.
+  const double s = result.point_spacing_mm;
+  result.noise_mm = NoiseLevel(cloud.positions, s);
+  double h = options.spacing;
+  if (h == 0.0 && options.target_faces > 0) {
+    // Marching cubes gives about 2.2 triangles per h^2 of area; the area is about points * s^2.
+    h = std::sqrt(2.2 * double(cloud.size()) * s * s / double(options.target_faces));
+  }
+  if (h == 0.0) h = 1.5 * s;
+  const double detail =
+      options.detail > 0.0
+          ? options.detail
+          : std::max({2.0 * h, kCentrePointSpacings * s, kCentreNoiseLevels * result.noise_mm});
+  result.spacing_mm = h;
+  result.centre_spacing_mm = detail;
+
+  // 3. The working cloud: a cloud denser than a quarter of the detail is averaged per cube of that side
+  // first (O(N); it also averages the noise), so that everything after costs what the detail needs, not
+  // what the density gives. The points of each cube are averaged apart on the two sides of a thin sheet
+  // when normals are given.
+  const double cube = 0.25 * detail;
+  const bool keep_normals = cloud.has_normals() && !options.recompute_normals;
+  PointCloud working;
+  Eigen::VectorXd counts;
+  std::unique_ptr<KdTree3> tree;
+  if (s < cube) {
+    RbfLevel averaged;
+    AverageByVoxel(cloud.positions, keep_normals ? cloud.normals : Points3(0, 3),
+                   Eigen::VectorXd::Ones(cloud.size()), cube, &averaged);
+    working.positions = std::move(averaged.positions);
+    working.normals = std::move(averaged.normals);
+    counts = std::move(averaged.counts);
+    tree = std::make_unique<KdTree3>(working.positions);  // the level's tree refers to the moved matrix
+  } else {
+    working.positions = cloud.positions;
+    if (keep_normals) working.normals = cloud.normals;
+    counts = Eigen::VectorXd::Ones(cloud.size());
+    tree = std::make_unique<KdTree3>(working.positions);
+  }
+  result.working_points = working.size();
+
+  // 4. Oriented normals: given, toward the scanner, or by propagation (Hoppe et al. 1992).
   SurfaceNormalOptions no;
   no.neighbours = options.normal_neighbours;
   no.recompute = options.recompute_normals;
   no.viewpoint = options.viewpoint;
-  const SurfaceNormalResult normals = SurfaceNormals(cloud, tree, no, what);
+  const SurfaceNormalResult normals = SurfaceNormals(working, *tree, no, what);
   result.normals_source = normals.source;
   std::vector<Eigen::Index> usable;
   usable.reserve(std::size_t(normals.usable));
   for (Eigen::Index i = 0; i < normals.normals.rows(); ++i) {
     if (normals.normals.row(i).squaredNorm() > 0.25) usable.push_back(i);
   }
-  Points3 positions(Eigen::Index(usable.size()), 3), oriented(Eigen::Index(usable.size()), 3);
-  for (std::size_t k = 0; k < usable.size(); ++k) {
-    positions.row(Eigen::Index(k)) = cloud.positions.row(usable[k]);
-    oriented.row(Eigen::Index(k)) = normals.normals.row(usable[k]);
-  }
+  const Points3 positions = working.positions(usable, Eigen::all);
+  const Points3 oriented = normals.normals(usable, Eigen::all);
+  const Eigen::VectorXd weights = counts(usable);
   result.used_points = positions.rows();
   clock.Lap("normals");
 
-  // 3. Scales: grid step, centre spacing, cell size, off-surface distance.
-  const double s = result.point_spacing_mm;
-  double h = options.spacing;
-  if (h == 0.0 && options.target_faces > 0) {
-    // Marching cubes gives about 2.2 triangles per h^2 of area; the area is about points * s^2.
-    h = std::sqrt(2.2 * double(positions.rows()) * s * s / double(options.target_faces));
-  }
-  if (h == 0.0) h = 1.5 * s;
-  const double detail = options.detail > 0.0 ? options.detail : std::max(2.0 * h, 4.0 * s);
-  result.spacing_mm = h;
-  result.centre_spacing_mm = detail;
   RbfImplicitOptions ro;
   ro.centre_spacing = detail;
   ro.cell_size = 2.0 * detail;
   ro.off_surface_distance = options.off_surface_distance > 0.0 ? options.off_surface_distance : 0.5 * detail;
   ro.smoothing = options.smoothing;
   ro.max_fill_distance = 0.5 * options.fill_holes + ro.cell_size;
+  ro.max_hole_size = options.fill_holes;
   result.cell_size_mm = ro.cell_size;
 
-  // 4. The implicit s(x), fitted lazily where marching cubes asks for it.
-  RbfImplicit implicit(positions, oriented, ro);
+  // 5. The implicit s(x), fitted lazily where marching cubes asks for it.
+  RbfImplicit implicit(positions, oriented, weights, ro);
   clock.Lap("centres");
   MarchingCubesOptions mo;
   mo.spacing = h;
@@ -177,11 +195,11 @@ ReconstructResult ReconstructSurface(const PointCloud& cloud, const ReconstructO
   result.surface_cubes = mc.surface_cubes;
   clock.Lap("fit_and_isosurface");
 
-  // 5. Trim to the scanned region, keeping hole fillings.
+  // 6. Trim to the scanned region, keeping hole fillings.
   TrimOptions to;
   to.margin = options.margin > 0.0 ? options.margin : detail;
   to.max_hole_size = options.fill_holes;
-  result.trim = TrimToData(tree, &mc.mesh, to);
+  result.trim = TrimToData(*tree, &mc.mesh, to);
   result.mesh = std::move(mc.mesh);
   if (result.mesh.num_faces() == 0) {
     ThrowFailure("reconstruct: no surface was found near the data (normals inconsistent?)", what);
@@ -189,7 +207,7 @@ ReconstructResult ReconstructSurface(const PointCloud& cloud, const ReconstructO
   result.mesh.vertices.normals = VertexNormals(result.mesh);
   clock.Lap("trim");
 
-  // 6. Fitting accuracy (dissertation Eq. 11) and the CGAL check.
+  // 7. Fitting accuracy (dissertation Eq. 11) and the CGAL check.
   result.accuracy = implicit.FittingAccuracy();
   clock.Lap("fitting_accuracy");
   if (options.check) {

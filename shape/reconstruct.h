@@ -23,8 +23,9 @@ struct ReconstructOptions {
   double spacing = 0.0;
   /// When spacing is 0 and this is > 0: the spacing that gives about this many triangles.
   std::int64_t target_faces = 0;
-  /// Spacing of the RBF centres (mm), the finest detail the surface follows. 0 = twice the grid step,
-  /// at least three times the point spacing (so each centre averages several points).
+  /// Spacing of the RBF centres (mm), the finest detail the surface follows. 0 = the largest of twice
+  /// the grid step, 4 point spacings (a centre averages several points of a sparse cloud) and 22 noise
+  /// levels (it averages the noise): it does not shrink when more points sample the same surface.
   double detail = 0.0;
   /// Bending-energy weight of the local fits (RbfImplicitOptions::smoothing); larger = smoother.
   double smoothing = 1e-3;
@@ -50,19 +51,21 @@ struct ReconstructOptions {
 
 /// The surface and what it took.
 struct ReconstructResult {
-  TriangleMesh mesh;               ///< vertices with normals and a "data_distance" scalar (mm)
-  RbfFittingAccuracy accuracy;     ///< dissertation Eq. 11 and its parts
-  TrimResult trim;                 ///< holes filled, pieces removed
-  std::optional<MeshCheck> check;  ///< when options.check
-  std::string normals_source;      ///< "input", "propagated" or "viewpoint"
-  double point_spacing_mm = 0.0;   ///< side of the square each input point covers (from density)
-  double spacing_mm = 0.0;         ///< grid step used
-  double centre_spacing_mm = 0.0;  ///< RBF centre spacing used
-  double cell_size_mm = 0.0;       ///< partition-of-unity cell used
-  std::int64_t input_points = 0;   ///< points given
-  std::int64_t used_points = 0;    ///< points with a usable normal
-  std::int64_t cells = 0;          ///< local fits made (undefined ones included)
-  std::int64_t surface_cubes = 0;  ///< marching cubes the surface crossed
+  TriangleMesh mesh;                ///< vertices with normals and a "data_distance" scalar (mm)
+  RbfFittingAccuracy accuracy;      ///< dissertation Eq. 11 and its parts
+  TrimResult trim;                  ///< holes filled, pieces removed
+  std::optional<MeshCheck> check;   ///< when options.check
+  std::string normals_source;       ///< "input", "propagated" or "viewpoint"
+  double point_spacing_mm = 0.0;    ///< side of the square each input point covers (from density)
+  double noise_mm = 0.0;            ///< noise level of the points about their surface (NoiseLevel)
+  double spacing_mm = 0.0;          ///< grid step used
+  double centre_spacing_mm = 0.0;   ///< RBF centre spacing used
+  double cell_size_mm = 0.0;        ///< partition-of-unity cell used
+  std::int64_t input_points = 0;    ///< points given
+  std::int64_t working_points = 0;  ///< points after averaging a dense cloud per cube of detail / 4
+  std::int64_t used_points = 0;     ///< working points with a usable normal
+  std::int64_t cells = 0;           ///< local fits made (undefined ones included)
+  std::int64_t surface_cubes = 0;   ///< marching cubes the surface crossed
   std::vector<std::pair<std::string, double>> timings_s;  ///< wall time per stage, in order
   std::string message;                                    ///< one line: what was made
 };

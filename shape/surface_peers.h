@@ -8,9 +8,11 @@ namespace pectus {
 
 /// PCL's Poisson reconstruction (Kazhdan et al. 2006, pcl::Poisson) of an oriented cloud.
 /// @param[in] cloud  positions and unit normals pointing out of the object (mm)
-/// @param[in] depth  octree depth (8 gives a 256^3 grid over the cloud's bounding cube)
+/// @param[in] depth    octree depth (8 gives a 256^3 grid over the cloud's bounding cube)
+/// @param[in] threads  OpenMP threads of PCL's solver (pcl::Poisson::setThreads; PCL's own default is 1);
+///                     0 = omp_get_max_threads(), i.e. OMP_NUM_THREADS or every core
 /// Throws Error(kBadInput) if the cloud has no normals, Error(kFailure) if PCL returns no triangles.
-TriangleMesh PclPoissonSurface(const PointCloud& cloud, int depth = 8);
+TriangleMesh PclPoissonSurface(const PointCloud& cloud, int depth = 8, int threads = 0);
 
 /// PCL's MarchingCubesRBF: one global polyharmonic RBF s(x) = sum_j w_j |x - c_j|^3 interpolating 0 at the
 /// points and eps at the points moved by eps along their normals (Carr et al. 2001 without the polynomial

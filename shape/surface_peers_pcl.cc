@@ -1,4 +1,5 @@
 // The PCL peers of shape/surface_peers.h.
+#include <omp.h>
 #include <pcl/PolygonMesh.h>
 #include <pcl/conversions.h>
 #include <pcl/point_types.h>
@@ -51,12 +52,13 @@ TriangleMesh FromPcl(const pcl::PolygonMesh& mesh, const Eigen::Vector3d& origin
 
 }  // namespace
 
-TriangleMesh PclPoissonSurface(const PointCloud& cloud, int depth) {
+TriangleMesh PclPoissonSurface(const PointCloud& cloud, int depth, int threads) {
   const Eigen::Vector3d origin = cloud.positions.colwise().mean().transpose();
   PointCloud centred = cloud;
   centred.positions.rowwise() -= origin.transpose();
   pcl::Poisson<pcl::PointNormal> poisson;
   poisson.setDepth(depth);
+  poisson.setThreads(threads > 0 ? threads : omp_get_max_threads());
   poisson.setInputCloud(ToPcl(centred, "PCL Poisson"));
   pcl::PolygonMesh mesh;
   poisson.reconstruct(mesh);

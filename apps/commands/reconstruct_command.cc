@@ -100,6 +100,7 @@ class ReconstructCommand : public Command {
     r["input"] = input_;
     r["output"] = output_;
     r["input_points"] = result.input_points;
+    r["working_points"] = result.working_points;
     r["used_points"] = result.used_points;
     r["normals"] = result.normals_source;
     r["vertices"] = result.mesh.num_vertices();
@@ -111,6 +112,7 @@ class ReconstructCommand : public Command {
                     {"off_surface_max_mm", result.accuracy.off_surface_max_mm},
                     {"constraints", result.accuracy.num_on_surface + result.accuracy.num_off_surface}};
     r["scales_mm"] = {{"point_spacing", result.point_spacing_mm},
+                      {"noise", result.noise_mm},
                       {"grid_spacing", result.spacing_mm},
                       {"centre_spacing", result.centre_spacing_mm},
                       {"cell_size", result.cell_size_mm}};

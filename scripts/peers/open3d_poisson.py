@@ -11,15 +11,16 @@ process (MB).
 
   /usr/bin/python3 scripts/peers/open3d_poisson.py cloud.ply surface.ply --depth 8
   /usr/bin/python3 scripts/peers/open3d_poisson.py cloud.ply surface.ply --depth 8 --estimate-normals
+  /usr/bin/python3 scripts/peers/open3d_poisson.py cloud.ply surface.ply --depth 8 --threads 1
 """
 import argparse
 import json
+import os
 import resource
 import sys
 import time
 
 import numpy as np
-import open3d as o3d
 
 
 def main() -> int:
@@ -30,8 +31,15 @@ def main() -> int:
     parser.add_argument("--estimate-normals", action="store_true")
     parser.add_argument("--neighbours", type=int, default=16)
     parser.add_argument("--density-quantile", type=float, default=0.0)
-    parser.add_argument("--threads", type=int, default=0, help="unused: Open3D picks its own")
+    parser.add_argument("--threads", type=int, default=0,
+                        help="run on this many cores (the process is pinned to them); 0 = all")
     args = parser.parse_args()
+    if args.threads > 0:
+        # Open3D sizes its thread pools from the cores it may use, whatever OMP_NUM_THREADS says.
+        cores = sorted(os.sched_getaffinity(0))
+        os.sched_setaffinity(0, cores[:args.threads])
+    # Imported after pinning: its OpenMP runtime sizes its thread pool when it loads.
+    import open3d as o3d  # pylint: disable=import-outside-toplevel
 
     pcd = o3d.io.read_point_cloud(args.cloud)
     if len(pcd.points) == 0:

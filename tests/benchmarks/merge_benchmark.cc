@@ -11,8 +11,8 @@
 // files, so the same disturbance can be fed to the command:
 //
 //   build/tests/benchmarks/merge_benchmark [--seeds 5] [--workdir /tmp/pectus_merge_benchmark]
-//   cd ../shared/datasets/stanford_bunny && pectus merge bun*.ply chin.ply ear_back.ply top*.ply \
-//       --poses /tmp/pectus_merge_benchmark/start_1000.conf --input-units m --poses-out /tmp/aligned.conf \
+//   cd ../shared/datasets/stanford_bunny && pectus merge bun*.ply chin.ply ear_back.ply top*.ply
+//       --poses /tmp/pectus_merge_benchmark/start_1000.conf --input-units m --poses-out /tmp/aligned.conf
 //       -o /tmp/merged.ply --report /tmp/merge.json
 //   build/tests/benchmarks/merge_benchmark --evaluate /tmp/aligned.conf     (the same figures for it)
 #include <sys/resource.h>
@@ -27,6 +27,7 @@
 #include "shape/io/mesh_io.h"
 #include "shape/io/stanford_conf.h"
 #include "shape/sweep_merge.h"
+#include "tests/support/bunny_data.h"
 
 using namespace pectus;
 
@@ -109,17 +110,10 @@ int main(int argc, char** argv) {
     if (key == "--workdir") workdir = value;
     if (key == "--evaluate") evaluate = value;
   }
-  const std::string dir = std::string(PECTUS_SHARED_DIR) + "/datasets/stanford_bunny/";
-  std::vector<ScanPose> poses = ReadStanfordConf(dir + "bun.conf");
-  ScaleTranslations(1000.0, &poses);
-  ReadOptions ro;
-  ro.input_units = LengthUnit::kMetre;
-  std::vector<PointCloud> sweeps;
-  std::vector<Rigid3> truth;
-  for (const auto& p : poses) {
-    sweeps.push_back(ReadPointCloud(dir + p.file, ro));
-    truth.push_back(p.T_common_scan);
-  }
+  const testing_support::BunnySweeps bunny = testing_support::ReadBunnySweeps();
+  const std::vector<ScanPose>& poses = bunny.poses;
+  const std::vector<PointCloud>& sweeps = bunny.sweeps;
+  const std::vector<Rigid3>& truth = bunny.placements;
   if (!evaluate.empty()) {
     std::vector<ScanPose> out = ReadStanfordConf(evaluate);
     ScaleTranslations(1000.0, &out);

@@ -13,7 +13,11 @@
 //   build/tests/benchmarks/reconstruct_benchmark [--workdir DIR]
 //       [--datasets
 //       crosscheck,bunny,chest100k,chest100k_4sweeps,chest100k_6sweeps,chest100k_bigholes,chest1m]
-//       [--methods pectus,pectus_normals,cgal,pcl,open3d,open3d_normals] [--timeout SECONDS]
+//       [--methods pectus,pectus_normals,cgal,pcl,open3d,open3d_normals] [--threads 1,2]
+//       [--timeout SECONDS]
+// Every method runs once per thread count (default 1 and 2: "one thread each", "two threads each"):
+// OMP_NUM_THREADS for pectus and PCL (pcl::Poisson::setThreads follows it), the process pinned to that
+// many cores for Open3D (scripts/peers/open3d_poisson.py --threads); CGAL's Poisson is sequential.
 // Internal: reconstruct_benchmark --child METHOD IN.ply OUT.ply SPACING_MM
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -68,6 +72,10 @@ int RunChild(const std::string& method, const std::string& in, const std::string
     j["surface_cpu_s"] = CpuSeconds() - c0;
     for (const auto& [stage, s] : r.timings_s) j["stages"][stage] = s;
     j["fitting_accuracy_mm"] = r.accuracy.fitting_accuracy_mm;
+    j["scales_mm"] = {{"point_spacing", r.point_spacing_mm},
+                      {"noise", r.noise_mm},
+                      {"centre_spacing", r.centre_spacing_mm},
+                      {"working_points", r.working_points}};
     mesh = std::move(r.mesh);
     const MeshCheck check = CheckMesh(mesh);
     j["check"] = {{"manifold", check.manifold},
@@ -94,8 +102,9 @@ int RunChild(const std::string& method, const std::string& in, const std::string
   return 0;
 }
 
-// Runs argv as a child with a timeout; its stdout (last line, JSON), wall time and peak memory.
-nlohmann::json Spawn(const std::vector<std::string>& args, double timeout_s) {
+// Runs argv as a child with a timeout and OMP_NUM_THREADS=threads; its stdout (last line, JSON), wall
+// time and peak memory.
+nlohmann::json Spawn(const std::vector<std::string>& args, int threads, double timeout_s) {
   int pipe_fd[2];
   if (pipe(pipe_fd) != 0) return {{"error", "pipe"}};
   const auto t0 = Clock::now();
@@ -103,6 +112,7 @@ nlohmann::json Spawn(const std::vector<std::string>& args, double timeout_s) {
   if (pid == 0) {
     dup2(pipe_fd[1], 1);
     close(pipe_fd[0]);
+    setenv("OMP_NUM_THREADS", std::to_string(threads).c_str(), 1);
     std::vector<char*> argv;
     for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
@@ -163,12 +173,14 @@ int main(int argc, char** argv) {
       "crosscheck",         "bunny",  "chest100k", "chest100k_4sweeps", "chest100k_6sweeps",
       "chest100k_bigholes", "chest1m"};
   std::vector<std::string> methods = {"pectus", "pectus_normals", "cgal", "pcl", "open3d", "open3d_normals"};
+  std::vector<std::string> threads = {"1", "2"};
   double timeout = 900.0;
   for (int a = 1; a + 1 < argc; a += 2) {
     const std::string key = argv[a], value = argv[a + 1];
     if (key == "--workdir") workdir = value;
     if (key == "--datasets") datasets = Split(value);
     if (key == "--methods") methods = Split(value);
+    if (key == "--threads") threads = Split(value);
     if (key == "--timeout") timeout = std::atof(value.c_str());
   }
   fs::create_directories(workdir);
@@ -195,29 +207,33 @@ int main(int argc, char** argv) {
     std::printf("%s: %lld points (prepared in %.1f s)%s%s\n", name.c_str(), (long long)data.points, Since(t0),
                 holes.empty() ? "" : "; holes missing from every sweep: ", holes.c_str());
     std::fflush(stdout);
-    for (const std::string& method : methods) {
-      if (method == "pectus_normals" && name != "bunny") continue;  // chests: normals come with the merge
-      if (method == "open3d_normals" && name != "bunny") continue;
-      const bool variant = name.find('_') != std::string::npos;  // 4 or 6 sweeps, big holes: pectus alone
-      if (variant && method != "pectus") continue;
-      const std::string out = workdir + "/" + name + "_" + method + ".ply";
-      std::vector<std::string> args;
-      if (method.rfind("open3d", 0) == 0) {
-        args = {"/usr/bin/python3", script, data.cloud_file, out, "--depth", "8"};
-        if (method == "open3d_normals") args.push_back("--estimate-normals");
-      } else {
-        args = {self, "--child", method, data.cloud_file, out, std::to_string(data.spacing_mm)};
+    for (const std::string& thread_text : threads)
+      for (const std::string& method : methods) {
+        const int thread_count = std::max(1, std::atoi(thread_text.c_str()));
+        if (method == "pectus_normals" && name != "bunny") continue;  // chests: normals come with the merge
+        if (method == "open3d_normals" && name != "bunny") continue;
+        const bool variant = name.find('_') != std::string::npos;  // 4 or 6 sweeps, big holes: pectus alone
+        if (variant && method != "pectus") continue;
+        const std::string out = workdir + "/" + name + "_" + method + ".ply";
+        std::vector<std::string> args;
+        if (method.rfind("open3d", 0) == 0) {
+          args = {"/usr/bin/python3", script, data.cloud_file, out, "--depth", "8", "--threads", thread_text};
+          if (method == "open3d_normals") args.push_back("--estimate-normals");
+        } else {
+          args = {self, "--child", method, data.cloud_file, out, std::to_string(data.spacing_mm)};
+        }
+        nlohmann::json r = Spawn(args, thread_count, timeout);
+        r["dataset"] = name;
+        r["threads"] = thread_count;
+        r["method"] = method;
+        r["points"] = data.points;
+        if (r.contains("total_s")) r["seconds"] = r["total_s"];
+        if (!r.contains("error") && fs::exists(out))
+          r["error_to_truth"] = bench::Evaluate(data, ReadMesh(out));
+        std::printf("%s\n", r.dump().c_str());
+        std::fflush(stdout);
+        all.push_back(r);
       }
-      nlohmann::json r = Spawn(args, timeout);
-      r["dataset"] = name;
-      r["method"] = method;
-      r["points"] = data.points;
-      if (r.contains("total_s")) r["seconds"] = r["total_s"];
-      if (!r.contains("error") && fs::exists(out)) r["error_to_truth"] = bench::Evaluate(data, ReadMesh(out));
-      std::printf("%s\n", r.dump().c_str());
-      std::fflush(stdout);
-      all.push_back(r);
-    }
   }
   std::printf("\n%s", bench::MarkdownTable(all).c_str());
   if (!crosscheck.empty()) std::printf("\nMarchingCubesRBF cross-check: %s\n", crosscheck.c_str());

@@ -20,6 +20,8 @@
 #include "shape/surface_peers.h"
 #include "shape/sweep_merge.h"
 #include "tests/shape/mesh_distance.h"
+#include "tests/support/bunny_data.h"
+#include "tests/support/synthetic_clouds.h"
 
 namespace pectus::bench {
 
@@ -43,19 +45,11 @@ inline Dataset MakeDataset(const std::string& name, const std::string& workdir) 
   d.name = name;
   d.cloud_file = workdir + "/" + name + ".ply";
   if (name == "bunny") {
-    const std::string dir = std::string(PECTUS_SHARED_DIR) + "/datasets/stanford_bunny/";
-    std::vector<ScanPose> poses = ReadStanfordConf(dir + "bun.conf");
-    ScaleTranslations(1000.0, &poses);
+    const testing_support::BunnySweeps bunny = testing_support::ReadBunnySweeps();
+    d.cloud = MergeSweeps(bunny.sweeps, bunny.placements).merged;
     ReadOptions ro;
     ro.input_units = LengthUnit::kMetre;
-    std::vector<PointCloud> sweeps;
-    std::vector<Rigid3> start;
-    for (const auto& p : poses) {
-      sweeps.push_back(ReadPointCloud(dir + p.file, ro));
-      start.push_back(p.T_common_scan);
-    }
-    d.cloud = MergeSweeps(sweeps, start).merged;
-    d.reference = ReadMesh(dir + "reconstruction/bun_zipper.ply", ro);
+    d.reference = ReadMesh(testing_support::BunnyDirectory() + "reconstruction/bun_zipper.ply", ro);
   } else {
     // "chest100k" and "chest1m" (5 sweeps); "chest100k_4sweeps", "chest100k_6sweeps": the same subject
     // scanned with 4 or 6 strips at the same line spacing; "chest100k_bigholes": with three large holes.
@@ -210,17 +204,7 @@ inline std::string LoadAverage() {
 /// by PCL's MarchingCubesRBF (one global r^3 spline, dense solve); distances between the two surfaces,
 /// both ways, where PCL's surface is within 4 mm of the data.
 inline nlohmann::json CrossCheckMarchingCubesRbf(int n) {
-  const Eigen::Vector3d axes(30.0, 22.0, 16.0);
-  PointCloud cloud;
-  cloud.positions.resize(n, 3);
-  cloud.normals.resize(n, 3);
-  const double golden = M_PI * (3.0 - std::sqrt(5.0));
-  for (int i = 0; i < n; ++i) {
-    const double z = 1.0 - 2.0 * (i + 0.5) / n, rho = std::sqrt(1.0 - z * z);
-    const Eigen::Vector3d u(rho * std::cos(golden * i), rho * std::sin(golden * i), z);
-    cloud.positions.row(i) = u.cwiseProduct(axes).transpose();
-    cloud.normals.row(i) = u.cwiseQuotient(axes).normalized().transpose();
-  }
+  const PointCloud cloud = testing_support::EllipsoidCloud(n);
   ReconstructOptions o;
   o.spacing = 0.75;
   o.smoothing = 0.0;
@@ -263,20 +247,26 @@ inline std::string Fixed(double x, int digits) {
 /// One table per dataset: time, memory and error of each method, and their ratios to pectus.
 inline std::string MarkdownTable(const nlohmann::json& runs) {
   std::string out;
+  // Runs are grouped by dataset and thread count; ratios are to pectus in the same group.
+  auto group = [](const nlohmann::json& r) {
+    const int t = r.value("threads", 0);
+    return r["dataset"].get<std::string>() +
+           (t > 0 ? ", " + std::to_string(t) + (t == 1 ? " thread each" : " threads each") : "");
+  };
   std::map<std::string, nlohmann::json> pectus;
   for (const auto& r : runs)
-    if (r["method"] == "pectus" && !r.contains("error")) pectus[r["dataset"]] = r;
+    if (r["method"] == "pectus" && !r.contains("error")) pectus[group(r)] = r;
   // CPU time of the surface stage (all threads) where the method measured it, else of its whole process.
   auto cpu = [](const nlohmann::json& r) {
     return r.contains("surface_cpu_s") ? r["surface_cpu_s"].get<double>() : r["cpu_s"].get<double>();
   };
   std::string current;
   for (const auto& r : runs) {
-    const std::string name = r["dataset"];
-    if (name != current) {
-      current = name;
+    const std::string name = r["dataset"], group_key = group(r);
+    if (group_key != current) {
+      current = group_key;
       const bool bunny = name == "bunny";
-      out += "\n**" + name + "** (" + std::to_string(r["points"].get<long long>()) + " points)\n\n";
+      out += "\n**" + group_key + "** (" + std::to_string(r["points"].get<long long>()) + " points)\n\n";
       out += bunny ? "| method | time s | x pectus | CPU s | x pectus | peak MB | x pectus | surface->ref "
                      "mean / p95 mm | "
                      "ref->surface mean / p95 mm | faces |\n|---|---|---|---|---|---|---|---|---|---|\n"
@@ -290,10 +280,10 @@ inline std::string MarkdownTable(const nlohmann::json& runs) {
       continue;
     }
     const double t = r["seconds"], m = r["peak_rss_mb"];
-    const bool have = pectus.count(name) > 0;
-    const double t0 = have ? pectus[name]["seconds"].get<double>() : t;
-    const double m0 = have ? pectus[name]["peak_rss_mb"].get<double>() : m;
-    const double cpu0 = have ? cpu(pectus[name]) : cpu(r);
+    const bool have = pectus.count(group_key) > 0;
+    const double t0 = have ? pectus[group_key]["seconds"].get<double>() : t;
+    const double m0 = have ? pectus[group_key]["peak_rss_mb"].get<double>() : m;
+    const double cpu0 = have ? cpu(pectus[group_key]) : cpu(r);
     out += "| " + r["method"].get<std::string>() + " | " + Fixed(t, 2) + " | " + Fixed(t / t0, 2) + " | " +
            Fixed(cpu(r), 2) + " | " + Fixed(cpu(r) / cpu0, 2) + " | " + Fixed(m, 0) + " | " +
            Fixed(m / m0, 2) + " | ";

@@ -50,7 +50,9 @@ TEST(RbfImplicit, IsTheSignedDistanceNearTheSurface) {
   s.Evaluate(q, &v);
   for (int i = 0; i < 400; ++i) EXPECT_NEAR(v(i), truth(i), 0.02 + 0.02 * std::abs(truth(i))) << i;
   const RbfFittingAccuracy acc = s.FittingAccuracy();
-  EXPECT_EQ(acc.num_on_surface, p.rows());
+  // The on-surface constraints are the points averaged per 1 mm cube (about one point each here).
+  EXPECT_GT(acc.num_on_surface, p.rows() / 2);
+  EXPECT_LE(acc.num_on_surface, p.rows());
   EXPECT_LT(acc.on_surface_max_mm, 0.01);
   EXPECT_LT(acc.fitting_accuracy_mm, 0.05);
   EXPECT_GE(acc.fitting_accuracy_mm, acc.on_surface_max_mm);

@@ -7,30 +7,15 @@
 #include "registration/kdtree.h"
 #include "shape/reconstruct.h"
 #include "tests/shape/mesh_distance.h"
+#include "tests/support/synthetic_clouds.h"
 
 namespace pectus {
 namespace {
 
-// An ellipsoid with semi-axes (30, 22, 16) mm sampled on a Fibonacci lattice, with exact outward normals.
-PointCloud Ellipsoid(int n) {
-  const Eigen::Vector3d axes(30.0, 22.0, 16.0);
-  PointCloud cloud;
-  cloud.positions.resize(n, 3);
-  cloud.normals.resize(n, 3);
-  const double golden = M_PI * (3.0 - std::sqrt(5.0));
-  for (int i = 0; i < n; ++i) {
-    const double z = 1.0 - 2.0 * (i + 0.5) / n, rho = std::sqrt(1.0 - z * z);
-    const Eigen::Vector3d u(rho * std::cos(golden * i), rho * std::sin(golden * i), z);
-    cloud.positions.row(i) = u.cwiseProduct(axes).transpose();
-    cloud.normals.row(i) = u.cwiseQuotient(axes).normalized().transpose();
-  }
-  return cloud;
-}
-
 // Same family, same data: pectus' partition-of-unity fit of local polyharmonic splines and PCL's one
 // global polyharmonic spline (MarchingCubesRBF) give the same surface on a small noise-free cloud.
 TEST(SurfacePeers, AgreesWithPclMarchingCubesRbfOnASmallCloud) {
-  const PointCloud cloud = Ellipsoid(900);
+  const PointCloud cloud = testing_support::EllipsoidCloud(900);
   ReconstructOptions o;
   o.spacing = 0.75;
   o.smoothing = 0.0;  // interpolate, as PCL does

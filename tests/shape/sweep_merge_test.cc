@@ -7,6 +7,7 @@
 #include "shape/core/error.h"
 #include "shape/io/mesh_io.h"
 #include "shape/io/stanford_conf.h"
+#include "tests/support/bunny_data.h"
 
 namespace pectus {
 namespace {
@@ -185,20 +186,15 @@ Rigid3 BestCommonMotion(const std::vector<PointCloud>& sweeps, const std::vector
 }
 
 TEST(SweepMerge, RealBunnyFromDisturbedPosesReturnsToPublishedPlacement) {
-  const std::string dir = std::string(PECTUS_SHARED_DIR) + "/datasets/stanford_bunny/";
-  std::vector<ScanPose> poses = ReadStanfordConf(dir + "bun.conf");
-  ScaleTranslations(1000.0, &poses);
-  ReadOptions ro;
-  ro.input_units = LengthUnit::kMetre;
-  std::vector<PointCloud> sweeps;
-  std::vector<Rigid3> truth, start;
+  const testing_support::BunnySweeps bunny = testing_support::ReadBunnySweeps();
+  const std::vector<ScanPose>& poses = bunny.poses;
+  const std::vector<PointCloud>& sweeps = bunny.sweeps;
+  const std::vector<Rigid3>& truth = bunny.placements;
+  std::vector<Rigid3> start;
   std::mt19937_64 rng(2026);
-  for (const auto& p : poses) {
-    sweeps.push_back(ReadPointCloud(dir + p.file, ro));
-    truth.push_back(p.T_common_scan);
-    // Every sweep disturbed about its centroid: up to 3 degrees and 5 mm.
-    start.push_back(DisturbAbout(&rng, 3.0, 5.0, sweeps.back(), truth.back()));
-  }
+  // Every sweep disturbed about its centroid: up to 3 degrees and 5 mm.
+  for (std::size_t s = 0; s < sweeps.size(); ++s)
+    start.push_back(DisturbAbout(&rng, 3.0, 5.0, sweeps[s], truth[s]));
   const SweepMergeResult r = MergeSweeps(sweeps, start);
   // The anchor (bun000) stays where it started, so the merged set is compared with bun.conf up to one
   // common rigid motion.

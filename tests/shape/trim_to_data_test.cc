@@ -40,14 +40,20 @@ Points3 Data(double hole) {
   return out;
 }
 
-TEST(TrimToData, KeepsTheScannedRegionAndFillsSmallHoles) {
-  const Points3 data = Data(16.0);
+// The grid trimmed to Data(hole) with a 2 mm margin, filling holes up to 20 mm.
+TrimResult TrimGrid(double hole, TriangleMesh* mesh) {
+  const Points3 data = Data(hole);
   const KdTree3 tree(data);
-  TriangleMesh mesh = Grid();
+  *mesh = Grid();
   TrimOptions o;
   o.margin = 2.0;
   o.max_hole_size = 20.0;
-  const TrimResult r = TrimToData(tree, &mesh, o);
+  return TrimToData(tree, mesh, o);
+}
+
+TEST(TrimToData, KeepsTheScannedRegionAndFillsSmallHoles) {
+  TriangleMesh mesh;
+  const TrimResult r = TrimGrid(16.0, &mesh);
   EXPECT_EQ(r.holes_filled, 1);
   EXPECT_NEAR(r.largest_hole_filled_mm, 16.0, 2.5);
   EXPECT_EQ(r.components_removed, 1) << "the speck of data at the corner";
@@ -66,13 +72,8 @@ TEST(TrimToData, KeepsTheScannedRegionAndFillsSmallHoles) {
 }
 
 TEST(TrimToData, WideHolesStayOpen) {
-  const Points3 data = Data(30.0);
-  const KdTree3 tree(data);
-  TriangleMesh mesh = Grid();
-  TrimOptions o;
-  o.margin = 2.0;
-  o.max_hole_size = 20.0;
-  const TrimResult r = TrimToData(tree, &mesh, o);
+  TriangleMesh mesh;
+  const TrimResult r = TrimGrid(30.0, &mesh);
   EXPECT_EQ(r.holes_filled, 0);
   EXPECT_EQ(r.holes_left_open, 1);
   for (Eigen::Index v = 0; v < mesh.num_vertices(); ++v) {
