@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "model_benchmark_truth.h"
+#include "registration/kdtree.h"
 #include "shape/io/landmark_io.h"
 #include "shape/model/distance_map.h"
 #include "shape/model/hole_fill_validation.h"
@@ -64,45 +65,109 @@ struct HoleFillSubject {
   Eigen::VectorXd true_depth;
 };
 
-inline HoleFillErrors MeasureHoleFill(const HoleFillSubject& s, double diameter_mm,
-                                      const CrossSectionOptions& options, HoleFillResult* out = nullptr) {
+/// A grid vertex is in a hole of the scan itself when the surface vertex nearest to it lies farther than
+/// this from the merged scan points (the reconstruction's per-vertex "data_distance").
+constexpr double kScanHoleMm = 2.0;
+/// The acceptance line's removed regions: up to this size (mm) across.
+constexpr double kMaxRegionMm = 30.0;
+
+/// Distance (mm) from each grid vertex to the scan's data: the "data_distance" of the surface vertex
+/// nearest to it (zero where the surface carries none). Unlike the resampler's data_gap_mm, which is
+/// measured to the mesh, this sees the holes that the reconstruction bridged.
+inline Eigen::VectorXd ScanDataDistanceOnGrid(const TriangleMesh& surface, const TriangleMesh& grid) {
+  Eigen::VectorXd d = Eigen::VectorXd::Zero(grid.vertices.size());
+  const auto it = surface.vertices.scalars.find("data_distance");
+  if (it == surface.vertices.scalars.end()) return d;
+  const KdTree3 tree(surface.vertices.positions);
+  for (Eigen::Index k = 0; k < d.size(); ++k) {
+    std::uint32_t i = 0;
+    double squared = 0.0;
+    if (tree.Nearest(grid.vertices.positions.row(k).transpose(), &i, &squared)) d[k] = it->second[i];
+  }
+  return d;
+}
+
+/// The size (mm) of the region each disk removes: the diameter, in the grid's (u, v), of the union of
+/// the disk and the scan's own hole vertices (scan_distance > kScanHoleMm) 4-connected to it; at least
+/// the disk's diameter. disk_of[k]: the disk holding grid vertex k, or -1.
+inline std::vector<double> RemovedRegionSizes(const std::vector<RemovedDisk>& disks, const GridSize& grid,
+                                              const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                                              const Eigen::VectorXd& scan_distance,
+                                              std::vector<int>* disk_of) {
+  disk_of->assign(std::size_t(grid.sternal) * grid.lateral, -1);
+  for (int i = 0; i < grid.sternal; ++i)
+    for (int j = 0; j < grid.lateral; ++j)
+      for (std::size_t d = 0; d < disks.size(); ++d)
+        if ((*disk_of)[grid.Index(i, j)] < 0 &&
+            std::hypot(u[j] - disks[d].u, v[i] - disks[d].v) <= disks[d].radius_mm)
+          (*disk_of)[grid.Index(i, j)] = int(d);
+  std::vector<double> sizes;
+  for (std::size_t d = 0; d < disks.size(); ++d) {
+    std::vector<char> in(disk_of->size(), 0);
+    std::vector<std::pair<int, int>> region, todo;
+    for (int i = 0; i < grid.sternal; ++i)
+      for (int j = 0; j < grid.lateral; ++j)
+        if ((*disk_of)[grid.Index(i, j)] == int(d)) in[grid.Index(i, j)] = 1, todo.push_back({i, j});
+    while (!todo.empty()) {
+      const auto [i, j] = todo.back();
+      todo.pop_back();
+      region.push_back({i, j});
+      for (const auto& [di, dj] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+        const int a = i + di, b = j + dj;
+        if (a < 0 || b < 0 || a >= grid.sternal || b >= grid.lateral) continue;
+        const Eigen::Index k = grid.Index(a, b);
+        if (in[k] || scan_distance[k] <= kScanHoleMm) continue;
+        in[k] = 1, todo.push_back({a, b});
+      }
+    }
+    double diameter = 2.0 * disks[d].radius_mm;
+    for (const auto& [i, j] : region)
+      for (const auto& [a, b] : region) diameter = std::max(diameter, std::hypot(u[j] - u[b], v[i] - v[a]));
+    sizes.push_back(diameter);
+  }
+  return sizes;
+}
+
+/// The errors over disks whose removed region is up to kMaxRegionMm across, those over the wider
+/// ones apart, and each disk's region size (mm).
+struct HoleFillMeasure {
+  HoleFillErrors up_to_30_mm, wider;
+  std::vector<double> region_mm;
+};
+
+inline HoleFillMeasure MeasureHoleFill(const HoleFillSubject& s, double diameter_mm,
+                                       const CrossSectionOptions& options, HoleFillResult* out = nullptr) {
   const std::vector<RemovedDisk> disks = DefaultRemovedDisks(s.roi, diameter_mm / 2.0);
   const HoleFillResult h = ValidateHoleFill(s.surface, s.roi, disks, options, s.name);
   const Eigen::VectorXd& holed = h.holed.mesh.vertices.scalars.at("depth_mm");
   const Eigen::VectorXd& full = h.full.mesh.vertices.scalars.at("depth_mm");
-  const Eigen::VectorXd& full_gap = h.full.mesh.vertices.scalars.at("data_gap_mm");
+  const Eigen::VectorXd scan_distance = ScanDataDistanceOnGrid(s.surface, h.full.mesh);
   const Eigen::VectorXd u = GridLateralPositions(s.roi, options.grid),
                         v = GridSternalPositions(s.roi, options.grid);
-  HoleFillErrors e;
-  for (int i = 0; i < options.grid.sternal; ++i) {
-    for (int j = 0; j < options.grid.lateral; ++j) {
-      const Eigen::Index k = options.grid.Index(i, j);
-      if (!h.in_disk[k]) continue;
-      const RemovedDisk& d = disks[0];
-      const int p = std::hypot(u[j] - d.u, v[i] - d.v) <= d.radius_mm ? 0 : 1;
-      e.vs_untouched[p].Add(holed[k] - full[k]);
-      if (full_gap[k] <= 2.0) {  // the untouched scan has data here (not a hole of its own)
-        e.vs_untouched_on_data[p].Add(holed[k] - full[k]);
-        e.vs_truth_on_data[p].Add(holed[k] - s.true_depth[k]);
-        e.untouched_vs_truth_on_data[p].Add(full[k] - s.true_depth[k]);
-      }
-      e.vs_truth[p].Add(holed[k] - s.true_depth[k]);
-      e.untouched_vs_truth[p].Add(full[k] - s.true_depth[k]);
+  HoleFillMeasure m;
+  std::vector<int> disk_of;
+  m.region_mm = RemovedRegionSizes(disks, options.grid, u, v, scan_distance, &disk_of);
+  for (Eigen::Index k = 0; k < full.size(); ++k) {
+    if (!h.in_disk[k] || disk_of[k] < 0) continue;
+    const int p = disk_of[k] == 0 ? 0 : 1;  // inside, border
+    HoleFillErrors& e = m.region_mm[disk_of[k]] <= kMaxRegionMm + 1e-9 ? m.up_to_30_mm : m.wider;
+    e.vs_untouched[p].Add(holed[k] - full[k]);
+    if (scan_distance[k] <= kScanHoleMm) {  // the untouched scan has data here
+      e.vs_untouched_on_data[p].Add(holed[k] - full[k]);
+      e.vs_truth_on_data[p].Add(holed[k] - s.true_depth[k]);
+      e.untouched_vs_truth_on_data[p].Add(full[k] - s.true_depth[k]);
     }
+    e.vs_truth[p].Add(holed[k] - s.true_depth[k]);
+    e.untouched_vs_truth[p].Add(full[k] - s.true_depth[k]);
   }
   // The fill alone against the ground truth: the same disks removed from the true skin itself (no scan
-  // error), resampled with the same options, against the true skin's grid.
+  // error, so each region is its disk), resampled with the same options, against the true skin's grid.
   const HoleFillResult t = ValidateHoleFill(s.truth, s.roi, disks, options, s.name + " truth");
-  for (int i = 0; i < options.grid.sternal; ++i) {
-    for (int j = 0; j < options.grid.lateral; ++j) {
-      const Eigen::Index k = options.grid.Index(i, j);
-      if (!t.in_disk[k]) continue;
-      const int p = std::hypot(u[j] - disks[0].u, v[i] - disks[0].v) <= disks[0].radius_mm ? 0 : 1;
-      e.true_skin[p].Add(t.error_mm[k]);
-    }
-  }
+  HoleFillErrors& e = diameter_mm <= kMaxRegionMm + 1e-9 ? m.up_to_30_mm : m.wider;
+  for (Eigen::Index k = 0; k < full.size(); ++k)
+    if (t.in_disk[k] && disk_of[k] >= 0) e.true_skin[disk_of[k] == 0 ? 0 : 1].Add(t.error_mm[k]);
   if (out != nullptr) *out = h;
-  return e;
+  return m;
 }
 
 inline std::vector<HoleFillSubject> LoadHoleFillSubjects(const std::filesystem::path& cohort,
@@ -132,26 +197,31 @@ inline nlohmann::json HoleFill(const std::filesystem::path& cohort, const std::f
   nlohmann::json rows = nlohmann::json::array();
   auto run = [&](const std::string& name, const CrossSectionOptions& options, double diameter,
                  bool per_subject) {
-    HoleFillErrors all;
+    HoleFillErrors all, wider;
     nlohmann::json each = nlohmann::json::object();
     for (const HoleFillSubject& s : subjects) {
-      const HoleFillErrors e = MeasureHoleFill(s, diameter, options);
-      all.Add(e);
+      const HoleFillMeasure m = MeasureHoleFill(s, diameter, options);
+      const HoleFillErrors& e = m.up_to_30_mm;
+      all.Add(e), wider.Add(m.wider);
       if (per_subject) {
-        each[s.name] = {{"inside_vs_untouched_max_mm", e.vs_untouched[0].max},
-                        {"true_skin_inside_max_mm", e.true_skin[0].max},
-                        {"true_skin_border_max_mm", e.true_skin[1].max},
-                        {"inside_vs_untouched_on_data_max_mm", e.vs_untouched_on_data[0].max},
-                        {"inside_vs_truth_on_data_max_mm", e.vs_truth_on_data[0].max},
-                        {"inside_vs_truth_max_mm", e.vs_truth[0].max},
-                        {"border_vs_untouched_max_mm", e.vs_untouched[1].max},
-                        {"border_vs_truth_max_mm", e.vs_truth[1].max},
-                        {"untouched_vs_truth_max_mm",
-                         std::max(e.untouched_vs_truth[0].max, e.untouched_vs_truth[1].max)}};
+        each[s.name] = {
+            {"inside_vs_untouched_max_mm", e.vs_untouched[0].max},
+            {"true_skin_inside_max_mm", e.true_skin[0].max},
+            {"true_skin_border_max_mm", e.true_skin[1].max},
+            {"inside_vs_untouched_on_data_max_mm", e.vs_untouched_on_data[0].max},
+            {"inside_vs_truth_on_data_max_mm", e.vs_truth_on_data[0].max},
+            {"inside_vs_truth_max_mm", e.vs_truth[0].max},
+            {"border_vs_untouched_max_mm", e.vs_untouched[1].max},
+            {"border_vs_truth_max_mm", e.vs_truth[1].max},
+            {"untouched_vs_truth_max_mm", std::max(e.untouched_vs_truth[0].max, e.untouched_vs_truth[1].max)},
+            {"removed_region_mm_inside_left_corner", m.region_mm}};
+        if (m.wider.vs_untouched[0].count + m.wider.vs_untouched[1].count > 0)
+          each[s.name]["wider_regions"] = m.wider.Json();
       }
     }
     nlohmann::json row = {{"fill", name}, {"diameter_mm", diameter}, {"subjects", subjects.size()}};
-    row.update(all.Json());
+    row.update(all.Json());  // inside/border: the disks whose removed region is up to 30 mm
+    row["wider_regions"] = wider.Json();
     if (per_subject) row["per_subject"] = each;
     std::cerr << row.dump() << "\n";
     rows.push_back(row);
@@ -209,7 +279,7 @@ inline nlohmann::json HoleFill(const std::filesystem::path& cohort, const std::f
     ErrorStats grid_to_truth;
     for (const HoleFillSubject& s : subjects) {
       HoleFillResult h;
-      all.Add(MeasureHoleFill(s, 30.0, options, &h));
+      all.Add(MeasureHoleFill(s, 30.0, options, &h).up_to_30_mm);
       const Eigen::VectorXd& full = h.full.mesh.vertices.scalars.at("depth_mm");
       for (Eigen::Index k = 0; k < full.size(); ++k) grid_to_truth.Add(full[k] - s.true_depth[k]);
     }
