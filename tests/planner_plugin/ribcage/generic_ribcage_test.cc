@@ -105,8 +105,12 @@ TEST(GenericRibcage, EveryRibCellLengthFromTwoToTwentyMillimetresMeshesWithoutFo
     for (double cell = 2.0; cell <= 20.0; cell += 0.5) {
       SCOPED_TRACE("rib cells " + std::to_string(cell) + " mm, sternum cells " + std::to_string(along));
       const Eigen::Index n = cartilage_tets(cell, along);
-      if (cell >= 6.0) EXPECT_EQ(n, at_6);
-      if (cell <= 4.0) EXPECT_EQ(n, at_4);
+      if (cell >= 6.0) {
+        EXPECT_EQ(n, at_6);
+      }
+      if (cell <= 4.0) {
+        EXPECT_EQ(n, at_4);
+      }
     }
   }
 }
