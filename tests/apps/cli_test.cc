@@ -12,6 +12,7 @@
 #include "shape/io/mesh_io.h"
 #include "shape/render/image.h"
 #include "tests/support/cli_run.h"
+#include "tests/support/scratch_dir.h"
 
 namespace pectus {
 namespace {
@@ -20,19 +21,10 @@ namespace fs = std::filesystem;
 using testing_support::CliRun;
 using testing_support::Pectus;
 
-class CliTest : public ::testing::Test {
+class CliTest : public testing_support::ScratchDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           (std::string("pectus_cli_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string P(const std::string& name) const { return (dir_ / name).string(); }
+  CliTest() : ScratchDirTest("pectus_cli_") {}
   void Write(const std::string& name, const std::string& text) const { std::ofstream(dir_ / name) << text; }
-  std::size_t CountFiles() const { return static_cast<std::size_t>(std::distance(fs::directory_iterator(dir_), {})); }
-  fs::path dir_;
 };
 
 const std::string kBunny = std::string(PECTUS_SHARED_DIR) + "/datasets/stanford_bunny/";
@@ -76,8 +68,8 @@ TEST_F(CliTest, ConvertRoundTripsThroughEveryWrittenFormat) {
 TEST_F(CliTest, ConvertAppliesUnitsAndTransform) {
   Write("square.ply", kSquare);
   Write("T.json", R"({"T_target_source": [[0,-1,0,10],[1,0,0,20],[0,0,1,30],[0,0,0,1]]})");
-  const CliRun r = Pectus("convert " + P("square.ply") + " " + P("out.ply") + " --input-units cm --transform " +
-                       P("T.json") + " --quiet");
+  const CliRun r = Pectus("convert " + P("square.ply") + " " + P("out.ply") +
+                          " --input-units cm --transform " + P("T.json") + " --quiet");
   ASSERT_EQ(r.code, 0) << r.output;
   const CliRun info = Pectus("info " + P("out.ply") + " --report " + P("i.json"));
   std::ifstream in(P("i.json"));
@@ -89,8 +81,9 @@ TEST_F(CliTest, ConvertAppliesUnitsAndTransform) {
 }
 
 TEST_F(CliTest, BadInputExitsThreeNamesTheFileAndWritesNothing) {
-  Write("broken.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                      "property float z\nend_header\n0 0 0\n1 1\n");
+  Write("broken.ply",
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+        "property float z\nend_header\n0 0 0\n1 1\n");
   const CliRun r = Pectus("convert " + P("broken.ply") + " " + P("out.ply") + " --report " + P("r.json"));
   EXPECT_EQ(r.code, 3) << r.output;
   EXPECT_NE(r.output.find("broken.ply"), std::string::npos) << r.output;
@@ -133,7 +126,7 @@ TEST_F(CliTest, HelpShowsAnExample) {
 
 TEST_F(CliTest, PlaceWritesOneCloudOfAllSweeps) {
   const CliRun r = Pectus("place --poses " + kBunny + "bun.conf --input-units m -o " + P("bunny.ply") +
-                       " --report " + P("r.json") + " --quiet");
+                          " --report " + P("r.json") + " --quiet");
   ASSERT_EQ(r.code, 0) << r.output;
   std::ifstream in(P("r.json"));
   const auto j = nlohmann::json::parse(in);

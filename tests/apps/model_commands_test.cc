@@ -13,6 +13,7 @@
 #include "shape/io/mesh_io.h"
 #include "tests/shape/model/analytic_chest.h"
 #include "tests/support/cli_run.h"
+#include "tests/support/scratch_dir.h"
 
 namespace pectus {
 namespace {
@@ -26,16 +27,9 @@ nlohmann::json ReadJson(const fs::path& path) {
   return nlohmann::json::parse(in);
 }
 
-class ModelCommands : public ::testing::Test {
+class ModelCommands : public testing_support::ScratchDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / (std::string("pectus_model_cli_") +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string P(const std::string& name) const { return (dir_ / name).string(); }
+  ModelCommands() : ScratchDirTest("pectus_model_cli_") {}
 
   // A chest with a depression of `dent_mm`, meshed at 2 mm beyond its landmark ROI, as NAME.ply and
   // NAME.mrk.json.
@@ -46,8 +40,6 @@ class ModelCommands : public ::testing::Test {
     WriteLandmarks(P(name + ".mrk.json"), chest.Landmarks());
     return chest;
   }
-
-  fs::path dir_;
 };
 
 TEST_F(ModelCommands, ResampledGridLiesOnTheSurfaceAndHolesAreFilledToHalfAMillimetre) {

@@ -11,6 +11,7 @@
 
 #include "shape/io/mesh_io.h"
 #include "tests/support/cli_run.h"
+#include "tests/support/scratch_dir.h"
 
 namespace pectus {
 namespace {
@@ -19,17 +20,9 @@ namespace fs = std::filesystem;
 using testing_support::CliRun;
 using testing_support::Pectus;
 
-class ReconstructCommand : public ::testing::Test {
+class ReconstructCommand : public testing_support::ScratchDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / (std::string("pectus_reconstruct_") +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string P(const std::string& name) const { return (dir_ / name).string(); }
-  std::size_t CountFiles() const { return std::size_t(std::distance(fs::directory_iterator(dir_), {})); }
+  ReconstructCommand() : ScratchDirTest("pectus_reconstruct_") {}
 
   // n points of a sphere of radius r (Fibonacci lattice), as ASCII XYZ.
   void WriteSphere(const std::string& name, int n, double r) const {
@@ -50,8 +43,6 @@ class ReconstructCommand : public ::testing::Test {
     EXPECT_NE(run.output.find(fragment), std::string::npos) << run.output;
     EXPECT_EQ(CountFiles(), before) << "a failed run left a file behind";
   }
-
-  fs::path dir_;
 };
 
 TEST_F(ReconstructCommand, SphereGivesAWatertightSurfaceOnTheSphereAndAReport) {

@@ -16,6 +16,7 @@
 #include "shape/io/transform_io.h"
 #include "tests/registration/synthetic_chest.h"
 #include "tests/support/cli_run.h"
+#include "tests/support/scratch_dir.h"
 
 namespace pectus {
 namespace {
@@ -29,16 +30,9 @@ LandmarkSet ChestLandmarks(const Rigid3& T, double noise_mm, std::uint64_t seed)
   return testing::ChestLandmarks(Similarity3::FromRigid(T), noise_mm, seed);
 }
 
-class RegisterCommand : public ::testing::Test {
+class RegisterCommand : public testing_support::ScratchDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / (std::string("pectus_register_") +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string P(const std::string& name) const { return (dir_ / name).string(); }
+  RegisterCommand() : ScratchDirTest("pectus_register_") {}
   std::size_t CountFiles(const fs::path& in) const {
     return static_cast<std::size_t>(std::distance(fs::directory_iterator(in), {}));
   }
@@ -52,7 +46,6 @@ class RegisterCommand : public ::testing::Test {
     WritePointCloud(folder / (name + ".ply"), c);
     WriteLandmarks(folder / (name + ".mrk.json"), ChestLandmarks(T_world_scan.inverse(), 3.0, seed + 7));
   }
-  fs::path dir_;
 };
 
 // Moving and fixed scans 10 km from the origin, 20 degrees and 100 mm apart: landmarks then ICP give

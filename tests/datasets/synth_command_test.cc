@@ -11,6 +11,7 @@
 
 #include "datasets/scan_writer.h"
 #include "tests/support/cli_run.h"
+#include "tests/support/scratch_dir.h"
 
 namespace pectus::datasets {
 namespace {
@@ -26,17 +27,9 @@ std::string Slurp(const fs::path& p) {
   return s.str();
 }
 
-class SynthCommand : public ::testing::Test {
+class SynthCommand : public testing_support::ScratchDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           (std::string("pectus_synth_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string P(const std::string& name) const { return (dir_ / name).string(); }
-  fs::path dir_;
+  SynthCommand() : ScratchDirTest("pectus_synth_") {}
 };
 
 const std::string kSmall = " --sweeps 3 --spacing 5 --truth-spacing 10 -q";
