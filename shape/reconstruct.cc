@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <memory>
 #include <sstream>
 
 #include "registration/kdtree.h"
@@ -134,7 +133,6 @@ ReconstructResult ReconstructSurface(const PointCloud& cloud, const ReconstructO
   const bool keep_normals = cloud.has_normals() && !options.recompute_normals;
   PointCloud working;
   Eigen::VectorXd counts;
-  std::unique_ptr<KdTree3> tree;
   if (s < cube) {
     RbfLevel averaged;
     AverageByVoxel(cloud.positions, keep_normals ? cloud.normals : Points3(0, 3),
@@ -142,13 +140,12 @@ ReconstructResult ReconstructSurface(const PointCloud& cloud, const ReconstructO
     working.positions = std::move(averaged.positions);
     working.normals = std::move(averaged.normals);
     counts = std::move(averaged.counts);
-    tree = std::make_unique<KdTree3>(working.positions);  // the level's tree refers to the moved matrix
   } else {
     working.positions = cloud.positions;
     if (keep_normals) working.normals = cloud.normals;
     counts = Eigen::VectorXd::Ones(cloud.size());
-    tree = std::make_unique<KdTree3>(working.positions);
   }
+  const KdTree3 tree(working.positions);  // refers to working.positions, which stays unchanged from here
   result.working_points = working.size();
 
   // 4. Oriented normals: given, toward the scanner, or by propagation (Hoppe et al. 1992).
@@ -156,7 +153,7 @@ ReconstructResult ReconstructSurface(const PointCloud& cloud, const ReconstructO
   no.neighbours = options.normal_neighbours;
   no.recompute = options.recompute_normals;
   no.viewpoint = options.viewpoint;
-  const SurfaceNormalResult normals = SurfaceNormals(working, *tree, no, what);
+  const SurfaceNormalResult normals = SurfaceNormals(working, tree, no, what);
   result.normals_source = normals.source;
   std::vector<Eigen::Index> usable;
   usable.reserve(std::size_t(normals.usable));
@@ -199,7 +196,7 @@ ReconstructResult ReconstructSurface(const PointCloud& cloud, const ReconstructO
   TrimOptions to;
   to.margin = options.margin > 0.0 ? options.margin : detail;
   to.max_hole_size = options.fill_holes;
-  result.trim = TrimToData(*tree, &mc.mesh, to);
+  result.trim = TrimToData(tree, &mc.mesh, to);
   result.mesh = std::move(mc.mesh);
   if (result.mesh.num_faces() == 0) {
     ThrowFailure("reconstruct: no surface was found near the data (normals inconsistent?)", what);
