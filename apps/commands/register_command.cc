@@ -1,15 +1,11 @@
 // pectus register: bring scans into one frame. A pair (moving to fixed), or a whole cohort (every scan to
 // a reference, or groupwise by generalised Procrustes): landmarks for the coarse step, ICP for the fine.
 #include <algorithm>
-#include <cctype>
-#include <cmath>
-#include <cstdio>
-#include <exception>
 #include <filesystem>
-#include <map>
 #include <optional>
 
 #include "apps/command.h"
+#include "apps/commands/register_io.h"
 #include "registration/cohort.h"
 #include "registration/pair_registration.h"
 #include "shape/core/error.h"
@@ -21,50 +17,6 @@
 namespace pectus::cli {
 namespace {
 namespace fs = std::filesystem;
-
-nlohmann::json IcpJson(const IcpResult& r) {
-  nlohmann::json levels = nlohmann::json::array();
-  for (const IcpLevelReport& l : r.levels) {
-    levels.push_back({{"voxel_size_mm", l.voxel_size_mm},
-                      {"max_distance_mm", l.max_distance_mm},
-                      {"source_points", l.source_points},
-                      {"iterations", l.iterations},
-                      {"converged", l.converged},
-                      {"rms_mm", l.rms_mm}});
-  }
-  return {{"rms_mm", r.rms_mm},
-          {"inlier_fraction", r.inlier_fraction},
-          {"inliers", r.inliers},
-          {"iterations", r.iterations},
-          {"converged", r.converged},
-          {"success", r.success},
-          {"conditioning", r.conditioning},
-          {"seconds", r.seconds},
-          {"levels", levels},
-          {"message", r.message}};
-}
-
-nlohmann::json LandmarkJson(const LandmarkAlignmentResult& r) {
-  nlohmann::json residuals = nlohmann::json::object();
-  for (std::size_t i = 0; i < r.labels.size(); ++i)
-    residuals[r.labels[i]] = r.residuals_mm(static_cast<Eigen::Index>(i));
-  return {{"labels", r.labels},
-          {"rms_mm", r.rms_mm},
-          {"residuals_mm", residuals},
-          {"unmatched", r.unmatched},
-          {"transform", TransformToJson(r.T_target_source)}};
-}
-
-// The landmark file beside a scan in a cohort folder: STEM.mrk.json, STEM.fcsv, STEM.csv or STEM.json.
-std::optional<fs::path> LandmarksBeside(const fs::path& scan) {
-  const fs::path dir = scan.parent_path();
-  const std::string stem = scan.stem().string();
-  for (const char* ext : {".mrk.json", ".fcsv", ".csv", ".json"}) {
-    const fs::path p = dir / (stem + ext);
-    if (fs::is_regular_file(p)) return p;
-  }
-  return std::nullopt;
-}
 
 class RegisterCommand : public Command {
  public:
@@ -232,16 +184,7 @@ class RegisterCommand : public Command {
 
     auto t = report.Stage("write");
     if (!transform_.empty()) {
-      nlohmann::json extra = {
-          {"source", moving_}, {"target", fixed_}, {"success", true}, {"message", r.message}};
-      if (r.icp) {
-        extra["rms_mm"] = r.icp->rms_mm;
-        extra["inlier_fraction"] = r.icp->inlier_fraction;
-        extra["iterations"] = r.icp->iterations;
-        extra["converged"] = r.icp->converged;
-      }
-      if (r.landmarks) extra["landmark_rms_mm"] = r.landmarks->rms_mm;
-      WriteTransformJson(staged_transform, r.T_target_source, extra);
+      WriteTransformJson(staged_transform, r.T_target_source, PairTransformExtra(moving_, fixed_, r));
     }
     if (!output_.empty()) {
       TriangleMesh mesh = ReadMesh(moving_, read_options_);  // keeps faces if the moving scan is a mesh
@@ -258,15 +201,7 @@ class RegisterCommand : public Command {
           "scans");
     }
     if (!fs::is_directory(cohort_)) ThrowBadInput(cohort_, "is not a folder");
-    std::vector<fs::path> files;
-    for (const auto& entry : fs::directory_iterator(cohort_)) {
-      if (!entry.is_regular_file()) continue;
-      std::string ext = entry.path().extension().string();
-      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-      if (ext == ".ply" || ext == ".obj" || ext == ".stl" || ext == ".pcd" || ext == ".xyz")
-        files.push_back(entry.path());
-    }
-    std::sort(files.begin(), files.end());
+    const std::vector<fs::path> files = CohortScanFiles(cohort_);
     if (files.size() < 2)
       ThrowBadInput(cohort_, "holds " + std::to_string(files.size()) + " scans; a cohort needs two or more");
     cohort_files_ = files;
@@ -292,25 +227,10 @@ class RegisterCommand : public Command {
     }
     const fs::path staged_summary = StageOutput(context, *this, out / "summary.json");
 
-    std::vector<CohortScan> scans(files.size());
+    std::vector<CohortScan> scans;
     {
       auto t = context->report.Stage("read");
-      Progress progress("reading scans", static_cast<std::int64_t>(files.size()));
-      std::exception_ptr failure;
-#pragma omp parallel for schedule(dynamic)
-      for (std::size_t i = 0; i < files.size(); ++i) {
-        try {
-          scans[i].name = files[i].stem().string();
-          scans[i].cloud = ReadPointCloud(files[i], read_options_);
-          if (const auto lm = LandmarksBeside(files[i]))
-            scans[i].landmarks = ReadLandmarks(*lm, landmark_options_);
-        } catch (...) {
-#pragma omp critical
-          failure = std::current_exception();
-        }
-        progress.Advance();
-      }
-      if (failure) std::rethrow_exception(failure);
+      scans = ReadCohortScans(files, read_options_, landmark_options_);
     }
     CohortResult r;
     {
@@ -318,34 +238,8 @@ class RegisterCommand : public Command {
       r = AlignCohort(scans, co);
     }
 
-    nlohmann::json list = nlohmann::json::array();
     std::vector<std::string> failed;
-    for (std::size_t i = 0; i < files.size(); ++i) {
-      list.push_back({{"name", scans[i].name},
-                      {"file", files[i].string()},
-                      {"landmarks", scans[i].landmarks.has_value()},
-                      {"success", static_cast<bool>(r.success[i])},
-                      {"rms_mm", r.rms_mm[i]},
-                      {"inlier_fraction", r.inlier_fraction[i]},
-                      {"message", r.messages[i]},
-                      {"transform", TransformToJson(r.T_frame_scan[i])}});
-      if (!r.success[i]) failed.push_back(scans[i].name + " (" + r.messages[i] + ")");
-    }
-    nlohmann::json summary = {{"mode", groupwise_ ? "groupwise" : "to-reference"},
-                              {"reference", scans[static_cast<std::size_t>(co.reference)].name},
-                              {"frame", "the reference scan's frame"},
-                              {"scans", list},
-                              {"all_succeeded", failed.empty()},
-                              {"failed", failed}};
-    if (groupwise_) {
-      summary["iterations"] = r.iterations;
-      summary["converged"] = r.converged;
-      if (r.procrustes) {
-        summary["landmark_procrustes"] = {{"iterations", r.procrustes->iterations},
-                                          {"rms_mm", r.procrustes->rms_mm},
-                                          {"skipped_labels", r.procrustes->skipped}};
-      }
-    }
+    const nlohmann::json summary = CohortSummary(files, scans, r, co, &failed);
     context->report["cohort"] = summary;
     if (!failed.empty()) {
       std::string text;
