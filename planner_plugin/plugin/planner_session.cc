@@ -61,15 +61,10 @@ PatientMeasurements MeasurementsFrom(const PectusPlannerPatient& patient) {
   const void* end = std::memchr(patient.id, '\0', sizeof(patient.id));
   if (end == nullptr) ThrowBadInput("patient", "the patient id is not NUL-terminated within 64 bytes");
   m.patient = patient.id;
-  m.magnification = patient.magnification;
-  m.width_mm = patient.width_mm;
-  m.depth_mm = patient.depth_mm;
-  m.sternal_length_mm = patient.sternal_length_mm;
+  CopyCtMeasurements(patient, &m);
   m.first_sternum_slice = patient.first_sternum_slice;
   m.last_sternum_slice = patient.last_sternum_slice;
   m.slice_spacing_mm = patient.slice_spacing_mm;
-  m.depression_mm = patient.depression_mm;
-  m.torsion_deg = patient.torsion_deg;
   return m;
 }
 
@@ -78,15 +73,10 @@ PectusPlannerPatient PatientFrom(const PatientMeasurements& m, double ct_haller_
   if (m.patient.size() >= sizeof(p.id))
     ThrowBadInput("patient table", "patient id '" + m.patient + "' is too long");
   std::memcpy(p.id, m.patient.c_str(), m.patient.size() + 1);
-  p.magnification = m.magnification;
-  p.width_mm = m.width_mm;
-  p.depth_mm = m.depth_mm;
-  p.sternal_length_mm = m.sternal_length_mm;
+  CopyCtMeasurements(m, &p);
   p.first_sternum_slice = m.first_sternum_slice;
   p.last_sternum_slice = m.last_sternum_slice;
   p.slice_spacing_mm = m.slice_spacing_mm;
-  p.depression_mm = m.depression_mm;
-  p.torsion_deg = m.torsion_deg;
   p.ct_haller_index = ct_haller_index;
   return p;
 }

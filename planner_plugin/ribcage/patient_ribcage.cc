@@ -49,12 +49,7 @@ void ThrowIfFolded(const GenericRibcage& generic, const Points3& nodes, const Pa
 PatientMeasurements MeasurementsOf(const PatientTableRow& row) {
   PatientMeasurements m;
   m.patient = std::to_string(row.patient);
-  m.magnification = row.magnification;
-  m.width_mm = row.width_mm;
-  m.depth_mm = row.depth_mm;
-  m.sternal_length_mm = row.sternal_length_mm;
-  m.depression_mm = row.depression_mm;
-  m.torsion_deg = row.torsion_deg;
+  CopyCtMeasurements(row, &m);
   return m;
 }
 

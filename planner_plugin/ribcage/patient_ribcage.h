@@ -42,6 +42,19 @@ struct PatientMeasurements {
   double SternalLength() const;
 };
 
+/// Copies the six CT measurements that a patient table row (PatientTableRow), the plugin's C patient
+/// (PectusPlannerPatient) and PatientMeasurements name alike, from `from` to `to`: the magnification,
+/// the width, depth, sternal length and depression (image mm) and the torsion (degrees).
+template <class From, class To>
+void CopyCtMeasurements(const From& from, To* to) {
+  to->magnification = from.magnification;
+  to->width_mm = from.width_mm;
+  to->depth_mm = from.depth_mm;
+  to->sternal_length_mm = from.sternal_length_mm;
+  to->depression_mm = from.depression_mm;
+  to->torsion_deg = from.torsion_deg;
+}
+
 /// The measurements of a row of the patient table (read by pectus::ReadPatientTable, which has already
 /// checked the same ranges as PatientMeasurements::IsValid), named by the patient's number.
 PatientMeasurements MeasurementsOf(const PatientTableRow& row);
