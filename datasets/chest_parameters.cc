@@ -3,10 +3,13 @@
 #include <cmath>
 #include <cstdio>
 
+#include "shape/core/enum_names.h"
 #include "shape/core/error.h"
 
 namespace pectus::datasets {
 namespace {
+
+constexpr EnumNames<PectusType, 2> kTypeNames{{{PectusType::kSaucer, "saucer"}, {PectusType::kCup, "cup"}}};
 
 bool Fail(std::string* why, const std::string& message) {
   if (why) *why = message;
@@ -52,12 +55,13 @@ nlohmann::json MatrixJson(const Eigen::Matrix4d& M) {
 }  // namespace
 
 PectusType ParsePectusType(const std::string& text) {
-  if (text == "saucer") return PectusType::kSaucer;
-  if (text == "cup") return PectusType::kCup;
-  ThrowUsage("unknown pectus type '" + text + "' (expected saucer or cup)");
+  return ParseEnum(kTypeNames, text, [&] {
+    return "unknown pectus type '" + text + "' (expected " + ListEnumNames(kTypeNames, "", ", ", " or ") +
+           ")";
+  });
 }
 
-std::string ToString(PectusType type) { return type == PectusType::kCup ? "cup" : "saucer"; }
+std::string ToString(PectusType type) { return EnumToString(kTypeNames, type, "saucer"); }
 
 bool PectusParameters::IsValid(std::string* why) const {
   if (!InRange(depth_mm, 0.0, 60.0)) return Fail(why, "pectus depth must be within [0, 60] mm");

@@ -4,19 +4,23 @@
 #include <sstream>
 
 #include "registration/icp.h"
+#include "shape/core/enum_names.h"
 #include "shape/core/error.h"
 
 namespace pectus {
 
+namespace {
+constexpr EnumNames<IcpMethod, 2> kMethodNames{
+    {{IcpMethod::kPointToPlane, "point-to-plane"}, {IcpMethod::kSymmetric, "symmetric"}}};
+}  // namespace
+
 IcpMethod ParseIcpMethod(const std::string& name) {
-  if (name == "point-to-plane") return IcpMethod::kPointToPlane;
-  if (name == "symmetric") return IcpMethod::kSymmetric;
-  ThrowUsage("unknown ICP method '" + name + "' (point-to-plane, symmetric)");
+  return ParseEnum(kMethodNames, name, [&] {
+    return "unknown ICP method '" + name + "' (" + ListEnumNames(kMethodNames, "", ", ", ", ") + ")";
+  });
 }
 
-std::string ToString(IcpMethod method) {
-  return method == IcpMethod::kSymmetric ? "symmetric" : "point-to-plane";
-}
+std::string ToString(IcpMethod method) { return EnumToString(kMethodNames, method, "point-to-plane"); }
 
 bool IcpOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& text) {

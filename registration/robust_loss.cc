@@ -3,27 +3,25 @@
 #include <algorithm>
 #include <cmath>
 
+#include "shape/core/enum_names.h"
 #include "shape/core/error.h"
 
 namespace pectus {
 
+namespace {
+constexpr EnumNames<RobustLoss, 4> kLossNames{{{RobustLoss::kNone, "none"},
+                                               {RobustLoss::kHuber, "huber"},
+                                               {RobustLoss::kCauchy, "cauchy"},
+                                               {RobustLoss::kTukey, "tukey"}}};
+}  // namespace
+
 RobustLoss ParseRobustLoss(const std::string& name) {
-  if (name == "none") return RobustLoss::kNone;
-  if (name == "huber") return RobustLoss::kHuber;
-  if (name == "cauchy") return RobustLoss::kCauchy;
-  if (name == "tukey") return RobustLoss::kTukey;
-  ThrowUsage("unknown robust loss '" + name + "' (none, huber, cauchy, tukey)");
+  return ParseEnum(kLossNames, name, [&] {
+    return "unknown robust loss '" + name + "' (" + ListEnumNames(kLossNames, "", ", ", ", ") + ")";
+  });
 }
 
-std::string ToString(RobustLoss loss) {
-  switch (loss) {
-    case RobustLoss::kNone: return "none";
-    case RobustLoss::kHuber: return "huber";
-    case RobustLoss::kCauchy: return "cauchy";
-    case RobustLoss::kTukey: return "tukey";
-  }
-  return "?";
-}
+std::string ToString(RobustLoss loss) { return EnumToString(kLossNames, loss); }
 
 double RobustTuningConstant(RobustLoss loss) {
   switch (loss) {

@@ -2,27 +2,26 @@
 
 #include <cstdio>
 
+#include "shape/core/enum_names.h"
 #include "shape/core/error.h"
 
 namespace pectus {
 
+namespace {
+constexpr EnumNames<LengthUnit, 4> kUnitNames{{{LengthUnit::kMillimetre, "mm"},
+                                               {LengthUnit::kCentimetre, "cm"},
+                                               {LengthUnit::kMetre, "m"},
+                                               {LengthUnit::kInch, "in"}}};
+}  // namespace
+
 LengthUnit ParseLengthUnit(const std::string& text) {
-  if (text == "mm") return LengthUnit::kMillimetre;
-  if (text == "cm") return LengthUnit::kCentimetre;
-  if (text == "m") return LengthUnit::kMetre;
-  if (text == "in") return LengthUnit::kInch;
-  ThrowUsage("unknown length unit '" + text + "' (expected mm, cm, m or in)");
+  return ParseEnum(kUnitNames, text, [&] {
+    return "unknown length unit '" + text + "' (expected " + ListEnumNames(kUnitNames, "", ", ", " or ") +
+           ")";
+  });
 }
 
-std::string ToString(LengthUnit unit) {
-  switch (unit) {
-    case LengthUnit::kMillimetre: return "mm";
-    case LengthUnit::kCentimetre: return "cm";
-    case LengthUnit::kMetre: return "m";
-    case LengthUnit::kInch: return "in";
-  }
-  return "mm";
-}
+std::string ToString(LengthUnit unit) { return EnumToString(kUnitNames, unit, "mm"); }
 
 double MillimetresPer(LengthUnit unit) {
   switch (unit) {
@@ -35,8 +34,8 @@ double MillimetresPer(LengthUnit unit) {
 }
 
 namespace {
-constexpr double kSmallestMm = 5.0;     // a scanned object smaller than this is implausible
-constexpr double kLargestMm = 5000.0;   // and so is one larger than this
+constexpr double kSmallestMm = 5.0;    // a scanned object smaller than this is implausible
+constexpr double kLargestMm = 5000.0;  // and so is one larger than this
 }  // namespace
 
 std::optional<LengthUnit> GuessLengthUnit(const Bounds3& bounds) {
@@ -57,9 +56,11 @@ std::string UnitsWarning(const std::string& file, const Bounds3& bounds, LengthU
   if (mm >= kSmallestMm && mm <= kLargestMm) return {};
   char size[64];
   std::snprintf(size, sizeof size, "%.4g mm", mm);
-  std::string msg = file + ": read as " + ToString(unit) + ", the object is " + size + " across, which looks wrong";
+  std::string msg =
+      file + ": read as " + ToString(unit) + ", the object is " + size + " across, which looks wrong";
   if (auto guess = GuessLengthUnit(bounds); guess && *guess != unit) {
-    msg += "; its coordinates look like " + ToString(*guess) + " (pass --input-units " + ToString(*guess) + ")";
+    msg +=
+        "; its coordinates look like " + ToString(*guess) + " (pass --input-units " + ToString(*guess) + ")";
   }
   return msg;
 }

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "registration/kdtree.h"
+#include "shape/core/enum_names.h"
 #include "shape/core/error.h"
 
 namespace pectus {
@@ -80,15 +81,17 @@ double Percentile(std::vector<double>& sorted, double q) {
   return sorted[lo] + (pos - static_cast<double>(lo)) * (sorted[hi] - sorted[lo]);
 }
 
+constexpr EnumNames<DistanceKind, 2> kKindNames{
+    {{DistanceKind::kNearestPoint, "nearest"}, {DistanceKind::kSignedSurface, "signed"}}};
 }  // namespace
 
 DistanceKind ParseDistanceKind(const std::string& text) {
-  if (text == "nearest") return DistanceKind::kNearestPoint;
-  if (text == "signed") return DistanceKind::kSignedSurface;
-  ThrowUsage("distance kind '" + text + "' is not 'nearest' or 'signed'");
+  return ParseEnum(kKindNames, text, [&] {
+    return "distance kind '" + text + "' is not " + ListEnumNames(kKindNames, "'", ", ", " or ");
+  });
 }
 
-std::string ToString(DistanceKind kind) { return kind == DistanceKind::kNearestPoint ? "nearest" : "signed"; }
+std::string ToString(DistanceKind kind) { return EnumToString(kKindNames, kind, "signed"); }
 
 nlohmann::json DistanceStats::ToJson() const {
   return {{"count", count},    {"min_mm", min},           {"max_mm", max},    {"max_abs_mm", max_abs},
