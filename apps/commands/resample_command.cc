@@ -68,6 +68,12 @@ class ResampleCommand : public Command {
     app->add_option("--inpaint-stretch", options_.holes.inpainting.stretch,
                     "2D fill: lateral stretch (> 1 follows the sternal direction more)")
         ->default_val(options_.holes.inpainting.stretch);
+    app->add_option("--inpaint-band", options_.holes.inpainting.stretch_band_mm,
+                    "2D fill: the stretch applies within this distance of the sternal line, mm")
+        ->default_val(options_.holes.inpainting.stretch_band_mm);
+    app->add_flag("!--roi-grid-only", options_.extend_grid,
+                  "Sample and fill on the ROI's grid only (default: grown by the fit margin, so holes "
+                  "across the ROI's border are filled in 2D where the data go on)");
     app->add_option("--fit-margin", options_.fit_margin_mm, "Profile data used beyond the ROI, mm")
         ->default_val(25.0);
     app->add_option("--notch-label", roi_.notch_label, "Label of the sternal notch")
@@ -137,7 +143,9 @@ class ResampleCommand : public Command {
                               {"sections", ToString(options_.directions)},
                               {"hole_fill", ToString(options_.holes.mode)},
                               {"inpaint_order", options_.holes.inpainting.order},
-                              {"inpaint_stretch", options_.holes.inpainting.stretch}};
+                              {"inpaint_stretch", options_.holes.inpainting.stretch},
+                              {"inpaint_band_mm", options_.holes.inpainting.stretch_band_mm},
+                              {"extend_grid", options_.extend_grid}};
 
     // 3. Resample (or validate).
     CrossSectionResult result;

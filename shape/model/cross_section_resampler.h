@@ -46,6 +46,11 @@ struct CrossSectionOptions {
   /// the vertices around them (biharmonic inpainting of the depths), not by 1D profiles that bridge the
   /// hole in one direction only.
   GridHoleFillOptions holes;
+  /// True (default): the profiles are sampled and the holes filled on the ROI grid grown by whole
+  /// spacings up to `fit_margin_mm` on each side, then cut back to the ROI; a hole across the ROI's border
+  /// whose data go on beyond it is then inside that grid and is filled in 2D like a hole inside the ROI.
+  /// False: the grid covers the ROI only, and holes across its border keep the profiles' estimate.
+  bool extend_grid = true;
 
   /// False, with the reason, for a value out of range.
   bool IsValid(std::string* why) const;

@@ -2,9 +2,11 @@
 
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 
+#include "shape/core/enum_names.h"
 #include "shape/core/error.h"
 
 namespace pectus {
@@ -23,6 +25,12 @@ std::vector<double> Difference(int n) {
 
 }  // namespace
 
+double GridInpaintingOptions::StretchAt(double u_mm) const {
+  if (!std::isfinite(stretch_band_mm)) return stretch;
+  const double beyond = std::clamp(std::abs(u_mm) / stretch_band_mm - 1.0, 0.0, 1.0);
+  return stretch + (1.0 - stretch) * beyond;
+}
+
 bool GridInpaintingOptions::IsValid(std::string* why) const {
   if (order != 2 && order != 3) {
     if (why != nullptr) *why = "grid inpainting order must be 2 or 3";
@@ -32,12 +40,16 @@ bool GridInpaintingOptions::IsValid(std::string* why) const {
     if (why != nullptr) *why = "grid inpainting stretch must be > 0";
     return false;
   }
+  if (!(stretch_band_mm > 0.0)) {
+    if (why != nullptr) *why = "grid inpainting stretch band must be > 0 mm";
+    return false;
+  }
   return true;
 }
 
 Eigen::VectorXd InpaintGrid(const GridSize& grid, double spacing_u_mm, double spacing_v_mm,
                             const Eigen::VectorXd& values, const std::vector<bool>& known,
-                            const GridInpaintingOptions& options) {
+                            const GridInpaintingOptions& options, const Eigen::VectorXd& u_mm) {
   std::string why;
   if (!grid.IsValid(&why) || !options.IsValid(&why)) ThrowUsage(why);
   const Eigen::Index m = grid.num_vertices();
@@ -45,6 +57,8 @@ Eigen::VectorXd InpaintGrid(const GridSize& grid, double spacing_u_mm, double sp
     ThrowUsage("grid inpainting: values and mask must have one entry per grid vertex");
   if (!(spacing_u_mm > 0.0) || !(spacing_v_mm > 0.0))
     ThrowUsage("grid inpainting: grid spacings must be > 0 mm");
+  if (u_mm.size() != 0 && u_mm.size() != grid.lateral)
+    ThrowUsage("grid inpainting: one lateral position per grid column expected");
 
   // Unknown vertices are numbered 0..n-1.
   std::vector<int> unknown_index(static_cast<std::size_t>(m), -1);
@@ -58,7 +72,7 @@ Eigen::VectorXd InpaintGrid(const GridSize& grid, double spacing_u_mm, double sp
 
   // Normal equations of E restricted to the unknowns: Q_uu h_u = -Q_uk h_k.
   const int q = options.order;
-  const double du = options.stretch * spacing_u_mm, dv = spacing_v_mm;
+  const double dv = spacing_v_mm;
   std::vector<Eigen::Triplet<double>> triplets;
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
   std::vector<std::pair<Eigen::Index, double>> stencil;
@@ -67,9 +81,12 @@ Eigen::VectorXd InpaintGrid(const GridSize& grid, double spacing_u_mm, double sp
     const int b = q - a;
     if (a >= grid.lateral || b >= grid.sternal) continue;
     const std::vector<double> ca = Difference(a), cb = Difference(b);
-    const double scale = 1.0 / (std::pow(du, a) * std::pow(dv, b));
     for (int i = 0; i + b < grid.sternal; ++i) {
       for (int j = 0; j + a < grid.lateral; ++j) {
+        // The stretch at the stencil's centre column.
+        const double stretch =
+            u_mm.size() == 0 ? options.stretch : options.StretchAt(0.5 * (u_mm[j] + u_mm[j + a]));
+        const double scale = 1.0 / (std::pow(stretch * spacing_u_mm, a) * std::pow(dv, b));
         stencil.clear();
         bool touches_unknown = false;
         for (int y = 0; y <= b; ++y) {
@@ -183,21 +200,17 @@ void ExtrapolateAlongGridLines(const GridSize& grid, const Eigen::VectorXd& u, c
   }
 }
 
+constexpr EnumNames<GridHoleFill, 3> kGridHoleFillNames{{{GridHoleFill::kProfiles, "profiles"},
+                                                         {GridHoleFill::kInpaint, "inpaint"},
+                                                         {GridHoleFill::kInpaintInside, "inpaint-inside"}}};
+
 GridHoleFill ParseGridHoleFill(const std::string& text) {
-  if (text == "profiles") return GridHoleFill::kProfiles;
-  if (text == "inpaint") return GridHoleFill::kInpaint;
-  if (text == "inpaint-inside") return GridHoleFill::kInpaintInside;
-  ThrowUsage("hole fill '" + text + "' is not 'profiles', 'inpaint' or 'inpaint-inside'");
+  return ParseEnum(kGridHoleFillNames, text, [&] {
+    return "hole fill '" + text + "' is not " + ListEnumNames(kGridHoleFillNames, "'", ", ", " or ");
+  });
 }
 
-std::string ToString(GridHoleFill fill) {
-  switch (fill) {
-    case GridHoleFill::kProfiles: return "profiles";
-    case GridHoleFill::kInpaint: return "inpaint";
-    case GridHoleFill::kInpaintInside: return "inpaint-inside";
-  }
-  return "inpaint";
-}
+std::string ToString(GridHoleFill fill) { return EnumToString(kGridHoleFillNames, fill, "inpaint"); }
 
 bool GridHoleFillOptions::IsValid(std::string* why) const {
   if (!(gap_mm >= 0.0) || !std::isfinite(gap_mm)) {
@@ -209,9 +222,11 @@ bool GridHoleFillOptions::IsValid(std::string* why) const {
 
 Eigen::Index FillGridHoles(const GridSize& grid, double spacing_u_mm, double spacing_v_mm,
                            const Eigen::VectorXd& gap, const GridHoleFillOptions& options,
-                           Eigen::VectorXd* depth) {
-  if (options.mode == GridHoleFill::kProfiles) return 0;
+                           Eigen::VectorXd* depth, std::vector<bool>* filled_mask,
+                           const Eigen::VectorXd& u_mm) {
   const Eigen::Index m = grid.num_vertices();
+  if (filled_mask != nullptr) filled_mask->assign(static_cast<std::size_t>(m), false);
+  if (options.mode == GridHoleFill::kProfiles) return 0;
   std::vector<bool> hole(static_cast<std::size_t>(m));
   for (Eigen::Index k = 0; k < m; ++k) hole[k] = !(gap[k] <= options.gap_mm);
   if (options.mode == GridHoleFill::kInpaintInside) {
@@ -226,7 +241,8 @@ Eigen::Index FillGridHoles(const GridSize& grid, double spacing_u_mm, double spa
   for (Eigen::Index k = 0; k < m; ++k) known[k] = !hole[k], filled += hole[k] ? 1 : 0;
   const int q = options.inpainting.order;
   if (filled == 0 || m - filled < 4 * q * q) return 0;
-  *depth = InpaintGrid(grid, spacing_u_mm, spacing_v_mm, *depth, known, options.inpainting);
+  *depth = InpaintGrid(grid, spacing_u_mm, spacing_v_mm, *depth, known, options.inpainting, u_mm);
+  if (filled_mask != nullptr) *filled_mask = hole;
   return filled;
 }
 

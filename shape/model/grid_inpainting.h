@@ -8,6 +8,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -26,7 +27,16 @@ struct GridInpaintingOptions {
   /// the hole is carried across it along v), 1 is isotropic. 3 is measured best on the virtual scanner's
   /// chests (docs/benchmarks/model.md); the resampler's default.
   double stretch = 3.0;
+  /// Half-width (> 0, mm) of the band about the sternal line u = 0 where `stretch` applies in full (about
+  /// the sternum's half-width); beyond it the stretch falls linearly to 1 (isotropic) over the same
+  /// distance, since the lateral chest wall has no groove along the sternum to carry and bends as much
+  /// across as along (border holes: 0.31 mm isotropic, 0.52 mm stretched; docs/benchmarks/model.md).
+  /// Infinity: `stretch` everywhere. Takes effect only when the column positions are given (InpaintGrid's
+  /// `u_mm`; the resampler gives them).
+  double stretch_band_mm = 15.0;
 
+  /// The stretch at lateral position `u_mm`.
+  double StretchAt(double u_mm) const;
   /// False, with the reason, for a value out of range.
   bool IsValid(std::string* why) const;
 };
@@ -35,10 +45,12 @@ struct GridInpaintingOptions {
 /// where `known` is false replaced by the smoothest fill given the known ones. `spacing_u_mm` and
 /// `spacing_v_mm` are the grid spacings across (u) and along (v) the chest (> 0). Throws Error(kUsage) for
 /// invalid options or sizes, Error(kFailure) if the known vertices do not determine the fill (none known,
-/// or too few for the order).
+/// or too few for the order). `u_mm`: the columns' lateral positions (mm), for
+/// GridInpaintingOptions::stretch_band_mm; empty: `stretch` everywhere.
 Eigen::VectorXd InpaintGrid(const GridSize& grid, double spacing_u_mm, double spacing_v_mm,
                             const Eigen::VectorXd& values, const std::vector<bool>& known,
-                            const GridInpaintingOptions& options = {});
+                            const GridInpaintingOptions& options = {},
+                            const Eigen::VectorXd& u_mm = Eigen::VectorXd());
 
 /// Which grid vertices the resampler fills in 2D rather than by its section profiles.
 enum class GridHoleFill {
@@ -67,10 +79,12 @@ struct GridHoleFillOptions {
 
 /// Fills the holes of `depth` (per grid vertex, mm) where `gap` (mm, per vertex) exceeds `options.gap_mm`,
 /// as `options.mode` says. Returns the number of vertices filled (0 if fewer than 4 order^2 vertices are
-/// within the gap: too little to fill from).
+/// within the gap: too little to fill from); `filled`, if given, receives per vertex whether it was.
+/// `u_mm`: the columns' lateral positions, as for InpaintGrid.
 Eigen::Index FillGridHoles(const GridSize& grid, double spacing_u_mm, double spacing_v_mm,
                            const Eigen::VectorXd& gap, const GridHoleFillOptions& options,
-                           Eigen::VectorXd* depth);
+                           Eigen::VectorXd* depth, std::vector<bool>* filled = nullptr,
+                           const Eigen::VectorXd& u_mm = Eigen::VectorXd());
 
 /// Vertices that no fitted section passes through (a corner beyond the data in both directions): a new
 /// profile (`fit`) through the values already `known` along their grid row, then column, extrapolates

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "shape/core/enum_names.h"
 #include "shape/core/error.h"
 
 namespace pectus {
@@ -27,15 +28,17 @@ void CubicBSpline(double r, double* b) {
 
 }  // namespace
 
+constexpr EnumNames<ProfileFitKind, 2> kProfileFitNames{
+    {{ProfileFitKind::kPolynomial, "polynomial"}, {ProfileFitKind::kSmoothingSpline, "spline"}}};
+
 ProfileFitKind ParseProfileFitKind(const std::string& text) {
-  if (text == "polynomial" || text == "poly") return ProfileFitKind::kPolynomial;
-  if (text == "spline") return ProfileFitKind::kSmoothingSpline;
-  ThrowUsage("profile fit '" + text + "' is not 'polynomial' or 'spline'");
+  // "poly" is accepted as a short form of "polynomial".
+  return ParseEnum(kProfileFitNames, text == "poly" ? "polynomial" : text, [&] {
+    return "profile fit '" + text + "' is not " + ListEnumNames(kProfileFitNames, "'", ", ", " or ");
+  });
 }
 
-std::string ToString(ProfileFitKind kind) {
-  return kind == ProfileFitKind::kPolynomial ? "polynomial" : "spline";
-}
+std::string ToString(ProfileFitKind kind) { return EnumToString(kProfileFitNames, kind, "spline"); }
 
 bool ProfileFitOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& m) {

@@ -19,13 +19,15 @@ struct AnalyticChest {
   double dent_depth = 15.0;  // Gaussian depression
   double dent_sigma = 25.0;
   double dent_y = 110.0;
+  double dent_x = 0.0;        // lateral position of the depression's centre
   double groove_depth = 0.0;  // a groove along the sternum (x = 0), Gaussian across, constant along it
   double groove_sigma = 8.0;
   Similarity3 T_world_chest;  // where the chest sits in the test's "scanner" frame
 
   double f(double x, double s) const {
     return -x * x / (2.0 * radius) + slope * s -
-           dent_depth * std::exp(-(x * x + (s - dent_y) * (s - dent_y)) / (2.0 * dent_sigma * dent_sigma)) -
+           dent_depth * std::exp(-((x - dent_x) * (x - dent_x) + (s - dent_y) * (s - dent_y)) /
+                                 (2.0 * dent_sigma * dent_sigma)) -
            groove_depth * std::exp(-x * x / (2.0 * groove_sigma * groove_sigma));
   }
   /// The point at (x, s) in the world frame.

@@ -68,6 +68,25 @@ TEST(GridInpainting, NaturalBoundaryContinuesLinearlyOrWithConstantCurvature) {
   EXPECT_GT(quadratic.FillError({.order = 2, .stretch = 1.0}), 0.05);  // thin plate goes on linearly
 }
 
+TEST(GridInpainting, StretchAppliesAboutTheSternalLineOnlyWhenColumnPositionsAreGiven) {
+  const GridInpaintingOptions o{.order = 2, .stretch = 3.0, .stretch_band_mm = 15.0};
+  EXPECT_DOUBLE_EQ(o.StretchAt(0.0), 3.0);
+  EXPECT_DOUBLE_EQ(o.StretchAt(-15.0), 3.0);
+  EXPECT_DOUBLE_EQ(o.StretchAt(22.5), 2.0);
+  EXPECT_DOUBLE_EQ(o.StretchAt(-40.0), 1.0);
+  // A hole far from the sternal line (u from 60 mm on) is filled isotropically; without the column
+  // positions the stretch applies everywhere.
+  const Field f([](double u, double v) { return std::sin(u / 20.0) * std::cos(v / 25.0) * 10.0; }, 15, 20, 6);
+  Eigen::VectorXd u(f.grid.lateral);
+  for (int j = 0; j < f.grid.lateral; ++j) u[j] = 60.0 + kDu * j;
+  const Eigen::VectorXd banded = InpaintGrid(f.grid, kDu, kDv, f.values, f.known, o, u);
+  const Eigen::VectorXd isotropic = InpaintGrid(f.grid, kDu, kDv, f.values, f.known, {.stretch = 1.0});
+  const Eigen::VectorXd stretched = InpaintGrid(f.grid, kDu, kDv, f.values, f.known, o);
+  EXPECT_LT((banded - isotropic).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_GT((stretched - isotropic).cwiseAbs().maxCoeff(), 1e-3);
+  EXPECT_THROW(InpaintGrid(f.grid, kDu, kDv, f.values, f.known, o, u.head(3)), Error);
+}
+
 TEST(GridInpainting, ComponentsAndTheirBorderContact) {
   const GridSize grid{6, 5};
   std::vector<bool> mask(30, false);
