@@ -4,6 +4,7 @@
 //   model_benchmark holefill COHORT OUT [PNG]    hole filling and the profile-fit choice, on the surfaces
 //                                                that `pectus pipeline COHORT --out OUT` made
 //   model_benchmark cohort COHORT OUT            the pipeline's mean and modes against the generator's truth
+//                                                and a Monte Carlo population of M (--population M, --pool P)
 //   model_benchmark all [WORK=/tmp/pectus_model_benchmark] [PECTUS=the pectus beside this build]
 //                                                every acceptance figure of issue 6 in one run: synth cohorts
 //                                                of 11 (seed 7) and 30 (seed 11), `pectus pipeline` on each
@@ -25,6 +26,7 @@ int main() {
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <thread>
+#include <vector>
 
 #include "model_benchmark_holefill.h"
 #include "model_benchmark_truth.h"
@@ -38,17 +40,6 @@ namespace pectus::bench {
 namespace {
 
 namespace fs = std::filesystem;
-double Now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-// CPU time of this process (user + system, all threads), seconds.
-double CpuSeconds() {
-  rusage r{};
-  getrusage(RUSAGE_SELF, &r);
-  return double(r.ru_utime.tv_sec) + 1e-6 * double(r.ru_utime.tv_usec) + double(r.ru_stime.tv_sec) +
-         1e-6 * double(r.ru_stime.tv_usec);
-}
 
 // 1. PCA of N subjects of the generator's population sampled on a 51 x 101 grid (15453 numbers each).
 nlohmann::json Pca(int n) {
@@ -127,7 +118,8 @@ std::string FirstLine(const std::string& path, const std::string& key = "") {
 }
 
 // 4. Everything the issue asks for, in one run.
-nlohmann::json All(const fs::path& work, const std::string& pectus) {
+nlohmann::json All(const fs::path& work, const std::string& pectus,
+                   const PopulationReferenceOptions& reference) {
   nlohmann::json j;
   j["machine"] = {{"nproc", std::thread::hardware_concurrency()},
                   {"cpu", FirstLine("/proc/cpuinfo", "model name")},
@@ -180,7 +172,7 @@ nlohmann::json All(const fs::path& work, const std::string& pectus) {
   const Timed t30 = Run(p30);
   std::ifstream r30(work / "o30/pipeline.json");
   j["pipeline_30"] = {{"command", p30}, {"wall_s", t30.wall_s}, {"cpu_s", t30.cpu_s}};
-  j["cohort_30"] = CompareWithTruth(work / "c30", work / "o30", nlohmann::json::parse(r30));
+  j["cohort_30"] = CompareWithTruth(work / "c30", work / "o30", nlohmann::json::parse(r30), reference);
   j["pca_1000"] = Pca(1000);
   j["machine"]["loadavg_at_end"] = FirstLine("/proc/loadavg");
   return j;
@@ -192,6 +184,18 @@ nlohmann::json All(const fs::path& work, const std::string& pectus) {
 int main(int argc, char** argv) {
   using namespace pectus::bench;
   try {
+    // --population M [--pool P]: the Monte Carlo reference's sizes (model_benchmark_population.h).
+    PopulationReferenceOptions reference;
+    std::vector<char*> args;
+    for (int i = 0; i < argc; ++i) {
+      const std::string a = argv[i];
+      if ((a == "--population" || a == "--pool") && i + 1 < argc)
+        (a == "--pool" ? reference.pool : reference.subjects) = std::atoi(argv[++i]);
+      else
+        args.push_back(argv[i]);
+    }
+    argc = static_cast<int>(args.size());
+    argv = args.data();
     const std::string what = argc > 1 ? argv[1] : "pca";
     nlohmann::json result;
     if (what == "pca") {
@@ -205,13 +209,15 @@ int main(int argc, char** argv) {
                                      : (fs::canonical("/proc/self/exe").parent_path() / "../../apps/pectus")
                                            .lexically_normal()
                                            .string();
-      result = All(argc > 2 ? argv[2] : "/tmp/pectus_model_benchmark", pectus);
+      result = All(argc > 2 ? argv[2] : "/tmp/pectus_model_benchmark", pectus, reference);
     } else if (what == "cohort" && argc >= 4) {
       std::ifstream in(fs::path(argv[3]) / "pipeline.json");
-      result = CompareWithTruth(argv[2], argv[3], nlohmann::json::parse(in));
+      result = CompareWithTruth(argv[2], argv[3], nlohmann::json::parse(in), reference);
     } else {
       std::cerr << "usage: model_benchmark pca [N] | holefill COHORT OUT [PNG] | cohort COHORT OUT | all "
                    "[WORK] [PECTUS]\n"
+                   "  [--population M=2000] [--pool P=1000]: the population reference's subjects, and the\n"
+                   "  independent pool from which cohorts of N are drawn for the sampling spread (0: none)\n"
                    "  (OUT is the folder of `pectus pipeline COHORT --out OUT --report OUT/pipeline.json`)\n";
       return 2;
     }
