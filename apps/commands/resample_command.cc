@@ -61,7 +61,7 @@ class ResampleCommand : public Command {
         ->default_val(1e-3);
     app->add_option("--sections", sections_, "Section planes: rows, columns or both")->default_val("both");
     app->add_option("--hole-fill", hole_fill_,
-                    "Holes: inpaint (2D), inpaint-inside (2D inside, profiles at the border) or profiles")
+                    "Holes: inpaint (2D), inpaint-inside (2D, but profiles where the scan ends) or profiles")
         ->default_val("inpaint-inside");
     app->add_option("--inpaint-order", options_.holes.inpainting.order, "2D fill: derivative order, 2 or 3")
         ->default_val(options_.holes.inpainting.order);
