@@ -8,9 +8,9 @@
 #include "shape/core/log.h"
 #include "shape/io/landmark_io.h"
 #include "shape/io/mesh_io.h"
-#include "shape/model/cohort_pipeline.h"
+#include "shape/pipeline/cohort_pipeline.h"
 #include "shape/model/model_figures.h"
-#include "shape/model/pipeline_report.h"
+#include "shape/pipeline/pipeline_report.h"
 #include "shape/model/statismo_io.h"
 
 namespace pectus::cli {

@@ -12,7 +12,7 @@
 #include "datasets/chest_population.h"
 #include "datasets/surface_query.h"
 #include "registration/landmark_alignment.h"
-#include "shape/model/cohort_pipeline.h"
+#include "shape/pipeline/cohort_pipeline.h"
 #include "shape/model/shape_grid.h"
 
 namespace pectus::bench {

@@ -33,9 +33,9 @@
 
 #include "shape/core/error.h"
 #include "shape/io/mesh_io.h"
-#include "shape/mesh_check_cgal.h"
-#include "shape/reconstruct.h"
-#include "shape/surface_peers.h"
+#include "shape/surface/mesh_check_cgal.h"
+#include "shape/surface/reconstruct.h"
+#include "tests/benchmarks/peers/surface_peers.h"
 #include "tests/benchmarks/reconstruct_benchmark_data.h"
 
 using namespace pectus;

@@ -1,0 +1,338 @@
+#include "shape/pipeline/cohort_pipeline.h"
+
+#include <algorithm>
+#include <chrono>
+#include <exception>
+#include <sstream>
+
+#include "registration/landmark_alignment.h"
+#include "shape/surface/cloud_filter.h"
+#include "shape/core/error.h"
+#include "shape/io/landmark_io.h"
+#include "shape/io/mesh_io.h"
+#include "shape/model/shape_grid.h"
+
+namespace pectus {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double Since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// True if `name` is `pattern` with its one '*' standing for any text.
+bool Matches(const std::string& name, const std::string& pattern) {
+  const std::size_t star = pattern.find('*');
+  if (star == std::string::npos) return name == pattern;
+  const std::string prefix = pattern.substr(0, star), suffix = pattern.substr(star + 1);
+  return name.size() >= prefix.size() + suffix.size() && name.compare(0, prefix.size(), prefix) == 0 &&
+         name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+LandmarkSet Transformed(const LandmarkSet& set, const Similarity3& T) {
+  LandmarkSet out = set;
+  for (Landmark& l : out.items) l.position = T * l.position;
+  return out;
+}
+
+// Runs one stage of one subject: times it, and turns an exception into the subject's failure.
+template <class Fn>
+bool RunStage(SubjectOutcome* s, const std::string& stage, Fn fn) {
+  if (!s->failed_stage.empty()) return false;
+  const Clock::time_point start = Clock::now();
+  try {
+    fn();
+  } catch (const std::exception& e) {
+    s->failed_stage = stage;
+    s->error = e.what();
+  }
+  s->seconds.emplace_back(stage, Since(start));
+  return s->failed_stage.empty();
+}
+
+// Read (and crop), merge and reconstruct one subject (stages 1-3).
+void BuildSurface(const CohortSubject& in, const PipelineOptions& options, SubjectOutcome* s,
+                  std::vector<PointCloud>* sweeps) {
+  RunStage(s, "read", [&] {
+    if (in.sweeps.empty()) ThrowBadInput(in.name, "has no sweep files");
+    s->landmarks = ReadLandmarks(in.landmarks);
+    const ChestRoi roi = ComputeChestRoi(s->landmarks, options.roi, in.landmarks.string());
+    for (const fs::path& f : in.sweeps) {
+      PointCloud sweep = ReadPointCloud(f);
+      if (options.crop_margin_mm > 0.0) sweep = CropToRoi(sweep, roi, options.crop_margin_mm);
+      if (sweep.size() < options.min_sweep_points) continue;
+      sweeps->push_back(std::move(sweep));
+      s->sweep_files.push_back(f);
+    }
+    s->sweeps = static_cast<int>(sweeps->size());
+    if (sweeps->empty())
+      ThrowBadInput(in.name, "no sweep has " + std::to_string(options.min_sweep_points) +
+                                 " points within the region of interest of its landmarks");
+  });
+  SweepMergeResult merged;
+  RunStage(s, "merge", [&] {
+    merged = MergeSweeps(*sweeps, std::vector<Rigid3>(sweeps->size(), Rigid3::Identity()), options.merge);
+    s->points_in = merged.points_in;
+    s->points_merged = merged.points_out;
+    s->merge_rms_mm = merged.global_rms_after_mm;
+  });
+  sweeps->clear();
+  RunStage(s, "reconstruct", [&] {
+    ReconstructResult r = ReconstructSurface(merged.merged, options.reconstruct, in.name);
+    s->surface = std::move(r.mesh);
+    s->faces = s->surface.num_faces();
+    s->fit_accuracy_mm = r.accuracy.fitting_accuracy_mm;
+    if (s->faces == 0) ThrowFailure("the reconstruction has no triangles", in.name);
+  });
+}
+
+// Moves one subject's grid, surface, landmarks and ROI by T, and composes T into its pose.
+void MoveSubject(const Similarity3& T, SubjectOutcome* s) {
+  TransformInPlace(T, &s->grid.mesh);
+  s->grid.shape_vector = ToShapeVector(s->grid.mesh.vertices.positions);
+  ChestRoi& roi = s->grid.roi;
+  roi.origin = T * roi.origin;
+  roi.lateral = T.rotation * roi.lateral;
+  roi.sternal = T.rotation * roi.sternal;
+  roi.normal = T.rotation * roi.normal;
+  TransformInPlace(T, &s->surface);
+  s->landmarks = Transformed(s->landmarks, T);
+  s->measures.deepest_point = T * s->measures.deepest_point;
+  s->T_reference_subject = Similarity3::FromMatrix(T.Matrix() * s->T_reference_subject.Matrix(), s->name);
+}
+
+// Generalized Procrustes analysis, rigid: each grid moved onto the mean of all, `iterations` times.
+void AlignGridsToTheirMean(const std::vector<int>& good, int iterations, PipelineResult* result) {
+  for (int it = 0; it < iterations; ++it) {
+    Points3 mean = Points3::Zero(result->subjects[good[0]].grid.mesh.num_vertices(), 3);
+    for (int i : good) mean += result->subjects[i].grid.mesh.vertices.positions;
+    mean /= static_cast<double>(good.size());
+    for (int i : good) {
+      SubjectOutcome& s = result->subjects[i];
+      MoveSubject(UmeyamaAlignment(s.grid.mesh.vertices.positions, mean, {}, false, 0.0, s.name + " grid"),
+                  &s);
+    }
+  }
+}
+
+void AddSeconds(std::vector<std::pair<std::string, double>>* total, const SubjectOutcome& s) {
+  for (const auto& [stage, t] : s.seconds) {
+    auto it = std::find_if(total->begin(), total->end(), [&](const auto& e) { return e.first == stage; });
+    if (it == total->end())
+      total->emplace_back(stage, t);
+    else
+      it->second += t;
+  }
+}
+
+}  // namespace
+
+PointCloud CropToRoi(const PointCloud& cloud, const ChestRoi& roi, double margin_mm) {
+  const Points3 uvw = roi.ToRoi(cloud.positions);
+  std::vector<std::uint32_t> rows;
+  for (Eigen::Index k = 0; k < uvw.rows(); ++k) {
+    if (uvw(k, 0) >= roi.u_min - margin_mm && uvw(k, 0) <= roi.u_max + margin_mm &&
+        uvw(k, 1) >= roi.v_min - margin_mm && uvw(k, 1) <= roi.v_max + margin_mm) {
+      rows.push_back(static_cast<std::uint32_t>(k));
+    }
+  }
+  return SelectRows(cloud, rows);
+}
+
+void RegisterToReference(const IcpTarget& reference_surface, const LandmarkSet& reference_landmarks,
+                         const PipelineOptions& options, SubjectOutcome* s) {
+  const PairRegistrationResult r = RegisterPair(reference_surface, s->surface.vertices, &reference_landmarks,
+                                                &s->landmarks, {}, options.registration);
+  const double landmark_fit_rms = r.landmarks->rms_mm;
+  s->icp_rms_mm = r.icp ? r.icp->rms_mm : 0.0;
+  s->icp_accepted = r.success && r.landmark_rms_mm <= landmark_fit_rms + options.max_landmark_shift_mm;
+  s->T_reference_subject = s->icp_accepted ? r.T_target_source : r.landmarks->T_target_source;
+  s->landmark_rms_mm = s->icp_accepted ? r.landmark_rms_mm : landmark_fit_rms;
+  s->registration_message = r.message;
+  if (!s->icp_accepted) {
+    s->registration_message =
+        "ICP refinement not kept (" +
+        (r.success ? "it moved the landmarks " + std::to_string(r.landmark_rms_mm - landmark_fit_rms) +
+                         " mm away from the landmark fit"
+                   : r.message) +
+        "); the landmark pose is used";
+  }
+  TransformInPlace(s->T_reference_subject, &s->surface);
+  s->landmarks = Transformed(s->landmarks, s->T_reference_subject);
+}
+
+std::vector<CohortSubject> FindCohortSubjects(const fs::path& folder, const std::string& sweep_pattern,
+                                              const std::string& landmarks_name) {
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec)) ThrowBadInput(folder.string(), "is not a folder");
+  std::vector<CohortSubject> subjects;
+  for (const fs::directory_entry& dir : fs::directory_iterator(folder, ec)) {
+    if (!dir.is_directory()) continue;
+    CohortSubject s;
+    s.name = dir.path().filename().string();
+    for (const fs::directory_entry& f : fs::directory_iterator(dir.path(), ec)) {
+      if (f.is_regular_file() && Matches(f.path().filename().string(), sweep_pattern))
+        s.sweeps.push_back(f.path());
+    }
+    if (s.sweeps.empty()) continue;
+    std::sort(s.sweeps.begin(), s.sweeps.end());
+    s.landmarks = dir.path() / landmarks_name;
+    subjects.push_back(std::move(s));
+  }
+  if (ec) ThrowBadInput(folder.string(), "cannot be listed: " + ec.message());
+  if (subjects.empty()) {
+    ThrowBadInput(folder.string(), "holds no subject folder with sweeps named '" + sweep_pattern + "'");
+  }
+  std::sort(subjects.begin(), subjects.end(), [](const auto& a, const auto& b) { return a.name < b.name; });
+  return subjects;
+}
+
+bool PipelineOptions::IsValid(std::string* why) const {
+  if (!merge.IsValid(why) || !reconstruct.IsValid(why) || !registration.IsValid(why) || !roi.IsValid(why) ||
+      !resample.IsValid(why) || !model.IsValid(why)) {
+    return false;
+  }
+  if (!(crop_margin_mm >= 0.0) || min_sweep_points < 10 || !(max_landmark_shift_mm >= 0.0) ||
+      procrustes_iterations < 0) {
+    if (why != nullptr) {
+      *why =
+          "the crop margin and the landmark shift must be >= 0 mm, a sweep needs at least 10 points and the "
+          "Procrustes iterations must be >= 0";
+    }
+    return false;
+  }
+  return !quality || quality_options.IsValid(why);
+}
+
+PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const PipelineOptions& options,
+                                 const PipelineObserver& observer) {
+  std::string why;
+  if (!options.IsValid(&why)) ThrowUsage("pipeline: " + why);
+  const auto n = static_cast<int>(inputs.size());
+  PipelineResult result;
+  result.subjects.resize(inputs.size());
+  auto report = [&](const SubjectOutcome& s, const std::string& stage) {
+    if (!observer) return;
+#pragma omp critical(pectus_pipeline_observer)
+    observer(s, stage);
+  };
+
+  // 1-3. Every subject's surface from its sweeps: read, merge, reconstruct (subjects in parallel).
+#pragma omp parallel for schedule(dynamic)
+  for (int i = 0; i < n; ++i) {
+    SubjectOutcome& s = result.subjects[i];
+    s.name = inputs[i].name;
+    std::vector<PointCloud> sweeps;
+    BuildSurface(inputs[i], options, &s, &sweeps);
+    report(s, "surface");
+  }
+
+  // 4. The reference: the named subject, or the first whose surface was made.
+  int ref = -1;
+  for (int i = 0; i < n && ref < 0; ++i) {
+    if (options.reference.empty() ? result.subjects[i].failed_stage.empty()
+                                  : inputs[i].name == options.reference)
+      ref = i;
+  }
+  if (ref < 0 && !options.reference.empty())
+    ThrowUsage("pipeline: no subject is named '" + options.reference + "'");
+  if (ref < 0 || !result.subjects[ref].failed_stage.empty()) {
+    ThrowFailure(ref < 0 ? "no subject's surface could be made; nothing to register to"
+                         : "the reference subject failed: " + result.subjects[ref].error,
+                 ref < 0 ? "cohort" : inputs[ref].name);
+  }
+  result.reference = inputs[ref].name;
+  const SubjectOutcome& reference = result.subjects[ref];
+  const IcpTarget target(reference.surface.vertices.positions, reference.surface.vertices.normals,
+                         reference.name + " (reference surface)");
+  const LandmarkSet reference_landmarks = reference.landmarks;
+
+  // 5-6. Register each surface to the reference (landmarks, then ICP), resample it on its landmark grid.
+#pragma omp parallel for schedule(dynamic)
+  for (int i = 0; i < n; ++i) {
+    SubjectOutcome& s = result.subjects[i];
+    RunStage(&s, "register", [&] {
+      if (i == ref) {
+        s.icp_accepted = true;
+        s.registration_message = "the reference";
+        return;
+      }
+      RegisterToReference(target, reference_landmarks, options, &s);
+    });
+    RunStage(&s, "resample", [&] {
+      s.grid = ResampleSurface(s.surface, s.landmarks, options.roi, options.resample, s.name);
+    });
+    if (options.measures) {
+      RunStage(&s, "measures", [&] {
+        try {
+          s.measures = MeasureChest(s.surface, s.grid.roi);
+        } catch (const Error& e) {
+          s.measures.message = e.what();  // a surface without a measurable section is not a failure
+        }
+      });
+    }
+    s.ok = s.failed_stage.empty();
+    if (!options.keep_surfaces) s.surface = TriangleMesh();
+    report(s, "resample");
+  }
+
+  // 7. The model of the subjects that made it.
+  std::vector<int> good;
+  for (int i = 0; i < n; ++i) {
+    if (result.subjects[i].ok) good.push_back(i);
+  }
+  result.succeeded = static_cast<int>(good.size());
+  Clock::time_point start = Clock::now();
+  if (good.size() >= 2) {
+    AlignGridsToTheirMean(good, options.procrustes_iterations, &result);
+    Eigen::MatrixXd shapes(static_cast<Eigen::Index>(good.size()),
+                           result.subjects[good[0]].grid.shape_vector.size());
+    for (std::size_t k = 0; k < good.size(); ++k) {
+      shapes.row(static_cast<Eigen::Index>(k)) = result.subjects[good[k]].grid.shape_vector.transpose();
+    }
+    result.model = BuildShapeModel(shapes, options.model, "resampled subjects");
+    for (int i : good) result.model.names.push_back(result.subjects[i].name);
+    result.model.faces = GridFaces(options.resample.grid);
+    result.has_model = true;
+    result.seconds.emplace_back("model", Since(start));
+    if (options.quality && good.size() >= 3) {
+      start = Clock::now();
+      result.quality = EvaluateModelQuality(shapes, options.quality_options);
+      result.has_quality = true;
+      result.seconds.emplace_back("quality", Since(start));
+    }
+    // 8. Each subject's distance to the mean, and the mean's own measures (on the mean landmark ROI).
+    start = Clock::now();
+    const TriangleMesh mean = result.model.ToMesh(result.model.mean);
+    LandmarkSet mean_landmarks = result.subjects[good[0]].landmarks;
+    for (Landmark& l : mean_landmarks.items) {
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      int count = 0;
+      for (int i : good) {
+        if (const Landmark* m = result.subjects[i].landmarks.Find(l.label)) sum += m->position, ++count;
+      }
+      l.position = sum / count;
+    }
+    for (std::size_t k = 0; k < good.size(); ++k) {
+      SubjectOutcome& s = result.subjects[good[k]];
+      s.to_mean = ComputeDistanceMap(s.grid.mesh.vertices.positions, mean, options.distance, "mean shape");
+      s.scores = result.model.scores.row(static_cast<Eigen::Index>(k)).transpose();
+    }
+    try {
+      result.mean_measures =
+          MeasureChest(mean, ComputeChestRoi(mean_landmarks, options.roi, "mean landmarks"));
+    } catch (const Error& e) {
+      result.mean_measures.message = e.what();
+    }
+    result.seconds.emplace_back("distance", Since(start));
+  }
+  for (const SubjectOutcome& s : result.subjects) AddSeconds(&result.seconds, s);
+  std::ostringstream msg;
+  msg << result.succeeded << " of " << n << " subjects made it to the model (reference " << result.reference
+      << ")";
+  if (result.has_model) msg << "; " << result.model.num_modes() << " modes";
+  result.message = msg.str();
+  return result;
+}
+
+}  // namespace pectus

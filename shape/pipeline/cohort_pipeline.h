@@ -1,0 +1,158 @@
+// pectus: the main job, from a folder of raw subjects (handheld sweeps + landmarks) to the average chest:
+// per subject merge the sweeps, reconstruct the surface, register it to the reference by landmarks then
+// ICP, resample it by cross-sections; then the shape model, its quality, and each subject's distance to
+// the mean (dissertation §4.3.1). A subject that fails is reported and the others go on.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "registration/pair_registration.h"
+#include "shape/core/geometry.h"
+#include "shape/core/landmarks.h"
+#include "shape/model/chest_measures.h"
+#include "shape/model/cross_section_resampler.h"
+#include "shape/model/distance_map.h"
+#include "shape/model/model_quality.h"
+#include "shape/model/roi.h"
+#include "shape/model/shape_model.h"
+#include "shape/surface/reconstruct.h"
+#include "shape/surface/sweep_merge.h"
+
+namespace pectus {
+
+/// One subject's raw data.
+struct CohortSubject {
+  std::string name;                           ///< the folder's name
+  std::vector<std::filesystem::path> sweeps;  ///< PLY (or any point format) files, scanner frame, mm
+  std::filesystem::path landmarks;            ///< .mrk.json (or .fcsv/.csv) in the same frame
+};
+
+/// The subjects of a cohort folder: every sub-folder holding files named `sweep_pattern` (a prefix and
+/// suffix around one '*', e.g. "sweep_*.ply"), with its landmarks `landmarks_name` (checked when the subject
+/// is processed, so that a missing file fails that subject only). Sorted by name. Throws Error(kBadInput)
+/// naming the folder if it does not exist or holds no subject.
+std::vector<CohortSubject> FindCohortSubjects(const std::filesystem::path& folder,
+                                              const std::string& sweep_pattern = "sweep_*.ply",
+                                              const std::string& landmarks_name = "landmarks.mrk.json");
+
+/// Options of every stage.
+struct PipelineOptions {
+  /// Each sweep is cut to the ROI (from the subject's landmarks) widened by this margin (mm) before
+  /// anything else: the model needs no more, and merging and reconstructing the whole torso would cost
+  /// three times as long. 0: keep whole sweeps. At least fit_margin_mm of the resampling, for its profiles.
+  double crop_margin_mm = 30.0;
+  /// Sweeps left with fewer points than this after the cut (strips at the sides) are dropped.
+  int min_sweep_points = 1000;
+  SweepMergeOptions merge = [] {
+    SweepMergeOptions o;
+    o.target_spacing_mm = 1.0;  // 2 mm doubled the surface's error on data (0.13 vs 0.05-0.07 mm RMS)
+    o.pairwise.auto_level_points = {2000};  // sweeps start within the tracker's error of each other
+    o.pairwise.auto_max_iterations = 20;
+    o.global_rounds = 6;
+    return o;
+  }();
+  ReconstructOptions reconstruct = [] {
+    ReconstructOptions o;
+    o.spacing = 1.0;  // isosurface step (mm), as fine as the merged cloud
+    o.check = false;  // the CGAL manifold check costs as much as the rest; `pectus reconstruct` has it
+    return o;
+  }();
+  /// Landmarks then ICP, to the reference subject. Two chests differ by millimetres (a depression by
+  /// centimetres), so ICP may slide longer before it settles and its acceptance is wider than for two
+  /// scans of one surface; the robust loss and the shrinking gate keep it on the parts that agree.
+  PairRegistrationOptions registration = [] {
+    PairRegistrationOptions o;
+    o.max_landmark_rms_mm = 1e3;  // two chests' landmarks differ by centimetres; see max_landmark_shift_mm
+    o.icp.auto_max_iterations = 60;
+    o.icp.rotation_tolerance_deg = 1e-2;
+    o.icp.translation_tolerance_mm = 1e-2;
+    o.icp.max_rms_mm = 5.0;
+    o.icp.min_inlier_fraction = 0.1;
+    return o;
+  }();
+  /// The ICP refinement is kept only if it succeeds and moves the landmarks' RMS distance to the
+  /// reference's by at most this much (mm) from the landmark fit; otherwise the landmark pose is kept
+  /// and the subject is flagged (SubjectOutcome::icp_accepted).
+  double max_landmark_shift_mm = 5.0;
+  ChestRoiOptions roi;           ///< landmarks and margins that bound the grid
+  CrossSectionOptions resample;  ///< grid size (51 x 101) and profile fit
+  /// Before the model, the resampled grids are aligned rigidly to their mean (generalized Procrustes
+  /// analysis, `procrustes_iterations` rounds; 0: off). The registration to one reference subject leaves
+  /// each grid a pose that is not shape (ICP between two different chests may slide by millimetres); the
+  /// surfaces, landmarks and T_reference_subject follow their grid.
+  int procrustes_iterations = 5;
+  ShapeModelOptions model;
+  bool quality = true;  ///< compute compactness, generalization, specificity (N >= 3)
+  ModelQualityOptions quality_options;
+  DistanceKind distance = DistanceKind::kSignedSurface;  ///< each subject's grid to the mean grid
+  bool measures = true;                                  ///< depression depth of each registered surface
+  std::string reference;      ///< the reference subject's name; empty: the first that reconstructs
+  bool keep_surfaces = true;  ///< keep each registered surface in the result (for output files)
+
+  /// False, with the reason, for invalid options of any stage.
+  bool IsValid(std::string* why) const;
+};
+
+/// What happened to one subject.
+struct SubjectOutcome {
+  std::string name;
+  bool ok = false;           ///< went through every stage
+  std::string failed_stage;  ///< "read", "merge", "reconstruct", "register", "resample" when not ok
+  std::string error;         ///< why it failed
+  int sweeps = 0;            ///< sweeps merged (after dropping those outside the ROI)
+  /// The sweeps merged; the merged surface is in the frame of the first (the merge's anchor).
+  std::vector<std::filesystem::path> sweep_files;
+  std::int64_t points_in = 0, points_merged = 0;
+  double merge_rms_mm = 0.0;        ///< joint pose adjustment residual
+  std::int64_t faces = 0;           ///< of the reconstructed surface
+  double fit_accuracy_mm = 0.0;     ///< RBF fitting accuracy (dissertation Eq. 11)
+  Similarity3 T_reference_subject;  ///< subject scan frame to the reference's
+  double landmark_rms_mm = 0.0, icp_rms_mm = 0.0;
+  bool icp_accepted = false;         ///< the ICP refinement was kept (else the landmark pose)
+  std::string registration_message;  ///< what the fine step found, and why it was not kept
+  TriangleMesh surface;              ///< the reconstructed surface in the reference frame (keep_surfaces)
+  LandmarkSet landmarks;             ///< in the reference frame
+  CrossSectionResult grid;           ///< the resampled grid (shape vector) in the reference frame
+  ChestMeasures measures;            ///< when options.measures (depth 0 and a message if it failed)
+  DistanceMapResult to_mean;         ///< distances of the grid vertices to the mean shape, mm
+  Eigen::VectorXd scores;            ///< model scores (mm)
+  std::vector<std::pair<std::string, double>> seconds;  ///< wall time per stage
+};
+
+/// The whole cohort's result.
+struct PipelineResult {
+  std::vector<SubjectOutcome> subjects;  ///< in input order, failed ones included
+  std::string reference;                 ///< the reference subject's name
+  int succeeded = 0;
+  bool has_model = false;  ///< at least 2 subjects made it
+  ShapeModel model;        ///< names = the succeeded subjects
+  bool has_quality = false;
+  ModelQualityCurves quality;
+  ChestMeasures mean_measures;                          ///< of the mean shape (its grid)
+  std::vector<std::pair<std::string, double>> seconds;  ///< wall time per stage, summed over subjects
+  std::string message;
+};
+
+/// The points of `cloud` whose ROI coordinates (u, v) lie within `margin_mm` of the ROI rectangle, with
+/// their attributes.
+PointCloud CropToRoi(const PointCloud& cloud, const ChestRoi& roi, double margin_mm);
+
+/// Stage 5 for one subject, as the pipeline does it: landmarks then ICP to the reference, the ICP kept
+/// only if it succeeds and stays with the landmarks (PipelineOptions::max_landmark_shift_mm). Sets the
+/// subject's pose, registration figures and message, and moves its surface and landmarks into the
+/// reference frame. Throws as RegisterPair (unusable landmarks).
+void RegisterToReference(const IcpTarget& reference_surface, const LandmarkSet& reference_landmarks,
+                         const PipelineOptions& options, SubjectOutcome* subject);
+
+/// Called after each subject's stage ("merge", "register", ...), for progress and logs; may be empty.
+using PipelineObserver = std::function<void(const SubjectOutcome& subject, const std::string& stage)>;
+
+/// Runs the pipeline. Throws Error(kUsage) for invalid options or an unknown reference name, and
+/// Error(kFailure) if no subject reconstructs (nothing to register to); a failing subject never throws.
+PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& subjects,
+                                 const PipelineOptions& options = {}, const PipelineObserver& observer = {});
+
+}  // namespace pectus

@@ -1,0 +1,41 @@
+// pectus: the pipeline's HTML report: one page with the pictures (mean shape, modes, variance explained,
+// model quality, each subject's distance to the mean on one colour scale) and the numbers (per subject and
+// per stage), made as a set of files for the caller to write.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "shape/pipeline/cohort_pipeline.h"
+
+namespace pectus {
+
+/// What the report shows.
+struct PipelineReportOptions {
+  std::string title = "pectus: the average chest";
+  /// Colour scale of the distance maps, +-mm (0: the largest 99th percentile of |d| over the subjects,
+  /// rounded up to a whole mm), so that every subject is shown on the same scale.
+  double distance_range_mm = 0.0;
+  int modes = 3;         ///< modes pictured (at +-mode_sd standard deviations)
+  double mode_sd = 2.0;  ///< > 0
+  int picture_px = 420;  ///< height of the surface pictures
+  nlohmann::json run;    ///< shown as "run" facts: the command, the folders, wall time (any JSON object)
+};
+
+/// One file of the report, relative to the output folder ("report.html", "figures/mean.png").
+struct ReportFile {
+  std::string path;
+  std::string bytes;
+};
+
+/// The report's files: report.html and the PNGs it shows under figures/. Never throws for a cohort in
+/// which subjects failed: they are listed with their stage and message.
+std::vector<ReportFile> MakePipelineReport(const PipelineResult& result,
+                                           const PipelineReportOptions& options = {});
+
+/// The per-subject and per-model figures as JSON (for --report): one object per subject with its stage
+/// results, and the model's variance table.
+nlohmann::json PipelineJson(const PipelineResult& result);
+
+}  // namespace pectus

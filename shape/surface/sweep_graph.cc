@@ -1,0 +1,137 @@
+#include "shape/surface/sweep_graph.h"
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <queue>
+
+namespace pectus {
+
+void OrientSweeps(const std::vector<Rigid3>& P, double distance_mm, std::size_t anchor,
+                  std::vector<SweepSurface>* sweeps) {
+  const std::size_t n = sweeps->size();
+  auto& S = *sweeps;
+  // votes(a, b): sum of sign(n_a . n_b) over samples of a near b with normals within 60 degrees of
+  // parallel or antiparallel (a sheet seen from two sides is left out by the distance of most samples).
+  Eigen::MatrixXd votes = Eigen::MatrixXd::Zero(Eigen::Index(n), Eigen::Index(n));
+#pragma omp parallel for schedule(dynamic)
+  for (std::size_t ab = 0; ab < n * n; ++ab) {
+    const std::size_t a = ab / n, b = ab % n;
+    if (a == b) continue;
+    const Rigid3 T_b_a = P[b].inverse() * P[a];
+    double v = 0;
+    for (const std::uint32_t r : S[a].samples) {
+      std::uint32_t k;
+      double d2;
+      const Eigen::Vector3d x = T_b_a * S[a].cloud->positions.row(r).transpose() - S[b].target->origin();
+      if (!S[b].target->tree().NearestWithin(x, distance_mm, &k, &d2)) continue;
+      const double c =
+          (T_b_a.linear() * S[a].normals.row(r).transpose()).dot(S[b].normals.row(k).transpose());
+      if (std::abs(c) > 0.5) v += c > 0 ? 1.0 : -1.0;
+    }
+    votes(Eigen::Index(a), Eigen::Index(b)) = v;
+  }
+  std::vector<bool> done(n, false);
+  done[anchor] = true;
+  for (std::size_t step = 1; step < n; ++step) {
+    std::size_t best = n;
+    double best_support = -1, best_vote = 0;
+    for (std::size_t s = 0; s < n; ++s) {
+      if (done[s]) continue;
+      double v = 0, support = 0;
+      for (std::size_t d = 0; d < n; ++d) {
+        if (!done[d]) continue;
+        const double both = votes(Eigen::Index(s), Eigen::Index(d)) + votes(Eigen::Index(d), Eigen::Index(s));
+        v += both;
+        support += std::abs(both);
+      }
+      if (support > best_support) {
+        best = s;
+        best_support = support;
+        best_vote = v;
+      }
+    }
+    if (best_vote < 0) {
+      S[best].FlipNormals();
+      for (std::size_t d = 0; d < n; ++d) {
+        votes(Eigen::Index(best), Eigen::Index(d)) *= -1;
+        votes(Eigen::Index(d), Eigen::Index(best)) *= -1;
+      }
+    }
+    done[best] = true;
+  }
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (std::size_t s = 0; s < n; ++s) centroid += P[s] * S[s].centroid / double(n);
+  double outward = 0;
+  for (std::size_t s = 0; s < n; ++s) {
+    for (const std::uint32_t r : S[s].samples) {
+      const Eigen::Vector3d p = P[s] * S[s].cloud->positions.row(r).transpose();
+      outward += (P[s].linear() * S[s].normals.row(r).transpose()).dot(p - centroid) > 0 ? 1 : -1;
+    }
+  }
+  if (outward < 0) {
+    for (auto& s : S) s.FlipNormals();
+  }
+}
+
+std::vector<SweepLink> FindSweepLinks(const std::vector<SweepSurface>& S, const std::vector<Rigid3>& P,
+                                      double distance_mm, double min_fraction) {
+  const std::size_t n = S.size();
+  std::vector<SweepLink> all;
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 1; j < n; ++j) all.push_back({i, j, 0.0});
+#pragma omp parallel for schedule(dynamic)
+  for (std::size_t k = 0; k < all.size(); ++k) {
+    const auto [i, j, unused] = all[k];
+    auto fraction = [&](std::size_t a, std::size_t b) {  // of b's samples on a
+      const auto c = FindSweepCorrespondences(S, P, a, b, 2000, distance_mm);
+      const double tried = double(std::min<std::size_t>(S[b].samples.size(), 2000));
+      return double(c.size()) / std::max(1.0, tried);
+    };
+    all[k].overlap = std::max(fraction(i, j), fraction(j, i));
+  }
+  std::vector<SweepLink> links;
+  for (const auto& l : all)
+    if (l.overlap >= min_fraction) links.push_back(l);
+  return links;
+}
+
+std::vector<SweepCorrespondence> AllCorrespondences(const std::vector<SweepSurface>& S,
+                                                    const std::vector<Rigid3>& P,
+                                                    const std::vector<SweepLink>& links, int per_pair,
+                                                    double gate_mm) {
+  std::vector<std::vector<SweepCorrespondence>> found(links.size() * 2);
+#pragma omp parallel for schedule(dynamic)
+  for (std::size_t k = 0; k < found.size(); ++k) {
+    const SweepLink& l = links[k / 2];
+    found[k] = k % 2 ? FindSweepCorrespondences(S, P, l.j, l.i, per_pair, gate_mm)
+                     : FindSweepCorrespondences(S, P, l.i, l.j, per_pair, gate_mm);
+  }
+  std::vector<SweepCorrespondence> all;
+  for (auto& f : found) all.insert(all.end(), f.begin(), f.end());
+  return all;
+}
+
+void PosesFromTree(const std::vector<SweepLink>& links, const std::vector<Rigid3>& T_i_j,
+                   const std::vector<bool>& ok, std::size_t anchor, std::vector<Rigid3>* P) {
+  std::vector<bool> placed(P->size(), false);
+  placed[anchor] = true;
+  std::priority_queue<std::pair<double, std::size_t>> queue;  // overlap, link
+  auto push = [&](std::size_t s) {
+    for (std::size_t k = 0; k < links.size(); ++k)
+      if (ok[k] && (links[k].i == s || links[k].j == s)) queue.push({links[k].overlap, k});
+  };
+  push(anchor);
+  while (!queue.empty()) {
+    const std::size_t k = queue.top().second;
+    queue.pop();
+    const auto [i, j, overlap] = links[k];
+    if (placed[i] == placed[j]) continue;
+    const std::size_t s = placed[i] ? j : i;
+    (*P)[s] = placed[i] ? (*P)[i] * T_i_j[k] : (*P)[j] * T_i_j[k].inverse();
+    placed[s] = true;
+    push(s);
+  }
+}
+
+}  // namespace pectus

@@ -1,0 +1,44 @@
+// pectus: the graph of overlapping sweeps that MergeSweeps works on: one side for every sweep's normals,
+// which pairs overlap, their correspondences, and poses along a spanning tree of the pairs.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "shape/core/geometry.h"
+#include "shape/surface/sweep_surface.h"
+
+namespace pectus {
+
+/// Two overlapping sweeps.
+struct SweepLink {
+  std::size_t i = 0, j = 0;  ///< the sweeps, i < j
+  double overlap = 0.0;      ///< fraction of the smaller sweep's samples that lie on the other
+};
+
+/// Turns every sweep's normals to one side: sweeps join the oriented set in order of their overlap with
+/// it, each taking the side most of its overlapping samples agree on; then the whole set faces away from
+/// its centroid (outward for a closed object, toward the scanner for a chest).
+/// @param[in]     P            T_world_sweep of each sweep
+/// @param[in]     distance_mm  samples farther than this from the other sweep do not vote
+/// @param[in]     anchor       the sweep whose side the others follow
+/// @param[in,out] sweeps       their normals flipped where needed
+void OrientSweeps(const std::vector<Rigid3>& P, double distance_mm, std::size_t anchor,
+                  std::vector<SweepSurface>* sweeps);
+
+/// Every pair overlapping by at least min_fraction of the smaller sweep's samples (within distance_mm).
+std::vector<SweepLink> FindSweepLinks(const std::vector<SweepSurface>& S, const std::vector<Rigid3>& P,
+                                      double distance_mm, double min_fraction);
+
+/// Correspondences of every link in both directions, at most per_pair each way, gated at gate_mm.
+std::vector<SweepCorrespondence> AllCorrespondences(const std::vector<SweepSurface>& S,
+                                                    const std::vector<Rigid3>& P,
+                                                    const std::vector<SweepLink>& links, int per_pair,
+                                                    double gate_mm);
+
+/// Poses from a maximum spanning tree (by overlap) of the links whose pairwise registration succeeded
+/// (ok[k]; T_i_j[k] the pose of sweep j in sweep i), grown from the anchor, whose pose is kept.
+void PosesFromTree(const std::vector<SweepLink>& links, const std::vector<Rigid3>& T_i_j,
+                   const std::vector<bool>& ok, std::size_t anchor, std::vector<Rigid3>* P);
+
+}  // namespace pectus

@@ -1,0 +1,208 @@
+#include "shape/surface/sweep_merge.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+
+#include "registration/voxel_downsample.h"
+#include "shape/surface/cloud_filter.h"
+#include "shape/core/error.h"
+#include "shape/core/log.h"
+#include "shape/surface/pose_adjustment.h"
+#include "shape/surface/sweep_graph.h"
+
+namespace pectus {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+double AngleDeg(const Eigen::Matrix3d& R) {
+  return std::acos(std::clamp((R.trace() - 1.0) / 2.0, -1.0, 1.0)) * 180.0 / M_PI;
+}
+
+}  // namespace
+
+bool SweepMergeOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (!(overlap_distance_mm > 0)) return fail("overlap distance must be > 0 mm");
+  if (min_overlap_fraction < 0 || min_overlap_fraction >= 1) return fail("minimum overlap must be in [0, 1)");
+  if (global_rounds < 0 || global_points_per_pair < 10)
+    return fail("global rounds >= 0 and points per pair >= 10");
+  if (global_max_distance_mm < 0) return fail("global gate must be >= 0");
+  if (smoothing_mm < 0) return fail("smoothing must be >= 0 mm");
+  if (outlier_neighbours < 0 || outlier_std_ratio <= 0) return fail("outlier neighbours >= 0 and ratio > 0");
+  if (target_spacing_mm < 0) return fail("target spacing must be >= 0 mm");
+  return surface.IsValid(why) && pairwise.IsValid(why);
+}
+
+SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::vector<Rigid3>& start,
+                             const SweepMergeOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) ThrowUsage("merge options: " + why);
+  if (clouds.empty()) ThrowBadInput("sweeps", "no sweeps to merge");
+  if (clouds.size() != start.size()) {
+    ThrowBadInput("poses",
+                  std::to_string(start.size()) + " poses for " + std::to_string(clouds.size()) + " sweeps");
+  }
+  if (options.anchor >= clouds.size())
+    ThrowUsage("anchor sweep " + std::to_string(options.anchor) + " does not exist");
+  const std::size_t n = clouds.size();
+  SweepMergeResult result;
+
+  // 1. Normals, border points, targets and subsamples of every sweep, in its own frame.
+  auto t0 = Clock::now();
+  std::vector<SweepSurface> sweeps;
+  for (std::size_t s = 0; s < n; ++s) {
+    sweeps.push_back(PrepareSweep(clouds[s], options.surface, "sweep " + std::to_string(s)));
+    result.points_in += clouds[s].size();
+  }
+  double spacing = 0;
+  for (const auto& w : sweeps) spacing += w.spacing_mm / double(n);
+
+  // A world frame centred on the data, so that far-from-origin scans keep their precision.
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (std::size_t s = 0; s < n; ++s) centre += start[s] * sweeps[s].centroid / double(n);
+  Rigid3 T_centred_world = Rigid3::Identity();
+  T_centred_world.translation() = -centre;
+  std::vector<Rigid3> P_start(n), P(n);
+  for (std::size_t s = 0; s < n; ++s) P[s] = P_start[s] = T_centred_world * start[s];
+  OrientSweeps(P, options.overlap_distance_mm, options.anchor, &sweeps);
+  result.seconds_normals = Since(t0);
+
+  // 2. Which sweeps overlap, at the starting poses.
+  t0 = Clock::now();
+  const std::vector<SweepLink> links =
+      FindSweepLinks(sweeps, P, options.overlap_distance_mm, options.min_overlap_fraction);
+  result.seconds_overlap = Since(t0);
+  if (n > 1) {
+    for (std::size_t s = 0; s < n; ++s) {
+      if (std::none_of(links.begin(), links.end(),
+                       [&](const SweepLink& l) { return l.i == s || l.j == s; })) {
+        ThrowFailure("sweep " + std::to_string(s) + " overlaps no other sweep (within " +
+                     std::to_string(options.overlap_distance_mm) +
+                     " mm at the starting poses); give better "
+                     "starting poses or a larger --overlap-distance");
+      }
+    }
+  }
+  const double gate = options.global_max_distance_mm > 0 ? options.global_max_distance_mm : 3.0 * spacing;
+  std::vector<std::vector<SweepCorrespondence>> before(links.size());
+  for (std::size_t k = 0; k < links.size(); ++k) {
+    before[k] = FindSweepCorrespondences(sweeps, P, links[k].i, links[k].j, options.global_points_per_pair,
+                                         options.overlap_distance_mm);
+  }
+
+  std::vector<bool> pairwise_ok(links.size(), false);
+  if (options.refine_poses && n > 1) {
+    // 3. Pairwise ICP on every linked pair (sweep j onto sweep i), then poses from a spanning tree.
+    t0 = Clock::now();
+    std::vector<Rigid3> relative(links.size());
+    {
+      Progress progress("pairwise alignment", std::int64_t(links.size()));
+      for (std::size_t k = 0; k < links.size(); ++k) {
+        const auto [i, j, overlap] = links[k];
+        const IcpResult r = AlignIcp(*sweeps[i].target, clouds[j].positions, sweeps[j].normals,
+                                     P[i].inverse() * P[j], options.pairwise);
+        relative[k] = r.T_target_source;
+        pairwise_ok[k] = r.success;
+        progress.Advance();
+      }
+    }
+    PosesFromTree(links, relative, pairwise_ok, options.anchor, &P);
+    result.seconds_pairwise = Since(t0);
+
+    // 4. Joint point-to-plane adjustment of all poses, with fresh correspondences every round.
+    t0 = Clock::now();
+    Progress progress("global adjustment", options.global_rounds);
+    PoseAdjustmentOptions ao;
+    ao.anchor = options.anchor;
+    for (int round = 0; round < options.global_rounds; ++round) {
+      const auto pairs = AllCorrespondences(sweeps, P, links, options.global_points_per_pair, gate);
+      const std::vector<Rigid3> previous = P;
+      const PoseAdjustmentResult a = AdjustPoses(pairs, &P, ao);
+      result.global_rms_before_mm = a.rms_before_mm;
+      result.global_rms_after_mm = a.rms_after_mm;
+      ++result.global_rounds;
+      progress.Advance();
+      double change_mm = 0;  // largest movement of a sweep's sample, roughly
+      for (std::size_t s = 0; s < n; ++s) {
+        const Rigid3 d = P[s] * previous[s].inverse();
+        const Eigen::Vector3d c = P[s] * sweeps[s].centroid;
+        const double radius = (ComputeBounds(clouds[s].positions).extent().norm()) / 2.0;
+        change_mm = std::max(change_mm, (d * c - c).norm() + AngleDeg(d.linear()) * M_PI / 180.0 * radius);
+      }
+      if (change_mm < 0.01 * spacing) break;
+    }
+    result.seconds_global = Since(t0);
+  }
+
+  // Back to the caller's world frame; corrections and overlap residuals.
+  const Rigid3 T_world_centred = T_centred_world.inverse();
+  for (std::size_t s = 0; s < n; ++s) {
+    result.T_world_sweep.push_back(T_world_centred * P[s]);
+    const Rigid3 correction = result.T_world_sweep[s] * start[s].inverse();
+    result.correction_deg.push_back(AngleDeg(correction.linear()));
+    const Eigen::Vector3d c = start[s] * sweeps[s].centroid;
+    result.correction_mm.push_back((correction * c - c).norm());
+  }
+  for (std::size_t k = 0; k < links.size(); ++k) {
+    SweepPairReport pr;
+    pr.i = links[k].i;
+    pr.j = links[k].j;
+    pr.overlap_fraction = links[k].overlap;
+    pr.pairwise_success = pairwise_ok[k];
+    pr.rms_before_mm = PointToPlaneRms(before[k], P_start);
+    const auto after = FindSweepCorrespondences(sweeps, P, pr.i, pr.j, options.global_points_per_pair, gate);
+    pr.rms_after_mm = PointToPlaneRms(after, P);
+    std::vector<double> d;
+    for (const auto& c : after) d.push_back((P[c.j] * c.p - P[c.i] * c.q).norm());
+    if (!d.empty()) {
+      std::nth_element(d.begin(), d.begin() + std::ptrdiff_t(d.size() / 2), d.end());
+      pr.median_after_mm = d[d.size() / 2];
+    }
+    result.pairs.push_back(pr);
+  }
+
+  // 5. One cloud (centred frame): every sweep at its final pose, with its oriented normals.
+  t0 = Clock::now();
+  PointCloud merged;
+  for (std::size_t s = 0; s < n; ++s) {
+    PointCloud c;
+    c.positions =
+        (clouds[s].positions * P[s].linear().transpose()).rowwise() + P[s].translation().transpose();
+    c.normals = sweeps[s].normals * P[s].linear().transpose();
+    if (clouds[s].has_colors()) c.colors = clouds[s].colors;
+    c.scalars["sweep"] = Eigen::VectorXd::Constant(c.size(), double(s));
+    merged.Append(c);
+  }
+  BlendAlongNormals(options.smoothing_mm, &merged);
+  result.seconds_blend = Since(t0);
+
+  // 6. Statistical outlier removal, then decimation to the target spacing.
+  t0 = Clock::now();
+  std::vector<std::uint32_t> keep =
+      StatisticalInliers(merged.positions, options.outlier_neighbours, options.outlier_std_ratio);
+  result.outliers_removed = merged.size() - std::int64_t(keep.size());
+  if (options.target_spacing_mm > 0)
+    keep = VoxelDownsample(merged.positions, options.target_spacing_mm, &keep);
+  result.merged = SelectRows(merged, keep);
+  result.merged.positions.rowwise() += T_world_centred.translation().transpose();
+  result.points_out = result.merged.size();
+  result.seconds_filter = Since(t0);
+
+  double worst_after = 0;
+  for (const auto& pr : result.pairs) worst_after = std::max(worst_after, pr.rms_after_mm);
+  char text[256];
+  std::snprintf(text, sizeof text,
+                "%zu sweeps, %zu overlapping pairs, worst pair RMS %.3f mm, %lld points out", n, links.size(),
+                worst_after, static_cast<long long>(result.points_out));
+  result.message = text;
+  return result;
+}
+
+}  // namespace pectus

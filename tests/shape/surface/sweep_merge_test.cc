@@ -1,0 +1,211 @@
+#include "shape/surface/sweep_merge.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "shape/core/error.h"
+#include "shape/io/mesh_io.h"
+#include "shape/io/stanford_conf.h"
+#include "tests/support/bunny_data.h"
+
+namespace pectus {
+namespace {
+
+// A random rigid disturbance: rotation up to max_deg about a random axis, translation up to max_mm.
+Rigid3 Disturbance(std::mt19937_64* rng, double max_deg, double max_mm) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::Vector3d axis(u(*rng), u(*rng), u(*rng));
+  Eigen::Vector3d t(u(*rng), u(*rng), u(*rng));
+  while (t.norm() > 1.0) t = Eigen::Vector3d(u(*rng), u(*rng), u(*rng));
+  const double angle = max_deg * M_PI / 180.0 * std::abs(u(*rng));
+  Rigid3 T = Rigid3::Identity();
+  T.linear() = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
+  T.translation() = max_mm * t;
+  return T;
+}
+
+// The disturbance applied about a point (the sweep's centroid in the world) rather than the origin.
+Rigid3 DisturbAbout(std::mt19937_64* rng, double max_deg, double max_mm, const PointCloud& sweep,
+                    const Rigid3& T_world_sweep) {
+  const Eigen::Vector3d c = T_world_sweep * Eigen::Vector3d(sweep.positions.colwise().mean().transpose());
+  Rigid3 D = Disturbance(rng, max_deg, max_mm);
+  D.translation() += c - D.linear() * c;
+  return D * T_world_sweep;
+}
+
+// RMS displacement of a sweep's points between two placements (mm).
+double RmsDisplacement(const Points3& points, const Rigid3& a, const Rigid3& b) {
+  const Rigid3 d = a * b.inverse();
+  double s = 0;
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    const Eigen::Vector3d x = b * points.row(i).transpose();
+    s += (d * x - x).squaredNorm();
+  }
+  return std::sqrt(s / static_cast<double>(points.rows()));
+}
+
+// Strips of a smooth, wavy dome seen from above, each in its own scanner frame.
+std::vector<PointCloud> DomeStrips(int strips, std::vector<Rigid3>* T_world_sweep) {
+  std::vector<PointCloud> out;
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  for (int s = 0; s < strips; ++s) {
+    const double y0 = -100.0 + 200.0 * s / strips - 15.0, y1 = -100.0 + 200.0 * (s + 1) / strips + 15.0;
+    std::vector<Eigen::Vector3d> pts;
+    for (double x = -120; x <= 120; x += 1.0) {
+      for (double y = y0; y <= y1; y += 1.0) {
+        const double z = 60.0 - 0.002 * (x * x + y * y) + 4.0 * std::sin(x / 17.0) * std::cos(y / 23.0 + 0.7);
+        pts.emplace_back(x, y, z + noise(rng));
+      }
+    }
+    // The scanner's frame: an arbitrary pose per strip.
+    Rigid3 T = Rigid3::Identity();
+    T.linear() = Eigen::AngleAxisd(0.3 * s, Eigen::Vector3d(0.2, 1, 0.1).normalized()).toRotationMatrix();
+    T.translation() = Eigen::Vector3d(10.0 * s, -5.0 * s, 300.0);
+    PointCloud c;
+    c.positions.resize(static_cast<Eigen::Index>(pts.size()), 3);
+    const Rigid3 T_sweep_world = T.inverse();
+    for (std::size_t i = 0; i < pts.size(); ++i)
+      c.positions.row(static_cast<Eigen::Index>(i)) = (T_sweep_world * pts[i]).transpose();
+    out.push_back(std::move(c));
+    T_world_sweep->push_back(T);
+  }
+  return out;
+}
+
+// The strips carry 0.05 mm noise and overlap in 30 mm bands of 80 mm strips, so the roll of a strip about
+// its long axis is known to about 0.02 degrees per link (the data's own limit: more samples of the same
+// points do not help); over a chain of three links that is up to ~0.1 mm at a strip's far edge.
+constexpr double kStripTolerance = 0.12;
+
+TEST(SweepMerge, RecoversKnownPosesOfSyntheticStrips) {
+  std::vector<Rigid3> truth;
+  const auto strips = DomeStrips(4, &truth);
+  std::mt19937_64 rng(11);
+  std::vector<Rigid3> start = truth;
+  for (std::size_t s = 1; s < start.size(); ++s) start[s] = DisturbAbout(&rng, 3.0, 5.0, strips[s], truth[s]);
+  const SweepMergeResult r = MergeSweeps(strips, start);
+  ASSERT_EQ(r.T_world_sweep.size(), 4u);
+  for (std::size_t s = 0; s < strips.size(); ++s) {
+    EXPECT_LT(RmsDisplacement(strips[s].positions, r.T_world_sweep[s], truth[s]), kStripTolerance)
+        << "strip " << s;
+    EXPECT_GT(r.correction_mm[s] + r.correction_deg[s], s == 0 ? -1.0 : 0.1) << "the start was disturbed";
+  }
+  EXPECT_EQ(r.pairs.size(), 3u);  // neighbouring strips overlap, others do not
+  for (const auto& p : r.pairs) {
+    EXPECT_NEAR(p.rms_after_mm, 0.05 * std::sqrt(2.0), 0.01) << "residuals at the noise level of two sweeps";
+    EXPECT_GT(p.rms_before_mm, p.rms_after_mm);
+  }
+  EXPECT_EQ(r.points_in, r.points_out + r.outliers_removed);
+  // Normals of the merged cloud agree across strips (the dome faces +z in the world).
+  int up = 0;
+  for (Eigen::Index i = 0; i < r.merged.size(); ++i) up += r.merged.normals(i, 2) > 0 ? 1 : -1;
+  EXPECT_TRUE(std::abs(up) > 0.98 * r.merged.size()) << up << " of " << r.merged.size();
+}
+
+TEST(SweepMerge, FarFromOriginGivesTheSameAnswer) {
+  std::vector<Rigid3> truth;
+  auto strips = DomeStrips(3, &truth);
+  std::mt19937_64 rng(5);
+  std::vector<Rigid3> start = truth;
+  for (std::size_t s = 1; s < start.size(); ++s) start[s] = DisturbAbout(&rng, 2.0, 3.0, strips[s], truth[s]);
+  const SweepMergeResult near = MergeSweeps(strips, start);
+  // The same scan with the world frame 10 km away: the same poses up to the shift, to 1 micrometre.
+  Rigid3 shift = Rigid3::Identity();
+  shift.translation() = Eigen::Vector3d(1e7, -2e6, 5e5);
+  std::vector<Rigid3> far_truth, far_start;
+  for (std::size_t s = 0; s < strips.size(); ++s) {
+    far_truth.push_back(shift * truth[s]);
+    far_start.push_back(shift * start[s]);
+  }
+  const SweepMergeResult far = MergeSweeps(strips, far_start);
+  for (std::size_t s = 0; s < strips.size(); ++s) {
+    EXPECT_LT(RmsDisplacement(strips[s].positions, far.T_world_sweep[s], shift * near.T_world_sweep[s]), 1e-3)
+        << s;
+    EXPECT_LT(RmsDisplacement(strips[s].positions, far.T_world_sweep[s], far_truth[s]), kStripTolerance) << s;
+  }
+}
+
+TEST(SweepMerge, SweepWithoutOverlapIsAClearFailure) {
+  std::vector<Rigid3> truth;
+  auto strips = DomeStrips(2, &truth);
+  truth[1].translation() += Eigen::Vector3d(0, 0, 500);  // far away from the other
+  try {
+    MergeSweeps(strips, truth);
+    FAIL() << "a sweep that overlaps nothing was merged";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kFailure);
+    EXPECT_NE(std::string(e.what()).find("overlaps no other sweep"), std::string::npos);
+  }
+}
+
+TEST(SweepMerge, SmoothingBlendsOffsetSweepsAndDecimationSetsSpacing) {
+  // Two copies of the same plane patch 0.4 mm apart: blending pulls them onto one surface.
+  PointCloud a, b;
+  std::vector<Eigen::Vector3d> pts;
+  for (double x = 0; x < 60; x += 0.7)
+    for (double y = 0; y < 60; y += 0.7) pts.emplace_back(x, y, 0);
+  a.positions.resize(static_cast<Eigen::Index>(pts.size()), 3);
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    a.positions.row(static_cast<Eigen::Index>(i)) = pts[i].transpose();
+  b.positions = a.positions;
+  b.positions.col(2).array() += 0.4;
+  b.positions.col(0).array() += 0.35;
+  SweepMergeOptions o;
+  o.refine_poses = false;
+  o.smoothing_mm = 3.0;
+  o.target_spacing_mm = 2.0;
+  const SweepMergeResult r = MergeSweeps({a, b}, {Rigid3::Identity(), Rigid3::Identity()}, o);
+  const double zmax = r.merged.positions.col(2).maxCoeff(), zmin = r.merged.positions.col(2).minCoeff();
+  EXPECT_NEAR(0.5 * (zmax + zmin), 0.2, 0.03);
+  EXPECT_LT(zmax - zmin, 0.1) << "blended sweeps should meet in the middle";
+  // Decimation: about one point per 2 mm voxel over 60 x 60 mm.
+  EXPECT_NEAR(static_cast<double>(r.points_out), 30.0 * 30.0, 120.0);
+}
+
+// The rigid motion G that best maps the placements `estimate` of all sweeps onto `truth` (least squares
+// over every 10th point of every sweep): the frame of a merge is fixed by its (disturbed) anchor sweep.
+Rigid3 BestCommonMotion(const std::vector<PointCloud>& sweeps, const std::vector<Rigid3>& estimate,
+                        const std::vector<Rigid3>& truth) {
+  std::vector<Eigen::Vector3d> a, b;
+  for (std::size_t s = 0; s < sweeps.size(); ++s) {
+    for (Eigen::Index i = 0; i < sweeps[s].size(); i += 10) {
+      a.push_back(estimate[s] * sweeps[s].positions.row(i).transpose());
+      b.push_back(truth[s] * sweeps[s].positions.row(i).transpose());
+    }
+  }
+  Eigen::Matrix3Xd A(3, Eigen::Index(a.size())), B(3, Eigen::Index(b.size()));
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    A.col(Eigen::Index(k)) = a[k];
+    B.col(Eigen::Index(k)) = b[k];
+  }
+  Rigid3 G;
+  G.matrix() = Eigen::umeyama(A, B, false);
+  return G;
+}
+
+TEST(SweepMerge, RealBunnyFromDisturbedPosesReturnsToPublishedPlacement) {
+  const testing_support::BunnySweeps bunny = testing_support::ReadBunnySweeps();
+  const std::vector<ScanPose>& poses = bunny.poses;
+  const std::vector<PointCloud>& sweeps = bunny.sweeps;
+  const std::vector<Rigid3>& truth = bunny.placements;
+  std::vector<Rigid3> start;
+  std::mt19937_64 rng(2026);
+  // Every sweep disturbed about its centroid: up to 3 degrees and 5 mm.
+  for (std::size_t s = 0; s < sweeps.size(); ++s)
+    start.push_back(DisturbAbout(&rng, 3.0, 5.0, sweeps[s], truth[s]));
+  const SweepMergeResult r = MergeSweeps(sweeps, start);
+  // The anchor (bun000) stays where it started, so the merged set is compared with bun.conf up to one
+  // common rigid motion.
+  const Rigid3 G = BestCommonMotion(sweeps, r.T_world_sweep, truth);
+  for (std::size_t s = 0; s < sweeps.size(); ++s) {
+    EXPECT_LE(RmsDisplacement(sweeps[s].positions, G * r.T_world_sweep[s], truth[s]), 0.3) << poses[s].file;
+    EXPECT_GE(RmsDisplacement(sweeps[s].positions, G * start[s], truth[s]), s == 0 ? 0.0 : 0.3)
+        << "disturbed";
+  }
+  for (const auto& p : r.pairs) EXPECT_LT(p.rms_after_mm, 0.3) << p.i << "-" << p.j;
+}
+
+}  // namespace
+}  // namespace pectus

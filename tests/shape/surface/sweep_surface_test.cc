@@ -1,0 +1,72 @@
+#include "shape/surface/sweep_surface.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "shape/core/error.h"
+
+namespace pectus {
+namespace {
+
+// A 60 x 40 mm grid patch of the plane z = 0 with 0.5 mm spacing and a hole of radius 5 mm at (20, 20).
+PointCloud Patch() {
+  std::vector<Eigen::Vector3d> p;
+  for (double x = 0; x <= 60.0 + 1e-9; x += 0.5)
+    for (double y = 0; y <= 40.0 + 1e-9; y += 0.5)
+      if (std::hypot(x - 20.0, y - 20.0) >= 5.0) p.emplace_back(x, y, 0.0);
+  PointCloud c;
+  c.positions.resize(Eigen::Index(p.size()), 3);
+  for (std::size_t i = 0; i < p.size(); ++i) c.positions.row(Eigen::Index(i)) = p[i].transpose();
+  return c;
+}
+
+TEST(SweepSurface, FindsTheBorderAndTheRimOfHoles) {
+  const PointCloud patch = Patch();
+  const SweepSurface s = PrepareSweep(patch, SweepSurfaceOptions{}, "patch");
+  EXPECT_NEAR(s.spacing_mm, 0.5, 1e-9);
+  int interior_flagged = 0, edge_missed = 0;
+  for (Eigen::Index i = 0; i < patch.size(); ++i) {
+    const double x = patch.positions(i, 0), y = patch.positions(i, 1);
+    const double to_edge = std::min({x, 60.0 - x, y, 40.0 - y, std::hypot(x - 20.0, y - 20.0) - 5.0});
+    if (to_edge < 1e-9 && !s.border[std::size_t(i)]) ++edge_missed;
+    if (to_edge > 1.6 && s.border[std::size_t(i)]) ++interior_flagged;
+    EXPECT_NEAR(std::abs(s.normals(i, 2)), 1.0, 1e-9);
+  }
+  EXPECT_EQ(edge_missed, 0) << "every point on the edge or the rim is a border point";
+  EXPECT_EQ(interior_flagged, 0) << "no point 1.6 mm inside is";
+  EXPECT_FALSE(s.samples.empty());
+}
+
+TEST(SweepSurface, CorrespondencesMeasureTheOffsetAndSkipTheEdge) {
+  const PointCloud a = Patch();
+  PointCloud b = a;
+  b.positions.col(0).array() += 30.0;  // half overlapping along x
+  std::vector<SweepSurface> s;
+  s.push_back(PrepareSweep(a, SweepSurfaceOptions{}, "a"));
+  s.push_back(PrepareSweep(b, SweepSurfaceOptions{}, "b"));
+  if (s[0].normals(0, 2) * s[1].normals(0, 2) < 0) s[1].FlipNormals();
+  Rigid3 lift = Rigid3::Identity();
+  lift.translation() = Eigen::Vector3d(0.0, 0.0, 0.2);  // sweep b 0.2 mm above a
+  const std::vector<Rigid3> poses = {Rigid3::Identity(), lift};
+  const auto pairs = FindSweepCorrespondences(s, poses, 0, 1, 100000, 2.0);
+  ASSERT_GT(pairs.size(), 100u);
+  for (const auto& c : pairs) {
+    EXPECT_GE(c.p.x(), 30.0 - 1e-9);
+    EXPECT_LE(c.p.x(), 60.0 + 1e-9) << "b's points beyond a's edge are not paired with it";
+    EXPECT_LT(c.q.x(), 60.0) << "a's border points are never targets";
+  }
+  EXPECT_NEAR(PointToPlaneRms(pairs, poses), 0.2, 1e-9);
+  // Normals of opposite sides never pair (the two sides of a thin part).
+  s[1].FlipNormals();
+  EXPECT_TRUE(FindSweepCorrespondences(s, poses, 0, 1, 100000, 2.0).empty());
+}
+
+TEST(SweepSurface, TooFewPointsIsBadInput) {
+  PointCloud c;
+  c.positions = Points3::Random(5, 3);
+  EXPECT_THROW(PrepareSweep(c, SweepSurfaceOptions{}, "tiny"), Error);
+}
+
+}  // namespace
+}  // namespace pectus
