@@ -23,6 +23,10 @@ void Report::AddTime(const std::string& stage, double seconds) {
   t = (t.is_number() ? t.get<double>() : 0.0) + seconds;
 }
 
+void Report::AddTimes(const Timings& timings) {
+  for (const auto& [stage, seconds] : timings.stages()) AddTime(stage, seconds);
+}
+
 void Report::Write(const std::filesystem::path& path) {
   json_["timings_s"]["total"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   json_["warnings"] = Warnings();

@@ -6,6 +6,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "shape/core/timings.h"
+
 namespace pectus {
 
 /// What a command did: free-form JSON plus timings per stage under "timings_s".
@@ -33,6 +35,8 @@ class Report {
   [[nodiscard]] StageTimer Stage(std::string name) { return StageTimer(this, std::move(name)); }
   /// Adds seconds to a stage.
   void AddTime(const std::string& stage, double seconds);
+  /// Adds every stage of a Result's `timings_s`.
+  void AddTimes(const Timings& timings);
   nlohmann::json& json() { return json_; }
   const nlohmann::json& json() const { return json_; }
   nlohmann::json& operator[](const std::string& key) { return json_[key]; }

@@ -36,6 +36,17 @@ TEST(Report, StagesAccumulateAndWriteValidJson) {
   EXPECT_EQ(j["warnings"].back(), "a warning for the report");
 }
 
+TEST(Report, AddsAResultsTimingsStageByStage) {
+  Report r;
+  Timings t;
+  t.Add("merge", 2.0);
+  t.Add("reconstruct", 0.5);
+  r.AddTime("merge", 1.0);
+  r.AddTimes(t);
+  EXPECT_DOUBLE_EQ(r["timings_s"]["merge"].get<double>(), 3.0);
+  EXPECT_DOUBLE_EQ(r["timings_s"]["reconstruct"].get<double>(), 0.5);
+}
+
 TEST(Error, WhatNamesFileAndLine) {
   const Error e(ErrorKind::kBadInput, "bad number 'x1'", "scan.ply", 17);
   EXPECT_STREQ(e.what(), "scan.ply:17: bad number 'x1'");
