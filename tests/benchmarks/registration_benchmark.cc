@@ -26,6 +26,7 @@
 #include <omp.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <iostream>
 #include <stdexcept>
 #include <string>
@@ -86,17 +87,35 @@ json Acceptance(const json& out) {
                   {"pectus_cpu_seconds_median", sp["pectus"]["cpu_seconds_median"]},
                   {"pectus_1_thread_seconds_median", sp["pectus_1_thread"]["seconds_median"]},
                   {"time_holds", sp["pectus"]["seconds_median"].get<double>() <= 0.15}};
-    if (sp.contains("ratios")) {
-      double least = 1e300;
-      bool accurate = true;
-      for (const auto& [peer, q] : sp["ratios"].items()) {
-        least = std::min(least, q["wall_time_over_pectus"].get<double>());
-        accurate = accurate && q["pectus_as_accurate"].get<bool>();
-        speed["peers_wall_time_over_pectus"][peer] = q["wall_time_over_pectus"];
+    // The ratio line, said per comparison (no blanket answer): each peer set-up with its speed ratio and
+    // pectus's accuracy in rotation and in translation, what holds and what does not. The line names the
+    // peers as documented; the staged set-ups are our stronger, extra peers.
+    if (sp.contains("comparisons")) {
+      bool documented = true, staged = true;
+      for (const auto& [peer, q] : sp["comparisons"].items()) {
+        const double ratio = q["wall_time_over_pectus"];
+        const bool fast = ratio >= 3.0, rot = q["rotation_deg"]["pectus_as_accurate"],
+                   trans = q["translation_mm"]["pectus_as_accurate"];
+        char text[512];
+        std::snprintf(
+            text, sizeof text,
+            "%s: %.1fx pectus's wall time (%.1fx CPU) -> %s; rotation %.4f deg (pectus %.4f) -> %s; "
+            "translation %.4f mm (pectus %.4f) -> %s",
+            q["peer"].get<std::string>().c_str(), ratio, q["cpu_time_over_pectus"].get<double>(),
+            fast ? ">= 3x holds" : "< 3x, does not hold", q["rotation_deg"]["peer"].get<double>(),
+            q["rotation_deg"]["pectus"].get<double>(), rot ? "pectus as accurate" : "the peer is closer",
+            q["translation_mm"]["peer"].get<double>(), q["translation_mm"]["pectus"].get<double>(),
+            trans ? "pectus as accurate" : "the peer is closer");
+        speed["comparisons"][peer] = {{"text", text},
+                                      {"speed_ratio_at_least_3", fast},
+                                      {"pectus_as_accurate_in_rotation", rot},
+                                      {"pectus_as_accurate_in_translation", trans},
+                                      {"holds", fast && rot && trans}};
+        bool& group = peer.find("_plain") != std::string::npos ? documented : staged;
+        group = group && fast && rot && trans;
       }
-      speed["least_ratio"] = least;
-      speed["pectus_as_accurate_as_every_peer"] = accurate;
-      speed["ratio_holds"] = least >= 3.0 && accurate;
+      speed["ratio_line_holds_against_the_peers_as_documented"] = documented;
+      speed["ratio_line_holds_against_the_peers_through_pectus_stages"] = staged;
     }
     a["speed"] = speed;
   }
