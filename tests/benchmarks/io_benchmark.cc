@@ -1,125 +1,94 @@
-// Benchmark of the PLY reader and writer: bytes per second for ASCII and binary files held in memory
-// (a 1M-point cloud with normals, a 1M-vertex / 2M-triangle mesh) and for a real Stanford bunny sweep
-// (ASCII, with a range_grid element to skip). Run:
+// Benchmark of the PLY reader and writer against PCL 1.13, like with like:
+//   file    pectus ReadPointCloud / ReadMesh of a file (mapping, parse, validation, units) against
+//           pcl::io::loadPLYFile of the same file (into PointCloud<PointNormal>, <PointXYZ> for the
+//           bunny scan that has no normals, or PolygonMesh for a mesh);
+//   memory  pectus ParsePly of the same bytes held in memory. PCL has no in-memory PLY reader (PLYReader
+//           and ply_parser take only a file name), so there is no PCL memory row: a memory figure is never
+//           divided by a PCL file figure.
+// Inputs: files of pectus's own writer (a 1M-point cloud with normals and a 1M-vertex / 2M-triangle mesh,
+// ASCII and binary) and third-party files (the Stanford bunny's raw scan bun000.ply and its zippered mesh
+// bun_zipper.ply, ASCII; see io_benchmark_inputs.h). After the runs, a table of ratios (CPU time, the
+// median of the repetitions when there are several): PCL's file read over pectus's, and pectus's file read
+// over its memory parse (the cost of the file and its checks). Run:
 //   cmake --build build --target io_benchmark && build/tests/benchmarks/io_benchmark
+//   --benchmark_repetitions=3 (quick check: --benchmark_filter=bunny --benchmark_min_time=0.01)
 #include <benchmark/benchmark.h>
-
-#include <cmath>
-#include <filesystem>
-#include <fstream>
-#include <random>
-#include <sstream>
-#include <string>
-
+#include <pcl/PolygonMesh.h>
+#include <pcl/console/print.h>
 #include <pcl/io/ply_io.h>
 #include <pcl/point_types.h>
+#include <unistd.h>
 
-#include "shape/io/format_parsers.h"
-#include "shape/io/mapped_file.h"
-#include "shape/io/mesh_io.h"
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "tests/benchmarks/io_benchmark_inputs.h"
 
 namespace pectus {
 namespace {
 
-/// 1M points on a 300 mm x 200 mm wavy patch (a chest-sized surface), with unit normals.
-TriangleMesh MakeCloud() {
-  const int n = 1'000'000;
-  std::mt19937 rng(1);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  TriangleMesh cloud;
-  cloud.vertices.positions.resize(n, 3);
-  cloud.vertices.normals.resize(n, 3);
-  for (int i = 0; i < n; ++i) {
-    const double x = 150.0 * u(rng), y = 100.0 * u(rng);
-    const double z = 20.0 * std::sin(x / 40.0) * std::cos(y / 30.0) + 0.2 * u(rng);
-    const Eigen::Vector3d normal = Eigen::Vector3d(-0.5 * std::cos(x / 40.0) * std::cos(y / 30.0),
-                                                   0.666 * std::sin(x / 40.0) * std::sin(y / 30.0), 1.0)
-                                       .normalized();
-    cloud.vertices.positions.row(i) << x, y, z;
-    cloud.vertices.normals.row(i) = normal.transpose();
-  }
-  cloud.faces.resize(0, 3);
-  return cloud;
+void CountBytes(benchmark::State& state, Input input) {
+  const std::size_t size = Bytes(input).size();
+  state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations()) * static_cast<std::int64_t>(size));
+  state.counters["file_MB"] = static_cast<double>(size) / 1e6;
 }
 
-/// A 1000 x 1000 grid of vertices on the same patch, two triangles per cell.
-TriangleMesh MakeMesh() {
-  const int side = 1000;
-  TriangleMesh mesh;
-  mesh.vertices.positions.resize(side * side, 3);
-  for (int r = 0; r < side; ++r) {
-    for (int c = 0; c < side; ++c) {
-      const double x = 0.3 * c - 150.0, y = 0.2 * r - 100.0;
-      mesh.vertices.positions.row(r * side + c) << x, y, 20.0 * std::sin(x / 40.0) * std::cos(y / 30.0);
+// pectus from the file: ReadMesh (with faces) for a mesh, ReadPointCloud for a point cloud.
+void BM_FilePectus(benchmark::State& state, Input input) {
+  const std::string path = Path(input);
+  const ReadOptions options = OptionsFor(input);
+  for (auto _ : state) {
+    if (IsMesh(input)) {
+      TriangleMesh mesh = ReadMesh(path, options);
+      benchmark::DoNotOptimize(mesh.faces.data());
+    } else {
+      PointCloud cloud = ReadPointCloud(path, options);
+      benchmark::DoNotOptimize(cloud.positions.data());
     }
   }
-  mesh.faces.resize(2 * (side - 1) * (side - 1), 3);
-  Eigen::Index f = 0;
-  for (int r = 0; r + 1 < side; ++r) {
-    for (int c = 0; c + 1 < side; ++c) {
-      const int v = r * side + c;
-      mesh.faces.row(f++) << v, v + 1, v + side + 1;
-      mesh.faces.row(f++) << v, v + side + 1, v + side;
+  CountBytes(state, input);
+}
+
+// PCL from the same file: pcl::io::loadPLYFile.
+void BM_FilePcl(benchmark::State& state, Input input) {
+  const std::string path = Path(input);
+  for (auto _ : state) {
+    int status = 0;
+    if (IsMesh(input)) {
+      pcl::PolygonMesh mesh;
+      status = pcl::io::loadPLYFile(path, mesh);
+      benchmark::DoNotOptimize(mesh.polygons.data());
+    } else if (IsOurs(input)) {
+      pcl::PointCloud<pcl::PointNormal> cloud;
+      status = pcl::io::loadPLYFile(path, cloud);
+      benchmark::DoNotOptimize(cloud.points.data());
+    } else {
+      pcl::PointCloud<pcl::PointXYZ> cloud;
+      status = pcl::io::loadPLYFile(path, cloud);
+      benchmark::DoNotOptimize(cloud.points.data());
     }
+    if (status != 0) state.SkipWithError("PCL could not read the file");
   }
-  return mesh;
+  CountBytes(state, input);
 }
 
-std::string ToPly(const TriangleMesh& mesh, bool binary) {
-  std::ostringstream out;
-  WriteOptions options;
-  options.binary = binary;
-  WritePly(out, mesh, options);
-  return std::move(out).str();
-}
-
-const TriangleMesh& Cloud() {
-  static const TriangleMesh cloud = MakeCloud();
-  return cloud;
-}
-const TriangleMesh& Mesh() {
-  static const TriangleMesh mesh = MakeMesh();
-  return mesh;
-}
-
-enum class Input { kCloudAscii, kCloudBinary, kMeshAscii, kMeshBinary };
-
-const std::string& Bytes(Input input) {
-  static const std::string cloud_ascii = ToPly(Cloud(), false), cloud_binary = ToPly(Cloud(), true);
-  static const std::string mesh_ascii = ToPly(Mesh(), false), mesh_binary = ToPly(Mesh(), true);
-  switch (input) {
-    case Input::kCloudAscii: return cloud_ascii;
-    case Input::kCloudBinary: return cloud_binary;
-    case Input::kMeshAscii: return mesh_ascii;
-    case Input::kMeshBinary: break;
-  }
-  return mesh_binary;
-}
-
-void BM_ParsePly(benchmark::State& state, Input input) {
+// pectus from memory: the parser alone on the file's bytes.
+void BM_MemoryPectus(benchmark::State& state, Input input) {
   const std::string& bytes = Bytes(input);
   for (auto _ : state) {
     TriangleMesh mesh = ParsePly(bytes, "bench.ply");
     benchmark::DoNotOptimize(mesh.vertices.positions.data());
   }
-  state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations()) * static_cast<std::int64_t>(bytes.size()));
-  state.counters["file_MB"] = static_cast<double>(bytes.size()) / 1e6;
+  CountBytes(state, input);
 }
 
-void BM_ParsePlyBunny(benchmark::State& state) {
-  const MappedFile file(std::string(PECTUS_SHARED_DIR) + "/datasets/stanford_bunny/bun000.ply");
-  for (auto _ : state) {
-    TriangleMesh mesh = ParsePly(file.bytes(), file.path());
-    benchmark::DoNotOptimize(mesh.vertices.positions.data());
-  }
-  state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations()) *
-                          static_cast<std::int64_t>(file.bytes().size()));
-  state.counters["file_MB"] = static_cast<double>(file.bytes().size()) / 1e6;
-}
-
+// pectus's writer, into memory.
 void BM_WritePly(benchmark::State& state, Input input) {
   const bool binary = input == Input::kCloudBinary || input == Input::kMeshBinary;
-  const TriangleMesh& mesh = (input == Input::kCloudAscii || input == Input::kCloudBinary) ? Cloud() : Mesh();
+  const TriangleMesh& mesh = IsMesh(input) ? Mesh() : Cloud();
   std::size_t size = 0;
   for (auto _ : state) {
     size = ToPly(mesh, binary).size();
@@ -128,53 +97,76 @@ void BM_WritePly(benchmark::State& state, Input input) {
   state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations()) * static_cast<std::int64_t>(size));
 }
 
-// The peer: PCL's PLY reader on the same bytes (from a file in the temporary folder, warm in the page
-// cache; pectus's own ReadMesh on the same file is measured beside it, so the two include the same I/O).
-std::string TempFile(Input input) {
-  const auto path = std::filesystem::temp_directory_path() /
-                    ("pectus_io_bench_" + std::to_string(static_cast<int>(input)) + ".ply");
-  if (!std::filesystem::exists(path)) {
-    std::ofstream(path, std::ios::binary) << Bytes(input);
-  }
-  return path.string();
-}
-
-void BM_ReadMeshFile(benchmark::State& state, Input input) {
-  const std::string path = TempFile(input);
-  for (auto _ : state) {
-    TriangleMesh mesh = ReadMesh(path);
-    benchmark::DoNotOptimize(mesh.vertices.positions.data());
-  }
-  state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations()) *
-                          static_cast<std::int64_t>(Bytes(input).size()));
-}
-
-void BM_PclLoadPly(benchmark::State& state, Input input) {
-  const std::string path = TempFile(input);
-  for (auto _ : state) {
-    pcl::PointCloud<pcl::PointNormal> cloud;
-    pcl::PLYReader reader;
-    if (reader.read(path, cloud) != 0) state.SkipWithError("PCL could not read the file");
-    benchmark::DoNotOptimize(cloud.points.data());
-  }
-  state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations()) *
-                          static_cast<std::int64_t>(Bytes(input).size()));
-}
-
-BENCHMARK_CAPTURE(BM_ReadMeshFile, cloud_ascii, Input::kCloudAscii)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_PclLoadPly, cloud_ascii, Input::kCloudAscii)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_ReadMeshFile, cloud_binary, Input::kCloudBinary)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_PclLoadPly, cloud_binary, Input::kCloudBinary)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_ParsePly, cloud_ascii, Input::kCloudAscii)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_ParsePly, cloud_binary, Input::kCloudBinary)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_ParsePly, mesh_ascii, Input::kMeshAscii)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_ParsePly, mesh_binary, Input::kMeshBinary)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_ParsePlyBunny)->Unit(benchmark::kMillisecond);
+#define PECTUS_READS(name, input)                                               \
+  BENCHMARK_CAPTURE(BM_FilePectus, name, input)->Unit(benchmark::kMillisecond); \
+  BENCHMARK_CAPTURE(BM_FilePcl, name, input)->Unit(benchmark::kMillisecond);    \
+  BENCHMARK_CAPTURE(BM_MemoryPectus, name, input)->Unit(benchmark::kMillisecond)
+PECTUS_READS(bunny_scan_ascii, Input::kBunnyScan);
+PECTUS_READS(bunny_mesh_ascii, Input::kBunnyMesh);
+PECTUS_READS(cloud_ascii, Input::kCloudAscii);
+PECTUS_READS(cloud_binary, Input::kCloudBinary);
+PECTUS_READS(mesh_ascii, Input::kMeshAscii);
+PECTUS_READS(mesh_binary, Input::kMeshBinary);
+#undef PECTUS_READS
 BENCHMARK_CAPTURE(BM_WritePly, cloud_ascii, Input::kCloudAscii)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_WritePly, cloud_binary, Input::kCloudBinary)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_WritePly, mesh_binary, Input::kMeshBinary)->Unit(benchmark::kMillisecond);
 
+// The console table as usual, then the ratios: for every input, the CPU time per read of each route (the
+// median aggregate when repeated), PCL file / pectus file, and pectus file / pectus memory.
+class RatioReporter : public benchmark::ConsoleReporter {
+ public:
+  RatioReporter() : ConsoleReporter(::isatty(STDOUT_FILENO) ? OO_Color : OO_None) {}
+
+  void ReportRuns(const std::vector<Run>& runs) override {
+    ConsoleReporter::ReportRuns(runs);
+    for (const Run& run : runs) {
+      if (run.error_occurred) continue;
+      const bool median = run.run_type == Run::RT_Aggregate && run.aggregate_name == "median";
+      if (run.run_type == Run::RT_Aggregate && !median) continue;
+      const std::string name = run.run_name.str();  // "BM_FilePcl/cloud_ascii"
+      const auto slash = name.find('/');
+      if (slash == std::string::npos) continue;
+      double& slot = ms_[name.substr(slash + 1)][name.substr(0, slash)];
+      if (median || slot == 0.0) slot = run.GetAdjustedCPUTime();  // a median replaces single runs
+    }
+  }
+
+  void Finalize() override {
+    std::FILE* out = stdout;
+    std::fprintf(out,
+                 "\nratios (CPU ms per read; PCL has no in-memory PLY reader, so memory is pectus only)\n"
+                 "%-18s %12s %12s %14s %16s %18s\n",
+                 "input", "pectus file", "PCL file", "pectus memory", "PCL / pectus file",
+                 "pectus file / memory");
+    for (const auto& [input, by] : ms_) {
+      auto get = [&](const char* route) {
+        const auto it = by.find(route);
+        return it == by.end() ? 0.0 : it->second;
+      };
+      const double file = get("BM_FilePectus"), pcl = get("BM_FilePcl"), memory = get("BM_MemoryPectus");
+      if (file == 0.0 && memory == 0.0) continue;  // the writer's rows
+      std::fprintf(out, "%-18s %12.2f %12.2f %14.2f %16.2fx %17.2fx\n", input.c_str(), file, pcl, memory,
+                   file > 0.0 ? pcl / file : 0.0, memory > 0.0 ? file / memory : 0.0);
+    }
+    std::fflush(out);
+  }
+
+ private:
+  std::map<std::string, std::map<std::string, double>> ms_;  // input -> route -> CPU ms per read
+};
+
 }  // namespace
 }  // namespace pectus
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  // PCL warns on every read of a cloud without its PointNormal's `curvature` field: errors only.
+  pcl::console::setVerbosityLevel(pcl::console::L_ERROR);
+  pectus::RatioReporter reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  benchmark::Shutdown();
+  pectus::RemoveTempFiles();
+  return 0;
+}
