@@ -1,6 +1,7 @@
 // Benchmarks and acceptance measurements of the shape model (issue 6), printed as JSON; figures and
 // commands in docs/benchmarks/model.md.
-//   model_benchmark pca [SUBJECTS=1000]          PCA time (Gram route) against Eigen's SVD and numpy's
+//   model_benchmark pca [SUBJECTS=1000]          PCA time (Gram route) against Eigen's SVD and numpy's SVD
+//                                                and Gram route, as ratios
 //   model_benchmark holefill COHORT OUT [PNG]    hole filling and the profile-fit choice, on the surfaces
 //                                                that `pectus pipeline COHORT --out OUT` made
 //   model_benchmark cohort COHORT OUT            the pipeline's mean and modes against the generator's truth
@@ -16,10 +17,13 @@ int main() {
   return 2;
 }
 #else
+#include <omp.h>
 #include <sys/resource.h>
 
 #include <Eigen/SVD>
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -41,7 +45,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// 1. PCA of N subjects of the generator's population sampled on a 51 x 101 grid (15453 numbers each).
+// 1. PCA of N subjects of the generator's population sampled on a 51 x 101 grid (15453 numbers each), by
+// every route in the same run from the same uncentred matrix (centring inside every time): pectus's
+// BuildShapeModel (the Gram route: eigen decomposition of X X', modes and scores), Eigen's BDCSVD of X,
+// and numpy's full SVD and Gram route (scripts/peers/numpy_pca.py, the same steps as pectus's), each as a
+// ratio to pectus's time. numpy is given as many threads as pectus uses (OMP_NUM_THREADS,
+// OPENBLAS_NUM_THREADS); the BLAS it runs on is reported.
 nlohmann::json Pca(int n) {
   const datasets::PopulationModel population = datasets::PopulationModel::Default();
   const datasets::ShapeGrid grid;
@@ -56,36 +65,69 @@ nlohmann::json Pca(int n) {
   const ShapeModel model = BuildShapeModel(shapes);
   const double gram_s = Now() - t, gram_cpu_s = CpuSeconds() - cpu0;
   t = Now();
+  const double svd_cpu0 = CpuSeconds();
   const Eigen::MatrixXd X = shapes.rowwise() - shapes.colwise().mean();
   const Eigen::BDCSVD<Eigen::MatrixXd> svd(X, Eigen::ComputeThinV);
-  const double svd_s = Now() - t;
+  const double svd_s = Now() - t, svd_cpu_s = CpuSeconds() - svd_cpu0;
   const Eigen::VectorXd lambda = svd.singularValues().array().square() / double(n - 1);
   const int k = std::min<int>(20, model.num_modes());
   const double rel =
       ((model.variances.head(k) - lambda.head(k)).array() / lambda.head(k).array()).abs().maxCoeff();
-  // numpy on the same matrix, in the same run.
+  // numpy on the same (uncentred) matrix, in the same run.
+  const int threads = omp_get_max_threads();
   const fs::path raw = fs::temp_directory_path() / "pectus_model_benchmark_shapes.f64";
-  std::ofstream(raw, std::ios::binary).write(reinterpret_cast<const char*>(X.data()), X.size() * 8);
-  const std::string py = "/usr/bin/python3 -c \"import numpy as np,time;X=np.fromfile('" + raw.string() +
-                         "').reshape(" + std::to_string(X.cols()) + "," + std::to_string(n) +
-                         ").T;t=time.time();np.linalg.svd(X,full_matrices=False);print(time.time()-t)\"";
-  double numpy_s = -1.0;
+  std::ofstream(raw, std::ios::binary)
+      .write(reinterpret_cast<const char*>(shapes.data()), static_cast<std::streamsize>(shapes.size() * 8));
+  const std::string py = "OMP_NUM_THREADS=" + std::to_string(threads) +
+                         " OPENBLAS_NUM_THREADS=" + std::to_string(threads) + " /usr/bin/python3 " +
+                         PECTUS_SOURCE_DIR + "/scripts/peers/numpy_pca.py " + raw.string() + " " +
+                         std::to_string(n) + " " + std::to_string(shapes.cols());
+  std::string text;
   if (FILE* p = popen(py.c_str(), "r")) {
-    if (std::fscanf(p, "%lf", &numpy_s) != 1) numpy_s = -1.0;
+    char buf[4096];
+    for (std::size_t got; (got = std::fread(buf, 1, sizeof buf, p)) > 0;) text.append(buf, got);
     pclose(p);
   }
   fs::remove(raw);
+  nlohmann::json numpy = nlohmann::json::parse(text, nullptr, false);
+  nlohmann::json routes = {
+      {"pectus_gram",
+       {{"what", "pectus BuildShapeModel: eigen of X X', modes, scores"},
+        {"seconds", gram_s},
+        {"cpu_seconds", gram_cpu_s}}},
+      {"eigen_bdcsvd",
+       {{"what", "Eigen BDCSVD of X (thin V)"}, {"seconds", svd_s}, {"cpu_seconds", svd_cpu_s}}}};
+  if (numpy.is_discarded() || !numpy.contains("routes")) {
+    numpy = {{"error", "failed: " + py}};
+  } else {
+    routes["numpy_svd"] = {{"what", "numpy linalg.svd of X (thin)"},
+                           {"seconds", numpy["routes"]["svd"]["seconds_median"]},
+                           {"cpu_seconds", numpy["routes"]["svd"]["cpu_seconds_median"]}};
+    routes["numpy_gram_eigh"] = {{"what", "numpy linalg.eigh of X X', modes, scores (pectus's steps)"},
+                                 {"seconds", numpy["routes"]["gram_eigh"]["seconds_median"]},
+                                 {"cpu_seconds", numpy["routes"]["gram_eigh"]["cpu_seconds_median"]}};
+    // pectus's variances against numpy's SVD (an independent route).
+    const nlohmann::json& v = numpy["routes"]["svd"]["variances_first_20"];
+    double numpy_rel = 0.0;
+    for (int c = 0; c < k && c < static_cast<int>(v.size()); ++c)
+      numpy_rel = std::max(numpy_rel, std::abs(model.variances[c] / v[c].get<double>() - 1.0));
+    numpy["max_relative_variance_difference_pectus_vs_numpy_svd_first_20"] = numpy_rel;
+    numpy.erase("routes");
+  }
+  for (auto& [name, r] : routes.items()) {
+    r["over_pectus"] = r["seconds"].get<double>() / gram_s;
+    r["cpu_over_pectus"] = r["cpu_seconds"].get<double>() / gram_cpu_s;
+  }
   return {{"subjects", n},
           {"numbers_per_shape", shapes.cols()},
           {"modes", model.num_modes()},
+          {"threads", threads},
           {"pectus_gram_pca_s", gram_s},
           {"pectus_gram_pca_cpu_s", gram_cpu_s},
           {"limit_s", 10},
           {"holds", gram_s <= 10.0},
-          {"eigen_bdcsvd_s", svd_s},
-          {"numpy_svd_s", numpy_s},
-          {"bdcsvd_over_pectus", svd_s / gram_s},
-          {"numpy_over_pectus", numpy_s / gram_s},
+          {"routes", routes},
+          {"numpy", numpy},
           {"max_relative_eigenvalue_difference_first_20", rel}};
 }
 
