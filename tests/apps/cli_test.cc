@@ -13,6 +13,7 @@
 #include "shape/render/image.h"
 #include "tests/support/cli_run.h"
 #include "tests/support/scratch_dir.h"
+#include "tests/support/require_shared_data.h"
 
 namespace pectus {
 namespace {
@@ -27,7 +28,7 @@ class CliTest : public testing_support::ScratchDirTest {
   void Write(const std::string& name, const std::string& text) const { std::ofstream(dir_ / name) << text; }
 };
 
-const std::string kBunny = std::string(PECTUS_SHARED_DIR) + "/datasets/stanford_bunny/";
+const std::string kBunny = testing_support::BunnyDirectory();
 
 const char* kSquare =
     "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
@@ -35,6 +36,7 @@ const char* kSquare =
     "0 0 0\n100 0 0\n100 100 0\n0 100 0\n3 0 1 2\n3 0 2 3\n";
 
 TEST_F(CliTest, InfoReportsBunnyPointCount) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kBunnyConf);
   const CliRun r = Pectus("info " + kBunny + "bun000.ply --report " + P("r.json"));
   ASSERT_EQ(r.code, 0) << r.output;
   std::ifstream in(P("r.json"));
@@ -125,6 +127,7 @@ TEST_F(CliTest, HelpShowsAnExample) {
 }
 
 TEST_F(CliTest, PlaceWritesOneCloudOfAllSweeps) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kBunnyConf);
   const CliRun r = Pectus("place --poses " + kBunny + "bun.conf --input-units m -o " + P("bunny.ply") +
                           " --report " + P("r.json") + " --quiet");
   ASSERT_EQ(r.code, 0) << r.output;

@@ -28,6 +28,7 @@
 #include "shape/core/error.h"
 #include "shape/core/log.h"
 #include "shape/io/patient_table_io.h"
+#include "tests/support/shared_data.h"
 
 namespace {
 
@@ -154,7 +155,7 @@ nlohmann::json CartilageSweep(const GenericRibcage& generic, const PatientTableR
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string table = std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv";
+  std::string table;  // default: the CT table of the shared folder
   std::string patient = "57", dataset_path, ccx;
   bool all = false, sweep = false;
   GenericRibcageOptions generic_options;
@@ -192,6 +193,11 @@ int main(int argc, char** argv) {
              "[--cell-mm MM] [--cartilage-mpa E] [--ccx CCX] [--cartilage-sweep]\n";
       return 2;
     }
+  }
+  if (table.empty()) {
+    if (!pectus::testing_support::HaveSharedFile("fem_benchmark", pectus::testing_support::kPatientTable))
+      return 3;
+    table = pectus::testing_support::SharedPath(pectus::testing_support::kPatientTable);
   }
   try {
     nlohmann::json report;

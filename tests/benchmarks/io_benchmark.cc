@@ -17,6 +17,7 @@
 #include "shape/io/format_parsers.h"
 #include "shape/io/mapped_file.h"
 #include "shape/io/mesh_io.h"
+#include "tests/support/shared_data.h"
 
 namespace pectus {
 namespace {
@@ -107,7 +108,7 @@ void BM_ParsePly(benchmark::State& state, Input input) {
 }
 
 void BM_ParsePlyBunny(benchmark::State& state) {
-  const MappedFile file(std::string(PECTUS_SHARED_DIR) + "/datasets/stanford_bunny/bun000.ply");
+  const MappedFile file(testing_support::BunnyDirectory() + "bun000.ply");
   for (auto _ : state) {
     TriangleMesh mesh = ParsePly(file.bytes(), file.path());
     benchmark::DoNotOptimize(mesh.vertices.positions.data());
@@ -177,4 +178,13 @@ BENCHMARK_CAPTURE(BM_WritePly, mesh_binary, Input::kMeshBinary)->Unit(benchmark:
 }  // namespace
 }  // namespace pectus
 
-BENCHMARK_MAIN();
+// BENCHMARK_MAIN(), after checking for the shared bunny sweep BM_ParsePlyBunny reads.
+int main(int argc, char** argv) {
+  if (!pectus::testing_support::HaveSharedFile("io_benchmark", "datasets/stanford_bunny/bun000.ply"))
+    return 3;
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
