@@ -11,20 +11,13 @@
 
 #include "shape/core/number_format.h"
 #include "shape/io/mesh_io.h"
-#include "tests/support/cli_run.h"
-#include "tests/support/scratch_dir.h"
+#include "tests/support/command_test.h"
 
 namespace pectus {
 namespace {
-namespace fs = std::filesystem;
 
-using testing_support::CliRun;
-using testing_support::Pectus;
-
-class ReconstructCommand : public testing_support::ScratchDirTest {
+class ReconstructCommand : public testing_support::CommandTest {
  protected:
-  ReconstructCommand() : ScratchDirTest("pectus_reconstruct_") {}
-
   // n points of a sphere of radius r (Fibonacci lattice), as ASCII XYZ.
   void WriteSphere(const std::string& name, int n, double r) const {
     std::ofstream out(P(name));
@@ -33,16 +26,6 @@ class ReconstructCommand : public testing_support::ScratchDirTest {
       const double z = 1.0 - 2.0 * (i + 0.5) / n, rho = std::sqrt(1.0 - z * z);
       out << r * rho * std::cos(golden * i) << " " << r * rho * std::sin(golden * i) << " " << r * z << "\n";
     }
-  }
-
-  // The command fails with exit code 3, names `file` and says `fragment`, and writes nothing.
-  void ExpectBadInput(const std::string& args, const std::string& file, const std::string& fragment) const {
-    const std::size_t before = CountFiles();
-    const CliRun run = Pectus(args);
-    EXPECT_EQ(run.code, 3) << run.output;
-    EXPECT_NE(run.output.find(file), std::string::npos) << run.output;
-    EXPECT_NE(run.output.find(fragment), std::string::npos) << run.output;
-    EXPECT_EQ(CountFiles(), before) << "a failed run left a file behind";
   }
 };
 

@@ -10,16 +10,12 @@
 #include <string>
 
 #include "datasets/scan_writer.h"
-#include "tests/support/cli_run.h"
-#include "tests/support/scratch_dir.h"
+#include "tests/support/command_test.h"
 #include "tests/support/require_shared_data.h"
 
 namespace pectus::datasets {
 namespace {
 namespace fs = std::filesystem;
-
-using testing_support::CliRun;
-using testing_support::Pectus;
 
 std::string Slurp(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -28,10 +24,7 @@ std::string Slurp(const fs::path& p) {
   return s.str();
 }
 
-class SynthCommand : public testing_support::ScratchDirTest {
- protected:
-  SynthCommand() : ScratchDirTest("pectus_synth_") {}
-};
+using SynthCommand = testing_support::CommandTest;
 
 const std::string kSmall = " --sweeps 3 --spacing 5 --truth-spacing 10 -q";
 const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
