@@ -6,6 +6,7 @@
 #include "apps/command.h"
 #include "shape/core/error.h"
 #include "shape/core/log.h"
+#include "shape/core/number_format.h"
 #include "shape/io/mesh_io.h"
 #include "shape/model/model_quality.h"
 #include "shape/model/shape_grid.h"
@@ -228,7 +229,8 @@ class ModelCommand : public Command {
     std::ostringstream out;
     out << model_in_ << ": " << model.num_points() << " points, " << model.faces.rows() << " triangles, "
         << model.num_modes() << " modes from " << model.scores.rows() << " subjects; total variance "
-        << model.total_variance << " mm^2\n  mode  eigenvalue_mm2  explained  cumulative\n";
+        << FormatSignificant(model.total_variance)
+        << " mm^2\n  mode  eigenvalue_mm2  explained  cumulative\n";
     const Eigen::VectorXd f = model.ExplainedFraction(), c = model.CumulativeFraction();
     for (int k = 0; k < std::min(10, model.num_modes()); ++k) {
       char line[128];
@@ -349,9 +351,9 @@ class ModelCommand : public Command {
     context->report["reconstruction_rms_mm"] = p.rms_error_mm;
     context->report["reconstruction_max_mm"] = p.max_error_mm;
     context->report["mahalanobis"] = p.mahalanobis;
-    std::printf("%s: %lld modes, reconstruction RMS %.4f mm (max %.4f mm), Mahalanobis distance %.3f\n",
-                grid_in_.c_str(), static_cast<long long>(p.scores.size()), p.rms_error_mm, p.max_error_mm,
-                p.mahalanobis);
+    std::printf("%s: %lld modes, reconstruction RMS %s (max %s), Mahalanobis distance %s\n", grid_in_.c_str(),
+                static_cast<long long>(p.scores.size()), FormatMm(p.rms_error_mm).c_str(),
+                FormatMm(p.max_error_mm).c_str(), FormatSignificant(p.mahalanobis).c_str());
   }
 
   CLI::App *build_ = nullptr, *info_ = nullptr, *modes_ = nullptr, *evaluate_ = nullptr, *project_ = nullptr;

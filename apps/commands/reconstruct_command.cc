@@ -5,12 +5,25 @@
 #include "apps/command.h"
 #include "shape/core/error.h"
 #include "shape/core/log.h"
+#include "shape/core/number_format.h"
 #include "shape/io/mesh_io.h"
 #include "shape/surface/reconstruct.h"
 
 namespace pectus::cli {
 namespace {
 namespace fs = std::filesystem;
+
+// The summary line: the size of the surface and how far the fit's on-surface points are from it (RMS and
+// 95th percentile). Carr's maximum residual is left to the report: it is set by the points the fit
+// rejects as outliers and reads as an error it is not.
+std::string SummaryLine(const ReconstructResult& r) {
+  std::ostringstream out;
+  out << r.mesh.num_vertices() << " vertices, " << r.mesh.num_faces() << " triangles from " << r.used_points
+      << " points; " << r.trim.holes_filled << " holes filled"
+      << (r.trim.boundary_edges == 0 ? ", watertight" : "") << "; on-surface residual RMS "
+      << FormatMm(r.accuracy.on_surface_rms_mm) << ", p95 " << FormatMm(r.accuracy.on_surface_p95_mm);
+  return out.str();
+}
 
 class ReconstructCommand : public Command {
  public:
@@ -105,8 +118,9 @@ class ReconstructCommand : public Command {
     r["normals"] = result.normals_source;
     r["vertices"] = result.mesh.num_vertices();
     r["faces"] = result.mesh.num_faces();
-    r["fitting_accuracy_mm"] = result.accuracy.fitting_accuracy_mm;
-    r["fitting"] = {{"on_surface_max_mm", result.accuracy.on_surface_max_mm},
+    // Carr et al.'s fitting accuracy (dissertation Eq. 11): the largest residual over every constraint.
+    r["fitting"] = {{"carr_max_residual_mm", result.accuracy.fitting_accuracy_mm},
+                    {"on_surface_max_mm", result.accuracy.on_surface_max_mm},
                     {"on_surface_rms_mm", result.accuracy.on_surface_rms_mm},
                     {"on_surface_p95_mm", result.accuracy.on_surface_p95_mm},
                     {"off_surface_max_mm", result.accuracy.off_surface_max_mm},
@@ -130,8 +144,9 @@ class ReconstructCommand : public Command {
                     {"components", result.check->components},
                     {"area_mm2", result.check->area_mm2}};
     }
-    r["message"] = result.message;
-    Info(result.message);
+    const std::string summary = SummaryLine(result);
+    r["message"] = summary;
+    Info(summary);
   }
 
  private:

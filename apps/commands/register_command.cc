@@ -10,6 +10,7 @@
 #include "registration/pair_registration.h"
 #include "shape/core/error.h"
 #include "shape/core/log.h"
+#include "shape/core/number_format.h"
 #include "shape/io/landmark_io.h"
 #include "shape/io/mesh_io.h"
 #include "shape/io/transform_io.h"
@@ -151,7 +152,7 @@ class RegisterCommand : public Command {
     // A rigid pose written with doubles reads back with a scale of 1 to rounding (cbrt of a determinant).
     if (!(std::abs(initial.scale - 1.0) <= 1e-9)) {
       ThrowBadInput(initial_,
-                    "the initial pose must be rigid (scale 1), not " + std::to_string(initial.scale));
+                    "the initial pose must be rigid (scale 1), not " + FormatSignificant(initial.scale, 12));
     }
     initial.scale = 1.0;
     PairRegistrationResult r;

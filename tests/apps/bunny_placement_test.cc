@@ -8,11 +8,12 @@
 #include "registration/kdtree.h"
 #include "shape/io/mesh_io.h"
 #include "shape/io/stanford_conf.h"
+#include "tests/support/require_shared_data.h"
 
 namespace pectus {
 namespace {
 
-const std::string kBunny = std::string(PECTUS_SHARED_DIR) + "/datasets/stanford_bunny/";
+const std::string kBunny = testing_support::BunnyDirectory();
 
 struct Sweep {
   std::string file;
@@ -34,6 +35,7 @@ std::vector<Sweep> PlacedSweeps() {
 }
 
 TEST(BunnyPlacement, TenSweepsWithExactCounts) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kBunnyConf);
   const std::map<std::string, Eigen::Index> expected = {
       {"bun000.ply", 40256}, {"bun045.ply", 40097}, {"bun090.ply", 30379}, {"bun180.ply", 40251},
       {"bun270.ply", 31701}, {"bun315.ply", 35336}, {"chin.ply", 37738},   {"ear_back.ply", 32193},
@@ -67,6 +69,7 @@ double MedianOverlapDistance(const PointCloud& a, const KdTree3& b, std::size_t*
 // only touch at their borders see each other at grazing angles, where the sample spacing of the scanner,
 // not the alignment, sets the distance: top2 meets bun000 on 10 % of its points at a median of 0.9 mm.)
 TEST(BunnyPlacement, OverlappingSweepsLieWithinSixTenthsOfAMillimetre) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kBunnyConf);
   const auto sweeps = PlacedSweeps();
   std::vector<KdTree3> trees;
   trees.reserve(sweeps.size());
@@ -91,6 +94,7 @@ TEST(BunnyPlacement, OverlappingSweepsLieWithinSixTenthsOfAMillimetre) {
 }
 
 TEST(BunnyPlacement, PlainRotationConventionWouldBeWrong) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kBunnyConf);
   // The convention matters: with R(q) instead of R(q)^T the sweeps stay tens of millimetres apart.
   std::vector<ScanPose> poses = ReadStanfordConf(kBunny + "bun.conf");
   ScaleTranslations(1000.0, &poses);

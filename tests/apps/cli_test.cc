@@ -10,24 +10,16 @@
 
 #include "registration/kdtree.h"
 #include "shape/io/mesh_io.h"
-#include "shape/render/image.h"
-#include "tests/support/cli_run.h"
-#include "tests/support/scratch_dir.h"
+#include "tests/support/command_test.h"
+#include "tests/support/require_shared_data.h"
 
 namespace pectus {
 namespace {
 namespace fs = std::filesystem;
 
-using testing_support::CliRun;
-using testing_support::Pectus;
+using CliTest = testing_support::CommandTest;
 
-class CliTest : public testing_support::ScratchDirTest {
- protected:
-  CliTest() : ScratchDirTest("pectus_cli_") {}
-  void Write(const std::string& name, const std::string& text) const { std::ofstream(dir_ / name) << text; }
-};
-
-const std::string kBunny = std::string(PECTUS_SHARED_DIR) + "/datasets/stanford_bunny/";
+const std::string kBunny = testing_support::BunnyDirectory();
 
 const char* kSquare =
     "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
@@ -35,6 +27,7 @@ const char* kSquare =
     "0 0 0\n100 0 0\n100 100 0\n0 100 0\n3 0 1 2\n3 0 2 3\n";
 
 TEST_F(CliTest, InfoReportsBunnyPointCount) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kBunnyConf);
   const CliRun r = Pectus("info " + kBunny + "bun000.ply --report " + P("r.json"));
   ASSERT_EQ(r.code, 0) << r.output;
   std::ifstream in(P("r.json"));
@@ -125,6 +118,7 @@ TEST_F(CliTest, HelpShowsAnExample) {
 }
 
 TEST_F(CliTest, PlaceWritesOneCloudOfAllSweeps) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kBunnyConf);
   const CliRun r = Pectus("place --poses " + kBunny + "bun.conf --input-units m -o " + P("bunny.ply") +
                           " --report " + P("r.json") + " --quiet");
   ASSERT_EQ(r.code, 0) << r.output;
@@ -149,21 +143,6 @@ TEST_F(CliTest, PlaceWritesOneCloudOfAllSweeps) {
   }
   std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
   EXPECT_LE(d[d.size() / 2], 0.7);
-}
-
-TEST_F(CliTest, RenderDrawsTheSquareAndRefusesAnUnknownScalar) {
-  Write("square.ply", kSquare);
-  const CliRun r = Pectus("render " + P("square.ply") + " -o " + P("square.png") + " --size 200 --quiet");
-  ASSERT_EQ(r.code, 0) << r.output;
-  const render::Image im = render::ReadImage(P("square.png"));
-  EXPECT_EQ(im.width, 200);
-  EXPECT_EQ(im.height, 200);
-  EXPECT_NE(im.at(100, 100).r, 255);  // the square fills the middle of the picture
-  EXPECT_EQ(im.at(2, 2).r, 255);      // the margin is background
-  const CliRun bad = Pectus("render " + P("square.ply") + " -o " + P("bad.png") + " --scalar curvature");
-  EXPECT_EQ(bad.code, 3) << bad.output;
-  EXPECT_NE(bad.output.find("curvature"), std::string::npos) << bad.output;
-  EXPECT_FALSE(fs::exists(P("bad.png")));
 }
 
 }  // namespace

@@ -12,25 +12,19 @@
 #include "shape/io/landmark_io.h"
 #include "shape/io/mesh_io.h"
 #include "tests/shape/model/analytic_chest.h"
-#include "tests/support/cli_run.h"
-#include "tests/support/scratch_dir.h"
+#include "tests/support/command_test.h"
 
 namespace pectus {
 namespace {
 namespace fs = std::filesystem;
-
-using testing_support::CliRun;
-using testing_support::Pectus;
 
 nlohmann::json ReadJson(const fs::path& path) {
   std::ifstream in(path);
   return nlohmann::json::parse(in);
 }
 
-class ModelCommands : public testing_support::ScratchDirTest {
+class ModelCommands : public testing_support::CommandTest {
  protected:
-  ModelCommands() : ScratchDirTest("pectus_model_cli_") {}
-
   // A chest with a depression of `dent_mm`, meshed at 2 mm beyond its landmark ROI, as NAME.ply and
   // NAME.mrk.json.
   testing::AnalyticChest WriteChest(const std::string& name, double dent_mm) const {

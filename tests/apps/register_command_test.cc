@@ -15,27 +15,19 @@
 #include "shape/io/mesh_io.h"
 #include "shape/io/transform_io.h"
 #include "tests/registration/synthetic_chest.h"
-#include "tests/support/cli_run.h"
-#include "tests/support/scratch_dir.h"
+#include "tests/support/command_test.h"
 
 namespace pectus {
 namespace {
 namespace fs = std::filesystem;
-
-using testing_support::CliRun;
-using testing_support::Pectus;
 
 // Landmarks on the analytic chest, moved by T, with Gaussian noise per axis.
 LandmarkSet ChestLandmarks(const Rigid3& T, double noise_mm, std::uint64_t seed) {
   return testing::ChestLandmarks(Similarity3::FromRigid(T), noise_mm, seed);
 }
 
-class RegisterCommand : public testing_support::ScratchDirTest {
+class RegisterCommand : public testing_support::CommandTest {
  protected:
-  RegisterCommand() : ScratchDirTest("pectus_register_") {}
-  std::size_t CountFiles(const fs::path& in) const {
-    return static_cast<std::size_t>(std::distance(fs::directory_iterator(in), {}));
-  }
   // One sampling of the chest (0.2 mm noise) in the frame `T_world_scan`^-1, written with its landmarks
   // (3 mm noise) as NAME.ply and NAME.mrk.json.
   void WriteScan(const std::string& name, const Rigid3& T_world_scan, std::uint64_t seed,
@@ -92,12 +84,12 @@ TEST_F(RegisterCommand, PoorFitAndUnusableLandmarksExitNonZeroAndWriteNothing) {
   Rigid3 away = Rigid3::Identity();
   away.translation() << 800.0, 0.0, 0.0;
   WriteTransformJson(P("start.json"), Similarity3::FromRigid(away));
-  const std::size_t before = CountFiles(dir_);
+  const std::size_t before = CountFiles();
   const CliRun poor = Pectus("register " + P("moving.ply") + " --to " + P("fixed.ply") + " --initial " +
                              P("start.json") + " --transform " + P("T.json") + " --report " + P("r.json"));
   EXPECT_EQ(poor.code, 1) << poor.output;
   EXPECT_NE(poor.output.find("overlap"), std::string::npos) << poor.output;
-  EXPECT_EQ(CountFiles(dir_), before);
+  EXPECT_EQ(CountFiles(), before);
 
   LandmarkSet two = ChestLandmarks(Rigid3::Identity(), 0.0, 1);
   two.items.resize(2);
@@ -108,7 +100,7 @@ TEST_F(RegisterCommand, PoorFitAndUnusableLandmarksExitNonZeroAndWriteNothing) {
   EXPECT_EQ(bad.code, 3) << bad.output;
   EXPECT_NE(bad.output.find("two.mrk.json"), std::string::npos) << bad.output;
   EXPECT_NE(bad.output.find("at least 3"), std::string::npos) << bad.output;
-  EXPECT_EQ(CountFiles(dir_), before + 1);  // two.mrk.json only
+  EXPECT_EQ(CountFiles(), before + 1);  // two.mrk.json only
 }
 
 // A cohort folder of three scans of one chest at known poses: to the reference (the second file) and

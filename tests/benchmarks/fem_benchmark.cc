@@ -33,6 +33,7 @@
 #include "shape/core/error.h"
 #include "shape/core/log.h"
 #include "shape/io/patient_table_io.h"
+#include "tests/support/shared_data.h"
 
 namespace {
 
@@ -264,7 +265,7 @@ nlohmann::json CartilageSweep(const GenericRibcage& generic, const PatientTableR
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string table = std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv";
+  std::string table;  // default: the CT table of the shared folder
   std::string patient = "57", dataset_path, ccx;
   std::vector<int> ccx_threads = {1, 2};
   bool all = false, sweep = false;
@@ -311,6 +312,11 @@ int main(int argc, char** argv) {
              "[--cell-mm MM] [--cartilage-mpa E] [--ccx CCX] [--ccx-threads 1,2] [--cartilage-sweep]\n";
       return 2;
     }
+  }
+  if (table.empty()) {
+    if (!pectus::testing_support::HaveSharedFile("fem_benchmark", pectus::testing_support::kPatientTable))
+      return 3;
+    table = pectus::testing_support::SharedPath(pectus::testing_support::kPatientTable);
   }
   try {
     nlohmann::json report;

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "tests/benchmarks/io_benchmark_inputs.h"
+#include "tests/support/shared_data.h"
 
 namespace pectus {
 namespace {
@@ -160,6 +161,10 @@ class RatioReporter : public benchmark::ConsoleReporter {
 }  // namespace pectus
 
 int main(int argc, char** argv) {
+  for (const char* bunny :
+       {"datasets/stanford_bunny/bun000.ply", "datasets/stanford_bunny/reconstruction/bun_zipper.ply"}) {
+    if (!pectus::testing_support::HaveSharedFile("io_benchmark", bunny)) return 3;
+  }
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   // PCL warns on every read of a cloud without its PointNormal's `curvature` field: errors only.

@@ -17,6 +17,7 @@
 #include "shape/io/format_parsers.h"
 #include "shape/io/mapped_file.h"
 #include "shape/io/mesh_io.h"
+#include "tests/support/shared_data.h"
 
 namespace pectus {
 namespace {
@@ -95,7 +96,7 @@ bool IsOurs(Input input) { return input != Input::kBunnyScan && input != Input::
 /// element to skip) and reconstruction/bun_zipper.ply (35 947 vertices, 69 451 triangles), both ASCII, in
 /// metres.
 std::string BunnyPath(Input input) {
-  const std::string dir = std::string(PECTUS_SHARED_DIR) + "/datasets/stanford_bunny/";
+  const std::string dir = testing_support::SharedPath("datasets/stanford_bunny/");
   return dir + (input == Input::kBunnyScan ? "bun000.ply" : "reconstruction/bun_zipper.ply");
 }
 

@@ -110,6 +110,7 @@ int main(int argc, char** argv) {
     if (key == "--workdir") workdir = value;
     if (key == "--evaluate") evaluate = value;
   }
+  if (!testing_support::HaveSharedFile("merge_benchmark", testing_support::kBunnyConf)) return 3;
   const testing_support::BunnySweeps bunny = testing_support::ReadBunnySweeps();
   const std::vector<ScanPose>& poses = bunny.poses;
   const std::vector<PointCloud>& sweeps = bunny.sweeps;

@@ -23,6 +23,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -182,6 +183,10 @@ int main(int argc, char** argv) {
     if (key == "--methods") methods = Split(value);
     if (key == "--threads") threads = Split(value);
     if (key == "--timeout") timeout = std::atof(value.c_str());
+  }
+  if (std::find(datasets.begin(), datasets.end(), "bunny") != datasets.end() &&
+      !testing_support::HaveSharedFile("reconstruct_benchmark", testing_support::kBunnyConf)) {
+    return 3;
   }
   fs::create_directories(workdir);
   const std::string self = fs::read_symlink("/proc/self/exe").string();

@@ -154,6 +154,8 @@ int Main(int argc, char** argv) {
     }
   }
   if (!speed && !pairs && !bunny) speed = pairs = bunny = true;
+  if (bunny && !testing_support::HaveSharedFile("registration_benchmark", testing_support::kBunnyConf))
+    return 3;
   const auto t0 = Clock::now();
   const double c0 = CpuSeconds();
   json out;

@@ -17,6 +17,7 @@
 #include "shape/io/mesh_io.h"
 #include "shape/io/stanford_conf.h"
 #include "tests/benchmarks/registration_benchmark_peers.h"
+#include "tests/support/shared_data.h"
 
 namespace pectus {
 namespace {
@@ -117,7 +118,7 @@ json BunnyLoop(const std::map<std::string, Rigid3>& found, const std::map<std::s
 }
 
 json Bunny(int seeds, bool peers, json* loop) {
-  const fs::path dir = fs::path(PECTUS_SHARED_DIR) / "datasets" / "stanford_bunny";
+  const fs::path dir = testing_support::BunnyDirectory();
   ReadOptions metres;
   metres.input_units = LengthUnit::kMetre;
   metres.warn_units = false;

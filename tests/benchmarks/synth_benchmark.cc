@@ -23,6 +23,7 @@
 #include "datasets/synth_preview.h"
 #include "shape/render/colormap.h"
 #include "shape/render/plot.h"
+#include "tests/support/shared_data.h"
 
 using namespace pectus;
 using namespace pectus::datasets;
@@ -122,7 +123,7 @@ void Convergence(const fs::path& images) {
 
 void Patients() {
   const std::vector<PatientTableRow> rows =
-      ReadPatientTable(std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv");
+      ReadPatientTable(testing_support::SharedPath(testing_support::kPatientTable));
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<double> err(rows.size() * 3);
 #pragma omp parallel for schedule(dynamic)
@@ -244,6 +245,7 @@ void Images(const fs::path& dir) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (!testing_support::HaveSharedFile("synth_benchmark", testing_support::kPatientTable)) return 3;
   fs::path images;
   if (argc == 3 && std::string(argv[1]) == "--images") images = argv[2];
   const fs::path out = fs::temp_directory_path() / "pectus_synth_benchmark";

@@ -8,11 +8,12 @@
 #include <algorithm>
 
 #include "datasets/synth.h"
+#include "tests/support/require_shared_data.h"
 
 namespace pectus::datasets {
 namespace {
 
-const std::string kTable = std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv";
+const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
 
 struct SliceMeasure {
   double width = 0, depth = 0, depression = 0;
@@ -60,6 +61,7 @@ SliceMeasure MeasureSlice(const ChestSurface& wall, double v) {
 // Acceptance: rows spanning the table (deepest depression 40 mm, flattest, narrowest, the validation patient
 // 57).
 TEST(PatientTable, SubjectFromARowGivesBackWidthDepthAndDepressionWithin2mm) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
   const std::vector<PatientTableRow> rows = ReadPatientTable(kTable);
   std::vector<int> chosen = {57, 3};
   auto extreme = [&](auto key) {

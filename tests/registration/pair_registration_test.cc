@@ -11,6 +11,7 @@
 #include "shape/io/mesh_io.h"
 #include "shape/io/stanford_conf.h"
 #include "synthetic_chest.h"
+#include "tests/support/require_shared_data.h"
 
 namespace pectus {
 namespace {
@@ -117,7 +118,8 @@ TEST(RegisterPair, SwappedLandmarksAreAFailure) {
 class BunnyPairs : public ::testing::TestWithParam<std::pair<const char*, const char*>> {};
 
 TEST_P(BunnyPairs, BackToPublishedPlacement) {
-  const std::filesystem::path dir = std::filesystem::path(PECTUS_SHARED_DIR) / "datasets" / "stanford_bunny";
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kBunnyConf);
+  const std::filesystem::path dir = testing_support::BunnyDirectory();
   ReadOptions metres;
   metres.input_units = LengthUnit::kMetre;
   const auto [fixed_name, moving_name] = GetParam();

@@ -8,11 +8,9 @@
 #include "shape/core/geometry.h"
 #include "shape/io/mesh_io.h"
 #include "shape/io/stanford_conf.h"
+#include "tests/support/shared_data.h"
 
 namespace pectus::testing_support {
-
-/// The bunny folder of the shared datasets, with a trailing slash.
-inline std::string BunnyDirectory() { return std::string(PECTUS_SHARED_DIR) + "/datasets/stanford_bunny/"; }
 
 /// The sweeps named in bun.conf, in its order.
 struct BunnySweeps {

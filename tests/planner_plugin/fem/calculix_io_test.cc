@@ -14,11 +14,12 @@
 #include "planner_plugin/ribcage/ribcage_fem.h"
 #include "shape/core/atomic_file.h"
 #include "shape/core/error.h"
+#include "tests/support/require_shared_data.h"
 
 namespace pectus::planner {
 namespace {
 
-const std::string kTable = std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv";
+const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
 namespace fs = std::filesystem;
 
 // Runs ccx on `mesh` with `load` in a fresh temporary folder; returns its displacements.
@@ -94,6 +95,7 @@ TEST(Calculix, ThreeMaterialBarMatchesCcxC3D10) {
 // The patient-specific ribcage itself (a coarse mesh of patient 57: 10 mm cells), with the bar's push
 // at 0.85 of the sternal length.
 TEST(Calculix, PatientRibcageMatchesCcxC3D10) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
   GenericRibcageOptions o;
   o.sternum_cells_along = 28;
   o.rib_cell_length_mm = 10.0;

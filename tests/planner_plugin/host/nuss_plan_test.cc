@@ -12,14 +12,16 @@
 
 #include "shape/model/shape_model.h"
 #include "shape/model/statismo_io.h"
+#include "tests/support/require_shared_data.h"
 
 namespace pectus::planner {
 namespace {
 namespace fs = std::filesystem;
 
-const std::string kTable = std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv";
+const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
 
 TEST(NussPlan, TheSearchFindsTheKnownPlacementOfAnAverageChestMadeFromItAndTheFilesAreWritten) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
   const fs::path dir = fs::temp_directory_path() / ("pectus_nuss_plan_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const PlannerPlugin plugin = PlannerPlugin::Load(PECTUS_PLANNER_PLUGIN_PATH);

@@ -17,13 +17,14 @@
 #include "shape/model/shape_model.h"
 #include "shape/model/statismo_io.h"
 #include "tests/support/cli_run.h"
+#include "tests/support/require_shared_data.h"
 
 namespace pectus::planner {
 namespace {
 namespace fs = std::filesystem;
 using testing_support::Pectus;
 
-const std::string kTable = std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv";
+const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
 
 class PlanCommandTest : public ::testing::Test {
  protected:
@@ -48,6 +49,7 @@ class PlanCommandTest : public ::testing::Test {
 };
 
 TEST_F(PlanCommandTest, Patient57GivesTwoScenariosTheBestPlacementAndAnHtmlReportWithPictures) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
   const auto run =
       Pectus("plan --patient-table '" + kTable + "' --patient 57 --model " + Path("average.h5") +
              " --bar-position 0.85 --force 1700 --out " + Path("plan57") + " --report " + Path("r.json") +
@@ -103,6 +105,7 @@ TEST_F(PlanCommandTest, Patient57GivesTwoScenariosTheBestPlacementAndAnHtmlRepor
 }
 
 TEST_F(PlanCommandTest, BadInputAndUsageHaveTheirExitCodesAndWriteNothing) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
   const std::string common = "plan --patient-table '" + kTable + "' --model " + Path("average.h5") +
                              " --out " + Path("out") + " --cell-mm 8 --no-search";
   auto run = Pectus(common + " --patient nobody");  // an argument naming no patient of the table: usage

@@ -10,12 +10,13 @@
 #include <string>
 
 #include "planner_plugin/api/planner_api.h"
+#include "tests/support/require_shared_data.h"
 
 extern "C" void pectus_planner_api_layout_from_c(size_t* out, int capacity);
 
 namespace {
 
-const std::string kTable = std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv";
+const std::string kTable = pectus::testing_support::SharedPath(pectus::testing_support::kPatientTable);
 
 class PluginEntry : public ::testing::Test {
  protected:
@@ -84,6 +85,7 @@ TEST_F(PluginEntry, DefaultMaterialsAreTableOneWithTheCartilageCalibratedToInViv
 }
 
 TEST_F(PluginEntry, FailuresComeBackAsStatusesNamingWhatIsWrong) {
+  PECTUS_REQUIRE_SHARED_FILE(pectus::testing_support::kPatientTable);
   PectusPlannerStatus status{};
   PectusPlannerPatient patient{};
   // A table that is not there: bad input, naming the file.
@@ -120,6 +122,7 @@ TEST_F(PluginEntry, FailuresComeBackAsStatusesNamingWhatIsWrong) {
 }
 
 TEST_F(PluginEntry, APlannerThroughTheBoundaryMeasuresLikeTheCtAndSolves) {
+  PECTUS_REQUIRE_SHARED_FILE(pectus::testing_support::kPatientTable);
   PectusPlannerStatus status{};
   PectusPlannerPatient patient{};
   ASSERT_EQ(api_->read_patient(kTable.c_str(), "57", &patient, &status), PECTUS_PLANNER_OK) << status.message;

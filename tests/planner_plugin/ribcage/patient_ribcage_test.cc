@@ -3,11 +3,12 @@
 #include <gtest/gtest.h>
 
 #include "shape/core/error.h"
+#include "tests/support/require_shared_data.h"
 
 namespace pectus::planner {
 namespace {
 
-const std::string kTable = std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv";
+const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
 
 class PatientRibcageTest : public ::testing::Test {
  protected:
@@ -19,6 +20,7 @@ GenericRibcage* PatientRibcageTest::generic_ = nullptr;
 
 // Measuring the generated ribcage gives back the CT measurements it was made from.
 TEST_F(PatientRibcageTest, MeasuringTheRibcageGivesBackItsInputsWithinOneMillimetre) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
   const std::vector<PatientTableRow> rows = ReadPatientTable(kTable);
   ASSERT_EQ(rows.size(), 62u);
   // The deepest (3, 40 mm), a flat chest (48, 0 mm), the validation case (57), the smallest ribcage (43)

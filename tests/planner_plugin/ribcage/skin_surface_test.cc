@@ -4,13 +4,15 @@
 
 #include "planner_plugin/ribcage/ribcage_fem.h"
 #include "shape/core/error.h"
+#include "tests/support/require_shared_data.h"
 
 namespace pectus::planner {
 namespace {
 
-const std::string kTable = std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv";
+const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
 
 TEST(SkinSurface, LiesOverTheChestWallAndFollowsTheRibcage) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
   GenericRibcageOptions o;
   o.sternum_cells_along = 28;
   o.rib_cell_length_mm = 8.0;

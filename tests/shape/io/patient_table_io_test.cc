@@ -11,11 +11,12 @@
 #include <utility>
 
 #include "shape/core/error.h"
+#include "tests/support/require_shared_data.h"
 
 namespace pectus {
 namespace {
 
-const std::string kTable = std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv";
+const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
 const std::string kHeader = "patient,haller_index,width_mm,sternal_length_mm,depth_mm,depression_mm\n";
 
 // The error a table raises (fails the test if it raises none).
@@ -30,6 +31,7 @@ Error ErrorOf(const std::string& text) {
 }
 
 TEST(PatientTableIo, ReadsTheSixtyTwoPatientsOfTheDissertation) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
   const std::vector<PatientTableRow> rows = ReadPatientTable(kTable);
   ASSERT_EQ(rows.size(), 62u);
   const PatientTableRow& p57 = FindPatient(rows, 57, kTable);

@@ -14,6 +14,7 @@
 #include "shape/core/error.h"
 #include "shape/io/format_parsers.h"
 #include "shape/io/mesh_io.h"
+#include "tests/support/require_shared_data.h"
 
 namespace pectus {
 namespace {
@@ -275,7 +276,8 @@ TEST(ParsePly, AcceptsCrLfFloatColoursAndPlusSigns) {
 }
 
 TEST(ReadMesh, ReadsAllStanfordBunnySweeps) {
-  const std::filesystem::path folder = std::filesystem::path(PECTUS_SHARED_DIR) / "datasets/stanford_bunny";
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kBunnyConf);
+  const std::filesystem::path folder = testing_support::BunnyDirectory();
   const std::pair<const char*, Eigen::Index> sweeps[] = {
       {"bun000", 40256}, {"bun045", 40097}, {"bun090", 30379}, {"bun180", 40251},     {"bun270", 31701},
       {"bun315", 35336}, {"chin", 37738},   {"top2", 38298},   {"ear_back", 32193}, {"top3", 36023}};

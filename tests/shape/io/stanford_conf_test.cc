@@ -6,14 +6,14 @@
 
 #include "shape/core/error.h"
 #include "tests/shape/io/io_test_util.h"
+#include "tests/support/require_shared_data.h"
 
 namespace pectus {
 namespace {
 
 using testing::ThrowsBadInput;
 
-const std::filesystem::path kBunnyConf =
-    std::filesystem::path(PECTUS_SHARED_DIR) / "datasets" / "stanford_bunny" / "bun.conf";
+const std::filesystem::path kBunnyConf = testing_support::SharedPath(testing_support::kBunnyConf);
 
 // The rotation matrix of the unit quaternion (x, y, z, w), written out (not through Eigen) so that the
 // test checks the convention independently of the implementation.
@@ -28,6 +28,7 @@ Eigen::Matrix3d RotationOf(double x, double y, double z, double w) {
 }
 
 TEST(StanfordConf, ReadsTheRealBunnyAlignment) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kBunnyConf);
   const std::vector<ScanPose> poses = ReadStanfordConf(kBunnyConf);
   ASSERT_EQ(poses.size(), 10u);
   const std::vector<std::string> files = {"bun000.ply", "bun045.ply",  "bun090.ply", "bun180.ply",
@@ -49,6 +50,7 @@ TEST(StanfordConf, ReadsTheRealBunnyAlignment) {
 }
 
 TEST(StanfordConf, WriteThenReadRecoversThePoses) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kBunnyConf);
   std::vector<ScanPose> poses;
   for (int i = 0; i < 5; ++i) {
     ScanPose pose{"scan_" + std::to_string(i) + ".ply", Rigid3::Identity()};

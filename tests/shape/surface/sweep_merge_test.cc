@@ -8,6 +8,7 @@
 #include "shape/io/mesh_io.h"
 #include "shape/io/stanford_conf.h"
 #include "tests/support/bunny_data.h"
+#include "tests/support/require_shared_data.h"
 
 namespace pectus {
 namespace {
@@ -186,6 +187,7 @@ Rigid3 BestCommonMotion(const std::vector<PointCloud>& sweeps, const std::vector
 }
 
 TEST(SweepMerge, RealBunnyFromDisturbedPosesReturnsToPublishedPlacement) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kBunnyConf);
   const testing_support::BunnySweeps bunny = testing_support::ReadBunnySweeps();
   const std::vector<ScanPose>& poses = bunny.poses;
   const std::vector<PointCloud>& sweeps = bunny.sweeps;

@@ -10,15 +10,12 @@
 #include <string>
 
 #include "datasets/scan_writer.h"
-#include "tests/support/cli_run.h"
-#include "tests/support/scratch_dir.h"
+#include "tests/support/command_test.h"
+#include "tests/support/require_shared_data.h"
 
 namespace pectus::datasets {
 namespace {
 namespace fs = std::filesystem;
-
-using testing_support::CliRun;
-using testing_support::Pectus;
 
 std::string Slurp(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -27,13 +24,10 @@ std::string Slurp(const fs::path& p) {
   return s.str();
 }
 
-class SynthCommand : public testing_support::ScratchDirTest {
- protected:
-  SynthCommand() : ScratchDirTest("pectus_synth_") {}
-};
+using SynthCommand = testing_support::CommandTest;
 
 const std::string kSmall = " --sweeps 3 --spacing 5 --truth-spacing 10 -q";
-const std::string kTable = std::string(PECTUS_SHARED_DIR) + "/datasets/patients/nuss_ct_parameters.csv";
+const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
 
 TEST_F(SynthCommand, CohortIsByteIdenticalPerSeedWhateverTheThreads) {
   ASSERT_EQ(
@@ -66,6 +60,7 @@ TEST_F(SynthCommand, CohortIsByteIdenticalPerSeedWhateverTheThreads) {
 }
 
 TEST_F(SynthCommand, SubjectPairAndPatientWriteTheirFolders) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
   ASSERT_EQ(
       Pectus("synth subject --seed 3 --pectus-depth 30 --pectus-type cup --out " + P("s") + kSmall).code, 0);
   const SubjectFolder s = ReadSubjectFolder(dir_ / "s");
@@ -89,6 +84,7 @@ TEST_F(SynthCommand, HelpShowsAWorkedExample) {
 }
 
 TEST_F(SynthCommand, BadOptionsAndBadTableFailCleanly) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
   EXPECT_EQ(Pectus("synth cohort --subjects 2 --noise -1 --out " + P("x") + kSmall).code, 2);
   EXPECT_EQ(Pectus("synth subject --pectus-type funnel --out " + P("x") + kSmall).code, 2);
   EXPECT_EQ(Pectus("synth patient --out " + P("x") + kSmall).code, 2);  // no --row
