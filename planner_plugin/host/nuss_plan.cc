@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "planner_plugin/host/plan_figures.h"
-#include "planner_plugin/host/plan_report.h"
+#include "planner_plugin/host/internal/plan_figures.h"
+#include "planner_plugin/host/internal/plan_report.h"
 #include "shape/core/atomic_file.h"
 #include "shape/core/error.h"
 #include "shape/io/mesh_io.h"

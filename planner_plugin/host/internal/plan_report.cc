@@ -1,4 +1,4 @@
-#include "planner_plugin/host/plan_report.h"
+#include "planner_plugin/host/internal/plan_report.h"
 
 #include <cstdio>
 #include <sstream>
