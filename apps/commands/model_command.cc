@@ -221,6 +221,7 @@ class ModelCommand : public Command {
     context->report["total_variance_mm2"] = model.total_variance;
     context->report["variance"] = VarianceJson(model, 20);
     context->report["output"] = model_path_;
+    pectus::Info("model: " + model.BriefReport());
   }
 
   void Info(Context* context) {

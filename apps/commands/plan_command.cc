@@ -259,18 +259,8 @@ void PlanCommand::Plan(const PlannerPlugin& plugin, Context* context) {
     }
   }
   if (plan.search && !SearchEdgeNote(*plan.search).empty()) Warn("search: " + SearchEdgeNote(*plan.search));
-  const PlanScenario& a = plan.scenarios.front();
-  char summary[300];
-  std::snprintf(summary, sizeof(summary), "scenario A (%s) RMS %.1f mm", a.solved.bar.Name().c_str(),
-                a.score.roi.rms);
-  std::string line = "plan for patient " + std::string(patient.id) + ": " + summary;
-  if (plan.search) {
-    const PlanScenario& best = plan.scenarios.back();
-    std::snprintf(summary, sizeof(summary), "; best (%s) RMS %.1f mm", best.solved.bar.Name().c_str(),
-                  best.score.roi.rms);
-    line += summary;
-  }
-  Info(line + "; report " + (fs::path(out_) / "report.html").string());
+  Info("plan for patient " + std::string(patient.id) + ": " + plan.BriefReport() + "; report " +
+       (fs::path(out_) / "report.html").string());
 }
 
 PECTUS_REGISTER_COMMAND(PlanCommand, 120);

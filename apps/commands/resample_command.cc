@@ -191,7 +191,7 @@ class ResampleCommand : public Command {
       auto t = context->report.Stage("resample");
       result = ResampleCrossSections(surface, roi, options_, input_);
     }
-    Info(result.message);
+    Info(result.BriefReport());
     context->report["profiles_fitted"] = result.profiles_fitted;
     context->report["profiles_unfitted"] = result.profiles_unfitted;
     context->report["profile_points"] = result.profile_points;

@@ -1,6 +1,5 @@
 #include "planner_plugin/fem/linear_elastic_solver.h"
 
-#include <chrono>
 #include <cstdio>
 
 #include "shape/core/error.h"
@@ -14,8 +13,8 @@ std::string LinearElasticSummary::BriefReport() const {
       "%lld nodes, %lld tets, %lld free dofs, %lld prescribed; assembly %.2f s, %s: analysis %.2f s, "
       "factorisation %.2f s, nnz(L) %.3g",
       static_cast<long long>(nodes), static_cast<long long>(tets), static_cast<long long>(free_dofs),
-      static_cast<long long>(prescribed_dofs), assembly_seconds, factorization.method.c_str(),
-      factorization.analyse_seconds, factorization.factorize_seconds, factorization.nonzeros_factor);
+      static_cast<long long>(prescribed_dofs), timings_s.Seconds("assembly"), factorization.method.c_str(),
+      timings_s.Seconds("analyse"), timings_s.Seconds("factorize"), factorization.nonzeros_factor);
   return line;
 }
 
@@ -23,9 +22,10 @@ LinearElasticSolver::LinearElasticSolver(const TetMesh& mesh, const std::vector<
                                          std::vector<std::int32_t> prescribed_dofs,
                                          const SparseCholeskyOptions& options)
     : num_nodes_(mesh.num_nodes()), partition_(mesh.num_nodes(), std::move(prescribed_dofs)) {
-  const auto t0 = std::chrono::steady_clock::now();
-  stiffness_ = AssembleStiffness(mesh, materials, partition_);
-  summary_.assembly_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  {
+    auto t = summary_.timings_s.Time("assembly");
+    stiffness_ = AssembleStiffness(mesh, materials, partition_);
+  }
   cholesky_ = std::make_unique<SparseCholesky>(options);
   cholesky_->Factorize(stiffness_.K_ff_lower);
   summary_.nodes = mesh.num_nodes();
@@ -33,6 +33,7 @@ LinearElasticSolver::LinearElasticSolver(const TetMesh& mesh, const std::vector<
   summary_.free_dofs = static_cast<Eigen::Index>(partition_.free.size());
   summary_.prescribed_dofs = static_cast<Eigen::Index>(partition_.prescribed.size());
   summary_.factorization = cholesky_->summary();
+  summary_.timings_s.Add(summary_.factorization.timings_s);
 }
 
 std::vector<Points3> LinearElasticSolver::Solve(const std::vector<LoadCase>& cases) const {

@@ -13,6 +13,7 @@
 #include "planner_plugin/fem/sparse_cholesky.h"
 #include "planner_plugin/fem/tet_mesh.h"
 #include "shape/core/geometry.h"
+#include "shape/core/timings.h"
 
 namespace pectus::planner {
 
@@ -28,7 +29,8 @@ struct LoadCase {
 /// Summary of the set-up (assembly and factorisation).
 struct LinearElasticSummary {
   Eigen::Index nodes = 0, tets = 0, free_dofs = 0, prescribed_dofs = 0;
-  double assembly_seconds = 0.0;
+  /// Wall time, s: "assembly", then the factorisation's "analyse" and "factorize".
+  Timings timings_s;
   SparseCholeskySummary factorization;
   /// One line: sizes and timings.
   std::string BriefReport() const;

@@ -46,8 +46,9 @@ void SparseCholesky::Factorize(const Eigen::SparseMatrix<double>& A_lower) {
   summary_.nonzeros_lower = A_lower.nonZeros();
   summary_.nonzeros_factor = common.lnz;
   summary_.flops = common.fl;
-  summary_.analyse_seconds = std::chrono::duration<double>(t1 - t0).count();
-  summary_.factorize_seconds = std::chrono::duration<double>(t2 - t1).count();
+  summary_.timings_s = Timings();
+  summary_.timings_s.Add("analyse", std::chrono::duration<double>(t1 - t0).count());
+  summary_.timings_s.Add("factorize", std::chrono::duration<double>(t2 - t1).count());
 }
 
 Eigen::MatrixXd SparseCholesky::Solve(const Eigen::MatrixXd& B) const {

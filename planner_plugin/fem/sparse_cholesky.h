@@ -7,6 +7,8 @@
 #include <memory>
 #include <string>
 
+#include "shape/core/timings.h"
+
 namespace pectus::planner {
 
 /// Options of the sparse Cholesky factorisation.
@@ -22,9 +24,10 @@ struct SparseCholeskySummary {
   Eigen::Index nonzeros_lower = 0;  ///< stored nonzeros of the lower triangle of A
   double nonzeros_factor = 0.0;     ///< nonzeros of L (CHOLMOD's estimate after analysis)
   double flops = 0.0;               ///< floating-point operations of the factorisation
-  double analyse_seconds = 0.0;     ///< fill-reducing ordering and symbolic analysis, s
-  double factorize_seconds = 0.0;   ///< numerical factorisation, s
-  std::string method;               ///< "CHOLMOD supernodal" or "CHOLMOD simplicial"
+  /// Wall time, s: "analyse" (fill-reducing ordering and symbolic analysis), "factorize" (numerical
+  /// factorisation); of the last Factorize.
+  Timings timings_s;
+  std::string method;  ///< "CHOLMOD supernodal" or "CHOLMOD simplicial"
 };
 
 /// A = L L^T of a symmetric positive definite sparse matrix given by its lower triangle. Factorise

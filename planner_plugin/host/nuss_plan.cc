@@ -2,9 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
-#include "planner_plugin/host/plan_figures.h"
-#include "planner_plugin/host/plan_report.h"
+#include "planner_plugin/host/internal/plan_figures.h"
+#include "planner_plugin/host/internal/plan_report.h"
 #include "shape/core/atomic_file.h"
 #include "shape/core/error.h"
 #include "shape/io/mesh_io.h"
@@ -34,6 +35,22 @@ nlohmann::json BarJson(const BarPlacement& bar) {
 }
 
 }  // namespace
+
+std::string NussPlan::BriefReport() const {
+  if (scenarios.empty()) return "no scenario";
+  const PlanScenario& a = scenarios.front();
+  char text[300];
+  std::snprintf(text, sizeof(text), "scenario A (%s) RMS %.1f mm", a.solved.bar.Name().c_str(),
+                a.score.roi.rms);
+  std::string line = text;
+  if (search) {
+    const PlanScenario& best = scenarios.back();
+    std::snprintf(text, sizeof(text), "; best (%s) RMS %.1f mm", best.solved.bar.Name().c_str(),
+                  best.score.roi.rms);
+    line += text;
+  }
+  return line;
+}
 
 nlohmann::json NussPlan::ToJson() const {
   nlohmann::json j;

@@ -50,6 +50,9 @@ struct NussPlan {
   double outcome_limit_mm = 0;  ///< colour scale of the unoperated chest and the best placement
   /// Scores, lifts, force to lift, search: the figures for --report.
   nlohmann::json ToJson() const;
+  /// One line: scenario A's placement and RMS difference from the average chest, and the best
+  /// placement's if searched, e.g. "scenario A (0.85 L, 200 N) RMS 4.2 mm; best (0.78 L, 260 N) RMS 2.9 mm".
+  std::string BriefReport() const;
 };
 
 /// Makes the plan; stages are timed into `report` if not null. Throws pectus::Error.

@@ -1,10 +1,10 @@
 #include "planner_plugin/host/placement_search.h"
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <map>
+#include <optional>
 
 #include "shape/core/error.h"
 
@@ -49,7 +49,7 @@ nlohmann::json PlacementSearchResult::ToJson() const {
       {"objective_mm", grid},
       {"evaluations", evaluations},
       {"solves", solves},
-      {"seconds", seconds}};
+      {"timings_s", timings_s.ToJson()}};
 }
 
 std::string SearchEdgeNote(const PlacementSearchResult& result) {
@@ -125,8 +125,8 @@ PlacementSearchResult SearchBestPlacement(const PlannerClient& planner, const Av
                                           const PlacementSearchOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage("placement search: " + why);
-  const auto start = std::chrono::steady_clock::now();
   PlacementSearchResult out;
+  std::optional<Timings::Scope> timer(std::in_place, &out.timings_s, "search");
   PlanScoreOptions fast = score_options;
   fast.map_predicted_skin = false;
   std::map<double, UnitResponse> responses;
@@ -231,7 +231,7 @@ PlacementSearchResult SearchBestPlacement(const PlannerClient& planner, const Av
   if (position <= options.position_from + position_tolerance) out.position_at_edge = -1;
   if (position >= options.position_to - position_tolerance) out.position_at_edge = 1;
   out.force_at_limit = force >= out.force_limit_n * (1 - 1e-9);
-  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  timer.reset();
   return out;
 }
 

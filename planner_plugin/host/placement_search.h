@@ -10,6 +10,7 @@
 
 #include "planner_plugin/host/plan_scoring.h"
 #include "planner_plugin/host/planner_client.h"
+#include "shape/core/timings.h"
 
 namespace pectus::planner {
 
@@ -54,7 +55,7 @@ struct PlacementSearchResult {
   PlanScore best_score;
   int evaluations = 0;  ///< chests scored
   int solves = 0;       ///< positions solved by the plugin
-  double seconds = 0;
+  Timings timings_s;    ///< wall time, s: "search" (the grid and its refinement)
   nlohmann::json ToJson() const;
 };
 

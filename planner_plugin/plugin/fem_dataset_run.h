@@ -5,15 +5,21 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <string>
 
 #include "planner_plugin/plugin/planner_session.h"
+#include "shape/core/timings.h"
 
 namespace pectus::planner {
 
 /// What the dataset run did.
 struct FemDatasetSummary {
   std::int64_t patients = 0, load_cases = 0, results = 0, surface_nodes = 0;
-  double seconds = 0;  ///< wall time of the whole run
+  /// Wall time, s: "generic_ribcage" (reading the table, building the generic ribcage), "patient_ribcages"
+  /// (the fits), "fem" (assembly, factorisation and solves), "write" (the HDF5 file).
+  Timings timings_s;
+  /// One line: "62 patients x 24 load cases = 1488 results, 4321 surface nodes, 95.3 s".
+  std::string BriefReport() const;
 };
 
 /// Builds, solves and writes every patient of `table` (one generic ribcage, one factorisation per

@@ -1,6 +1,5 @@
 #include "planner_plugin/plugin/planner_session.h"
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -123,9 +122,10 @@ PlannerSession::PlannerSession(const PatientMeasurements& patient, const Planner
   if (!ribcage_.converged && ribcage_.residual_mm > 1.0) {
     ThrowFailure("the generated ribcage does not reproduce the CT measurements: " + ribcage_.message);
   }
-  const auto t0 = std::chrono::steady_clock::now();
-  fem_ = std::make_unique<RibcageFem>(ribcage_, settings.fem);
-  factorization_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  {
+    auto t = timings_s_.Time("assembly_and_factorisation");
+    fem_ = std::make_unique<RibcageFem>(ribcage_, settings.fem);
+  }
   skin_ = BuildSkinSurface(ribcage_, settings.skin);
   skin_landmarks_ = skin_.Landmarks(skin_.mesh.vertices.positions);
   // The reference: the skin carried by the same ribcage mapped without depression and torsion (the
@@ -169,7 +169,7 @@ PectusPlannerMeasurements PlannerSession::Measurements() const {
   out.nodes = ribcage_.mesh.num_nodes();
   out.tets = ribcage_.mesh.num_tets();
   out.free_dofs = fem_->solver().summary().free_dofs;
-  out.factorization_seconds = factorization_seconds_;
+  out.factorization_seconds = timings_s_.Seconds("assembly_and_factorisation");
   return out;
 }
 

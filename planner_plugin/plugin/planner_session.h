@@ -14,6 +14,7 @@
 #include "planner_plugin/ribcage/ribcage_fem.h"
 #include "planner_plugin/ribcage/skin_surface.h"
 #include "shape/core/geometry.h"
+#include "shape/core/timings.h"
 
 namespace pectus::planner {
 
@@ -79,7 +80,7 @@ class PlannerSession {
   LandmarkSet skin_landmarks_, reference_landmarks_;
   Points3 reference_skin_;  // the skin without the deformity
   BoneSurface bone_;
-  double factorization_seconds_ = 0;
+  Timings timings_s_;  // "assembly_and_factorisation", s
 };
 
 }  // namespace pectus::planner

@@ -164,7 +164,8 @@ std::int32_t WriteDataset(const char* table_path, const char* output_path,
                                          if (progress != nullptr) progress(progress_user, done, total);
                                        });
     if (out != nullptr) {
-      *out = {summary.patients, summary.load_cases, summary.results, summary.surface_nodes, summary.seconds};
+      *out = {summary.patients, summary.load_cases, summary.results, summary.surface_nodes,
+              summary.timings_s.Total()};
     }
   });
 }

@@ -6,80 +6,14 @@
 #include <numbers>
 
 #include "planner_plugin/fem/hex_block.h"
-#include "planner_plugin/ribcage/sweep.h"
+#include "planner_plugin/ribcage/internal/ribcage_anatomy.h"
+#include "planner_plugin/ribcage/internal/sweep.h"
 #include "shape/core/error.h"
 
 namespace pectus::planner {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-
-// Anatomy of the left ribs of the generic (average) ribcage, mm, in the frame of ChestShell. Rib heads
-// sit one vertebra (21.7 mm) apart, the sternal notch at the level of the T2/T3 disc. The
-// costochondral junctions (x, z) descend laterally; ribs 1-7 join the sternum at `sternal_fraction` of
-// its arc; ribs 8-10 join the lower border of the cartilage above, `margin_fraction` along it.
-struct RibAnatomy {
-  double head_z;            // z of the rib head (costovertebral joint)
-  double junction_x;        // costochondral junction: lateral position
-  double junction_z;        //   and height
-  double sternal_fraction;  // ribs 1-7: centre of the sternocostal joint along the sternal arc
-  double shaft_height;      // rib height (cranio-caudal extent of its section)
-  double shaft_thickness;   // rib thickness (radial)
-};
-constexpr double kRibHeadX = 22.0;         // lateral position of the rib heads
-constexpr double kMarginFraction = 0.5;    // where a false rib's cartilage meets the cartilage above
-constexpr double kCartilageHeight = 12.0;  // costal cartilage section, mm
-constexpr double kCartilageThickness = 9.0;
-constexpr RibAnatomy kRibs[10] = {{32.0, 50, -15, 0.11, 16.0, 6.0},    {10.3, 58, -40, 0.29, 13.0, 6.5},
-                                  {-11.4, 70, -68, 0.42, 13.0, 6.5},   {-33.1, 80, -95, 0.54, 13.0, 6.5},
-                                  {-54.8, 88, -120, 0.65, 13.0, 6.5},  {-76.5, 95, -145, 0.75, 13.0, 6.5},
-                                  {-98.2, 102, -168, 0.87, 13.0, 6.5}, {-119.9, 112, -202, 0, 13.0, 6.5},
-                                  {-141.6, 118, -226, 0, 12.0, 6.5},   {-163.3, 120, -248, 0, 11.0, 6.0}};
-
-// Sternum along its arc fraction f: width and thickness (manubrium 0-0.29, body 0.29-0.9, xiphoid 0.9-1).
-const SmoothProfile& SternumWidth() {
-  static const SmoothProfile p({{0.0, 48},
-                                {0.07, 56},
-                                {0.16, 52},
-                                {0.29, 30},
-                                {0.40, 30},
-                                {0.70, 36},
-                                {0.86, 30},
-                                {0.90, 22},
-                                {0.96, 14},
-                                {1.0, 8}});
-  return p;
-}
-const SmoothProfile& SternumThickness() {
-  static const SmoothProfile p({{0.0, 15}, {0.29, 12}, {0.86, 10}, {0.90, 7}, {1.0, 4}});
-  return p;
-}
-constexpr double kManubriumEnd = 0.29, kBodyEnd = 0.90;
-
-ChestShell MakeShell(double tilt_rad) {
-  // Half-width a(z) and half-depth b(z) of the rib centre lines.
-  SmoothProfile a({{-280, 114},
-                   {-240, 120},
-                   {-200, 124},
-                   {-160, 124},
-                   {-120, 120},
-                   {-80, 111},
-                   {-40, 97},
-                   {0, 76},
-                   {20, 62},
-                   {45, 42}});
-  SmoothProfile b({{-280, 74},
-                   {-240, 78},
-                   {-200, 80},
-                   {-160, 80},
-                   {-120, 78},
-                   {-80, 73},
-                   {-40, 66},
-                   {0, 55},
-                   {20, 46},
-                   {45, 34}});
-  return ChestShell(tilt_rad, 5.5, std::move(a), std::move(b));
-}
 
 double Smoothstep(double t) {
   t = std::clamp(t, 0.0, 1.0);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include "shape/core/enum_names.h"
@@ -81,8 +82,9 @@ CrossSectionResult ResampleCrossSections(const TriangleMesh& surface, const Ches
   auto roi_index = [&](int i, int j) { return work.Index(i + extra_v, j + extra_u); };
 
   // 2. A curve through each row's and column's section profile (cross_section_profiles.h).
-  const SectionCurves curves = FitSectionCurves(surface, roi, work_u, work_v, options);
   CrossSectionResult result;
+  std::optional<Timings::Scope> stage(std::in_place, &result.timings_s, "fit_profiles");
+  const SectionCurves curves = FitSectionCurves(surface, roi, work_u, work_v, options);
   result.roi = roi;
   result.grid = grid;
   double sum_sq = 0.0;
@@ -102,6 +104,7 @@ CrossSectionResult ResampleCrossSections(const TriangleMesh& surface, const Ches
 
   // 3. The curves sampled at the working grid, row and column blended by each one's expected error there
   //    (the derivatives typical of each family taken over the ROI).
+  stage.emplace(&result.timings_s, "blend");
   const double h = options.fit.knot_spacing_mm;
   const double noise_mm2 = std::max(1e-4, result.fit_rms_mm * result.fit_rms_mm);
   BlendedGrid blend = BlendSectionCurves(curves, work, work_u, work_v, FamilyRoughness(curves.rows, u, h),
@@ -135,10 +138,12 @@ CrossSectionResult ResampleCrossSections(const TriangleMesh& surface, const Ches
 
   // 5. Vertices far from every profile's data: filled in 2D from the vertices around them, which sees a
   //    feature narrower than the hole (the sternal groove) from all sides (docs/model.md).
+  stage.emplace(&result.timings_s, "fill_holes");
   std::vector<bool> filled;
   FillGridHoles(work, spacing_u, spacing_v, gap, options.holes, &depth, &filled, work_u);
 
   // 6. The ROI's part of the working grid, back in the surface's frame.
+  stage.emplace(&result.timings_s, "grid");
   Points3 grid_uvw(m, 3);
   Eigen::VectorXd roi_depth(m), roi_gap(m);
   for (int i = 0; i < grid.sternal; ++i) {
@@ -159,12 +164,17 @@ CrossSectionResult ResampleCrossSections(const TriangleMesh& surface, const Ches
   result.shape_vector = ToShapeVector(result.mesh.vertices.positions);
   result.max_data_gap_mm = roi_gap.maxCoeff();
   result.supported_fraction = static_cast<double>(supported) / static_cast<double>(m);
-  std::ostringstream msg;
-  msg << grid.lateral << "x" << grid.sternal << " grid from " << result.profiles_fitted << " profiles ("
-      << ToString(options.fit.kind) << "), fit RMS " << result.fit_rms_mm << " mm, largest data gap "
-      << result.max_data_gap_mm << " mm, " << result.vertices_inpainted << " vertices filled in 2D";
-  result.message = msg.str();
+  result.fit_kind = options.fit.kind;
+  stage.reset();
   return result;
+}
+
+std::string CrossSectionResult::BriefReport() const {
+  std::ostringstream msg;
+  msg << grid.lateral << "x" << grid.sternal << " grid from " << profiles_fitted << " profiles ("
+      << ToString(fit_kind) << "), fit RMS " << fit_rms_mm << " mm, largest data gap " << max_data_gap_mm
+      << " mm, " << vertices_inpainted << " vertices filled in 2D";
+  return msg.str();
 }
 
 CrossSectionResult ResampleSurface(const TriangleMesh& surface, const LandmarkSet& landmarks,

@@ -9,6 +9,7 @@
 
 #include "shape/core/geometry.h"
 #include "shape/core/landmarks.h"
+#include "shape/core/timings.h"
 #include "shape/model/grid_inpainting.h"
 #include "shape/model/profile_fit.h"
 #include "shape/model/roi.h"
@@ -73,7 +74,12 @@ struct CrossSectionResult {
   double max_data_gap_mm = 0.0;         ///< largest "data_gap_mm" over the grid
   double supported_fraction = 0.0;      ///< fraction of grid vertices with data_gap_mm <= 2 grid spacings
   Eigen::Index vertices_inpainted = 0;  ///< grid vertices filled in 2D (CrossSectionOptions::holes)
-  std::string message;                  ///< one line summary
+  ProfileFitKind fit_kind = ProfileFitKind::kSmoothingSpline;  ///< the profiles' curves
+  /// Wall time, s: "fit_profiles", "blend" (the sampled curves blended, corners extrapolated),
+  /// "fill_holes", "grid" (the ROI's vertices back in the surface's frame).
+  Timings timings_s;
+  /// One line: grid, profiles and fit, data gap, vertices filled in 2D.
+  std::string BriefReport() const;
 };
 
 /// Resamples `surface` (a triangle mesh, or a point cloud when it has no faces; mm, in the frame of

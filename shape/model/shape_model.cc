@@ -1,7 +1,9 @@
 #include "shape/model/shape_model.h"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "shape/core/error.h"
 #include "shape/model/shape_grid.h"
@@ -24,6 +26,21 @@ bool ShapeModelOptions::IsValid(std::string* why) const {
 Eigen::VectorXd ShapeModel::ExplainedFraction() const {
   if (total_variance <= 0.0) return Eigen::VectorXd::Zero(variances.size());
   return variances / total_variance;
+}
+
+std::string ShapeModel::BriefReport() const {
+  const Eigen::VectorXd cumulative = CumulativeFraction();
+  const auto at = [&](int k) {
+    return cumulative.size() > 0 ? 100.0 * cumulative(std::min<Eigen::Index>(k, cumulative.size()) - 1) : 0.0;
+  };
+  char line[300];
+  std::snprintf(
+      line, sizeof(line),
+      "%lld shapes, %lld points, %d modes: the first explains %.1f %%, the first three %.1f %% of the "
+      "total variance %.4g mm^2",
+      static_cast<long long>(scores.rows()), static_cast<long long>(num_points()), num_modes(), at(1), at(3),
+      total_variance);
+  return line;
 }
 
 Eigen::VectorXd ShapeModel::CumulativeFraction() const {

@@ -47,6 +47,8 @@ struct ShapeModel {
   TriangleMesh ToMesh(const Eigen::VectorXd& shape) const;
   /// Throws Error(kBadInput) naming `what` if the sizes disagree or a number is not finite.
   void Validate(const std::string& what) const;
+  /// One line: shapes, points, modes, and the variance the first and the first three modes explain.
+  std::string BriefReport() const;
 };
 
 /// Builds the model of N shapes (rows of `shapes`, N by 3m, mm). N >= 2. The basis comes from the

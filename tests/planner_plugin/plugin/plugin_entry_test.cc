@@ -10,6 +10,8 @@
 #include <string>
 
 #include "planner_plugin/api/planner_api.h"
+#include "planner_plugin/plugin/planner_session.h"
+#include "tests/planner_plugin/ribcage/direct_lift.h"
 #include "tests/support/require_shared_data.h"
 
 extern "C" void pectus_planner_api_layout_from_c(size_t* out, int capacity);
@@ -174,10 +176,16 @@ TEST_F(PluginEntry, APlannerThroughTheBoundaryMeasuresLikeTheCtAndSolves) {
   const PectusPlannerBar off = {1.3, 0, 100.0};
   EXPECT_EQ(api_->solve(planner, &off, 1, nullptr, nullptr, nullptr, nullptr, &status), PECTUS_PLANNER_USAGE);
   EXPECT_NE(std::string(status.message).find("off the sternum"), std::string::npos) << status.message;
-  // Force to lift: force x lift per newton = the depression.
+  // Force to lift: the bar at the force found lifts the sternum by the depression in a direct solve of
+  // its own (the same patient and options built in this process, its stiffness assembled and factorised
+  // apart from the plugin's: round-off, 1e-8 relative; a wrong force would be off by percents).
   PectusPlannerForceToLift lift{};
   ASSERT_EQ(api_->force_to_lift(planner, bars, 1, &lift, &status), PECTUS_PLANNER_OK);
-  EXPECT_NEAR(lift.force_n * lift.lift_per_newton_mm, m.depression_mm, 1e-9);
+  const pectus::planner::PlannerSession here(pectus::planner::MeasurementsFrom(patient),
+                                             pectus::planner::SettingsFrom(&options));
+  const pectus::planner::testing::DirectLift direct(here.fem());
+  EXPECT_NEAR(direct.SternumLift({bars[0].position, bars[0].position_in_mm != 0, lift.force_n}),
+              m.depression_mm, 1e-8 * m.depression_mm);
   EXPECT_NEAR(lift.lift_per_newton_mm, results[0].sternum_lift_mm / 100.0, 1e-12);
   api_->destroy(planner);
   api_->destroy(nullptr);

@@ -30,7 +30,11 @@ TEST(SkinSurface, LiesOverTheChestWallAndFollowsTheRibcage) {
   const Eigen::Vector3d notch = patient.landmarks.Position("sternal_notch", "bone");
   const Eigen::Vector3d skin_notch = on_skin.Position("sternal_notch", "skin");
   EXPECT_NEAR(skin_notch.z(), notch.z(), 1e-9);
-  EXPECT_NEAR(notch.y() - skin_notch.y(), options.soft_tissue_mm, 4.0);
+  // Measured: 17.7 mm, the 15 mm of soft tissue over the bone's depth as the skin sees it, a soft
+  // maximum over the bone nodes within its 6 mm reach: below the notch the sternum leans forward (20
+  // degrees), so that depth lies 2.7 mm in front of the notch. 0.5 mm, a fifth of that offset, still
+  // catches a lost or doubled offset and any change of the soft tissue by more than 0.5 mm.
+  EXPECT_NEAR(notch.y() - skin_notch.y(), options.soft_tissue_mm + 2.7, 0.5);
   // The depression shows on the skin: the same patient without a depression has the skin over the
   // xiphoid as far forward of the depressed one as the bone is, within 10 % (the skin keeps its
   // thickness; it follows a Gaussian-weighted neighbourhood of bone nodes, not one point).
@@ -57,8 +61,10 @@ TEST(SkinSurface, LiesOverTheChestWallAndFollowsTheRibcage) {
   const BarResult r = fem.Solve({{0.85, false, 60.0}}).front();
   const LandmarkSet lifted = skin.Landmarks(skin.Deformed(r.displacement));
   const double skin_lift = on_skin.Position("xiphoid", "s").y() - lifted.Position("xiphoid", "s").y();
-  EXPECT_GT(skin_lift, 0.5 * r.sternum_lift_mm);
-  EXPECT_LT(skin_lift, 1.5 * r.sternum_lift_mm);
+  // Measured: 0.94 of the sternum's lift (the skin over the xiphoid follows a Gaussian neighbourhood of
+  // bone nodes, the cartilages beside the sternum lifting less). Within 0.2 of the sternum's lift, about
+  // three times that shortfall: a skin left behind or lifted twice fails.
+  EXPECT_NEAR(skin_lift / r.sternum_lift_mm, 1.0, 0.2);
   SkinSurfaceOptions bad;
   bad.rows = 1;
   EXPECT_THROW(BuildSkinSurface(patient, bad), Error);

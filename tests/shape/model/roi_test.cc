@@ -1,10 +1,9 @@
-// ROI frame and grid: axes from the landmarks, extents, margins, the anterior hint, errors; grid layout.
+// ROI frame: axes from the landmarks, extents, margins, the anterior hint, errors.
 #include "shape/model/roi.h"
 
 #include <gtest/gtest.h>
 
 #include "shape/core/error.h"
-#include "shape/model/shape_grid.h"
 
 namespace pectus {
 namespace {
@@ -85,45 +84,6 @@ TEST(ChestRoi, MissingOrDegenerateLandmarksAreBadInput) {
   ChestRoiOptions bad;
   bad.lateral_margin_mm = -1;
   EXPECT_FALSE(bad.IsValid(nullptr));
-}
-
-TEST(ShapeGrid, DefaultIsTheDissertationsGrid) {
-  const GridSize g;
-  EXPECT_EQ(g.num_vertices(), 5151);
-  EXPECT_EQ(3 * g.num_vertices(), 15453);
-  EXPECT_EQ(g.Index(1, 0), 51);
-  const GridSize p = ParseGridSize("11x21");
-  EXPECT_EQ(p.lateral, 11);
-  EXPECT_EQ(p.sternal, 21);
-  EXPECT_THROW(ParseGridSize("11by21"), Error);
-  EXPECT_THROW(ParseGridSize("1x21"), Error);
-}
-
-TEST(ShapeGrid, FacesPointAlongTheRoiNormal) {
-  const ChestRoi roi = ComputeChestRoi(LpsLandmarks());
-  const GridSize g{5, 7};
-  const Eigen::VectorXd u = GridLateralPositions(roi, g), v = GridSternalPositions(roi, g);
-  EXPECT_NEAR(u[0], roi.u_min, 1e-12);
-  EXPECT_NEAR(u[4], roi.u_max, 1e-12);
-  EXPECT_NEAR(v[6], roi.v_max, 1e-12);
-  Points3 uvw(g.num_vertices(), 3);
-  for (int i = 0; i < g.sternal; ++i) {
-    for (int j = 0; j < g.lateral; ++j) uvw.row(g.Index(i, j)) << u[j], v[i], 0.0;
-  }
-  const Points3 x = roi.FromRoi(uvw);
-  const Faces3 f = GridFaces(g);
-  ASSERT_EQ(f.rows(), 2 * 4 * 6);
-  for (Eigen::Index k = 0; k < f.rows(); ++k) {
-    const Eigen::Vector3d n =
-        (x.row(f(k, 1)) - x.row(f(k, 0))).cross(x.row(f(k, 2)) - x.row(f(k, 0))).transpose();
-    EXPECT_GT(n.normalized().dot(roi.normal), 0.999) << "face " << k;
-  }
-  // Shape vectors are (x1, y1, z1, ...).
-  const Eigen::VectorXd s = ToShapeVector(x);
-  EXPECT_EQ(s.size(), 3 * g.num_vertices());
-  EXPECT_DOUBLE_EQ(s[3], x(1, 0));
-  EXPECT_DOUBLE_EQ(s[5], x(1, 2));
-  EXPECT_TRUE(FromShapeVector(s).isApprox(x));
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-#include "planner_plugin/host/plan_report.h"
+#include "planner_plugin/host/internal/plan_report.h"
 
 #include <cstdio>
 #include <sstream>
@@ -138,7 +138,7 @@ std::string PlanReportHtml(const PlanReportInput& in) {
       << s.positions.size() << " positions x " << s.forces_n.size() << " forces, refined: <b>"
       << Escape(s.best.Name()) << "</b>, RMS " << Num(s.best_objective_mm) << " mm, max |d| "
       << Num(s.best_score.roi.max_abs) << " mm (" << s.evaluations << " chests scored, " << s.solves
-      << " solves on the one factorisation, " << Num(s.seconds, "%.1f") << " s).</p>\n"
+      << " solves on the one factorisation, " << Num(s.timings_s.Total(), "%.1f") << " s).</p>\n"
       << (s.position_at_edge != 0 || s.force_at_limit
               ? "<p class=\"warn\">" + Escape(SearchEdgeNote(s)) + "</p>\n"
               : std::string())

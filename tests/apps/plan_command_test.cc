@@ -13,9 +13,9 @@
 #include <regex>
 #include <sstream>
 
-#include "analytic_chest.h"
 #include "shape/model/shape_model.h"
 #include "shape/model/statismo_io.h"
+#include "tests/planner_plugin/host/analytic_chest.h"
 #include "tests/support/cli_run.h"
 #include "tests/support/require_shared_data.h"
 

@@ -1,4 +1,4 @@
-#include "planner_plugin/host/plan_figures.h"
+#include "planner_plugin/host/internal/plan_figures.h"
 
 #include <algorithm>
 #include <cmath>

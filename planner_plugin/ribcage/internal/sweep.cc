@@ -1,4 +1,4 @@
-#include "planner_plugin/ribcage/sweep.h"
+#include "planner_plugin/ribcage/internal/sweep.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
