@@ -1,0 +1,59 @@
+// libFuzzer target: the statismo .h5 reader, on HDF5 file images built from the fuzzer's bytes
+// (h5_image.h): a model of 4 points and 2 modes, each dataset present, missing or malformed.
+#include <cstddef>
+#include <cstdint>
+#include <string_view>
+#include <vector>
+
+#include "shape/core/error.h"
+#include "shape/model/statismo_io.h"
+#include "tests/fuzz/h5_image.h"
+
+namespace {
+
+std::vector<double> Ramp(std::size_t n, double start, double step) {
+  std::vector<double> v(n);
+  for (std::size_t i = 0; i < n; ++i) v[i] = start + step * static_cast<double>(i);
+  return v;
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using pectus::fuzz::Slot;
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  static const std::vector<Slot> kLayout = [] {
+    std::vector<double> basis(12 * 2, 0.0);  // orthonormal columns: unit vectors e0 and e1
+    basis[0 * 2 + 0] = 1.0;
+    basis[1 * 2 + 1] = 1.0;
+    return std::vector<Slot>{
+        {"version/majorVersion", {}, {0}, H5T_NATIVE_INT32},
+        {"version/minorVersion", {}, {9}, H5T_NATIVE_INT32},
+        {"model/mean", {12}, Ramp(12, 0.0, 1.0), H5T_NATIVE_FLOAT},
+        {"model/pcaVariance", {2}, {4.0, 1.0}, H5T_NATIVE_FLOAT},
+        {"model/pcaBasis", {12, 2}, basis, H5T_NATIVE_FLOAT},
+        {"model/noiseVariance", {}, {0.0}, H5T_NATIVE_FLOAT},
+        {"representer/points", {3, 4}, Ramp(12, 0.0, 1.0), H5T_NATIVE_FLOAT},
+        {"representer/cells", {3, 2}, {0, 1, 1, 2, 2, 3}, H5T_NATIVE_INT32},
+        {"modelinfo/scores", {2, 3}, {1, -1, 0, 0.5, 0.5, -1}, H5T_NATIVE_FLOAT},
+        {"modelinfo/modelBuilder-0/dataInfo/URI_0", {}, {}, 0, true, "a.ply"},
+        {"modelinfo/modelBuilder-0/dataInfo/URI_1", {}, {}, 0, true, "b.ply"},
+        {"modelinfo/modelBuilder-0/dataInfo/URI_2", {}, {}, 0, true, "c.ply"},
+        {"pectus/totalVariance", {}, {5.0}, H5T_NATIVE_DOUBLE},
+        {"pectus/info", {}, {}, 0, true, "{\"subjects\": 3}"},
+    };
+  }();
+  pectus::fuzz::Bytes in(data, size);
+  std::vector<char> image;
+  {
+    pectus::fuzz::ImageBuilder builder;
+    for (const Slot& slot : kLayout) builder.Add(slot, &in);
+    image = builder.Image();
+  }
+  try {
+    nlohmann::json info;
+    pectus::ParseStatismoModel(std::string_view(image.data(), image.size()), "fuzz.h5", &info);
+  } catch (const pectus::Error&) {
+  }
+  return 0;
+}
