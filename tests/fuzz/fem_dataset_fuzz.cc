@@ -11,21 +11,24 @@
 #include "tests/fuzz/h5_image.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using pectus::fuzz::Numbers;
   using pectus::fuzz::Slot;
+  using pectus::fuzz::Text;
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   static const std::vector<Slot> kLayout = [] {
     std::vector<Slot> layout{
-        {"load_cases/position", {2}, {0.25, 0.5}},
-        {"load_cases/force_n", {2}, {50.0, 100.0}},
-        {"topology/faces", {2, 3}, {0, 1, 2, 1, 3, 2}, H5T_NATIVE_INT32},
-        {"topology/face_region", {2}, {0, 2}, H5T_NATIVE_INT32},
-        {"topology/face_part", {2}, {0, -3}, H5T_NATIVE_INT32},
+        Numbers("load_cases/position", {2}, {0.25, 0.5}),
+        Numbers("load_cases/force_n", {2}, {50.0, 100.0}),
+        Numbers("topology/faces", {2, 3}, {0, 1, 2, 1, 3, 2}, H5T_NATIVE_INT32),
+        Numbers("topology/face_region", {2}, {0, 2}, H5T_NATIVE_INT32),
+        Numbers("topology/face_part", {2}, {0, -3}, H5T_NATIVE_INT32),
     };
     for (const char* id : {"patients/3", "patients/57"}) {
       const std::string p = id;
-      layout.push_back({p + "/nodes", {4, 3}, {0, 0, 0, 10, 0, 0, 0, 10, 0, 10, 10, 1}});
-      layout.push_back({p + "/displacements", {2, 4, 3}, std::vector<double>(24, 0.5), H5T_NATIVE_FLOAT});
-      layout.push_back({p + "/sternum_lift", {2}, {1.0, 2.0}});
+      layout.push_back(Numbers(p + "/nodes", {4, 3}, {0, 0, 0, 10, 0, 0, 0, 10, 0, 10, 10, 1}));
+      layout.push_back(
+          Numbers(p + "/displacements", {2, 4, 3}, std::vector<double>(24, 0.5), H5T_NATIVE_FLOAT));
+      layout.push_back(Numbers(p + "/sternum_lift", {2}, {1.0, 2.0}));
     }
     return layout;
   }();

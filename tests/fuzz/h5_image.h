@@ -17,6 +17,7 @@
 #include <cstdlib>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace pectus::fuzz {
@@ -58,6 +59,26 @@ struct Slot {
   bool is_string = false;          ///< a string dataset holding `text`
   std::string text;
 };
+
+/// A numeric dataset of the layout.
+inline Slot Numbers(std::string path, std::vector<hsize_t> dims, std::vector<double> values,
+                    hid_t type = H5T_NATIVE_DOUBLE) {
+  Slot slot;
+  slot.path = std::move(path);
+  slot.dims = std::move(dims);
+  slot.values = std::move(values);
+  slot.type = type;
+  return slot;
+}
+
+/// A string dataset of the layout.
+inline Slot Text(std::string path, std::string text) {
+  Slot slot;
+  slot.path = std::move(path);
+  slot.is_string = true;
+  slot.text = std::move(text);
+  return slot;
+}
 
 /// Builds an HDF5 file in memory, slot by slot as the bytes decide; Image() returns its bytes.
 class ImageBuilder {

@@ -20,27 +20,29 @@ std::vector<double> Ramp(std::size_t n, double start, double step) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using pectus::fuzz::Numbers;
   using pectus::fuzz::Slot;
+  using pectus::fuzz::Text;
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   static const std::vector<Slot> kLayout = [] {
     std::vector<double> basis(12 * 2, 0.0);  // orthonormal columns: unit vectors e0 and e1
     basis[0 * 2 + 0] = 1.0;
     basis[1 * 2 + 1] = 1.0;
     return std::vector<Slot>{
-        {"version/majorVersion", {}, {0}, H5T_NATIVE_INT32},
-        {"version/minorVersion", {}, {9}, H5T_NATIVE_INT32},
-        {"model/mean", {12}, Ramp(12, 0.0, 1.0), H5T_NATIVE_FLOAT},
-        {"model/pcaVariance", {2}, {4.0, 1.0}, H5T_NATIVE_FLOAT},
-        {"model/pcaBasis", {12, 2}, basis, H5T_NATIVE_FLOAT},
-        {"model/noiseVariance", {}, {0.0}, H5T_NATIVE_FLOAT},
-        {"representer/points", {3, 4}, Ramp(12, 0.0, 1.0), H5T_NATIVE_FLOAT},
-        {"representer/cells", {3, 2}, {0, 1, 1, 2, 2, 3}, H5T_NATIVE_INT32},
-        {"modelinfo/scores", {2, 3}, {1, -1, 0, 0.5, 0.5, -1}, H5T_NATIVE_FLOAT},
-        {"modelinfo/modelBuilder-0/dataInfo/URI_0", {}, {}, 0, true, "a.ply"},
-        {"modelinfo/modelBuilder-0/dataInfo/URI_1", {}, {}, 0, true, "b.ply"},
-        {"modelinfo/modelBuilder-0/dataInfo/URI_2", {}, {}, 0, true, "c.ply"},
-        {"pectus/totalVariance", {}, {5.0}, H5T_NATIVE_DOUBLE},
-        {"pectus/info", {}, {}, 0, true, "{\"subjects\": 3}"},
+        Numbers("version/majorVersion", {}, {0}, H5T_NATIVE_INT32),
+        Numbers("version/minorVersion", {}, {9}, H5T_NATIVE_INT32),
+        Numbers("model/mean", {12}, Ramp(12, 0.0, 1.0), H5T_NATIVE_FLOAT),
+        Numbers("model/pcaVariance", {2}, {4.0, 1.0}, H5T_NATIVE_FLOAT),
+        Numbers("model/pcaBasis", {12, 2}, basis, H5T_NATIVE_FLOAT),
+        Numbers("model/noiseVariance", {}, {0.0}, H5T_NATIVE_FLOAT),
+        Numbers("representer/points", {3, 4}, Ramp(12, 0.0, 1.0), H5T_NATIVE_FLOAT),
+        Numbers("representer/cells", {3, 2}, {0, 1, 1, 2, 2, 3}, H5T_NATIVE_INT32),
+        Numbers("modelinfo/scores", {2, 3}, {1, -1, 0, 0.5, 0.5, -1}, H5T_NATIVE_FLOAT),
+        Text("modelinfo/modelBuilder-0/dataInfo/URI_0", "a.ply"),
+        Text("modelinfo/modelBuilder-0/dataInfo/URI_1", "b.ply"),
+        Text("modelinfo/modelBuilder-0/dataInfo/URI_2", "c.ply"),
+        Numbers("pectus/totalVariance", {}, {5.0}, H5T_NATIVE_DOUBLE),
+        Text("pectus/info", "{\"subjects\": 3}"),
     };
   }();
   pectus::fuzz::Bytes in(data, size);
