@@ -174,4 +174,13 @@ class ImageBuilder {
   hid_t access_ = -1, file_ = -1, links_ = -1;
 };
 
+/// The file image of `layout` as the fuzzer's bytes decide (see ImageBuilder::Add).
+inline std::vector<char> BuildImage(const std::vector<Slot>& layout, const std::uint8_t* data,
+                                    std::size_t size) {
+  Bytes in(data, size);
+  ImageBuilder builder;
+  for (const Slot& slot : layout) builder.Add(slot, &in);
+  return builder.Image();
+}
+
 }  // namespace pectus::fuzz

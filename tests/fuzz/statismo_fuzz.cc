@@ -45,13 +45,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         Text("pectus/info", "{\"subjects\": 3}"),
     };
   }();
-  pectus::fuzz::Bytes in(data, size);
-  std::vector<char> image;
-  {
-    pectus::fuzz::ImageBuilder builder;
-    for (const Slot& slot : kLayout) builder.Add(slot, &in);
-    image = builder.Image();
-  }
+  const std::vector<char> image = pectus::fuzz::BuildImage(kLayout, data, size);
   try {
     nlohmann::json info;
     pectus::ParseStatismoModel(std::string_view(image.data(), image.size()), "fuzz.h5", &info);
