@@ -1,10 +1,12 @@
 #include "planner_plugin/fem/calculix_io.h"
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <limits>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "shape/core/atomic_file.h"
 #include "shape/core/error.h"
@@ -76,6 +78,7 @@ Points3 ReadCalculixDisplacements(const std::filesystem::path& path, Eigen::Inde
   }
   if (!found) ThrowBadInput(path.string(), "no 'displacements' block (was *NODE PRINT U requested?)");
   Points3 u = Points3::Constant(num_nodes, 3, std::numeric_limits<double>::quiet_NaN());
+  std::vector<std::int64_t> listed_on(static_cast<std::size_t>(num_nodes), 0);  // line of each node's row
   Eigen::Index read = 0;
   while (std::getline(in, line)) {
     ++line_number;
@@ -94,6 +97,18 @@ Points3 ReadCalculixDisplacements(const std::filesystem::path& path, Eigen::Inde
       ThrowBadInput(path.string(),
                     "node " + std::to_string(node) + " outside 1.." + std::to_string(num_nodes), line_number);
     }
+    std::int64_t& first = listed_on[static_cast<std::size_t>(node - 1)];
+    if (first > 0) {
+      ThrowBadInput(
+          path.string(),
+          "node " + std::to_string(node) + " listed twice (first on line " + std::to_string(first) + ")",
+          line_number);
+    }
+    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) {
+      ThrowBadInput(path.string(), "node " + std::to_string(node) + " has a non-finite displacement",
+                    line_number);
+    }
+    first = line_number;
     u.row(node - 1) << x, y, z;
     ++read;
   }

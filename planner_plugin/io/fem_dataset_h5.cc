@@ -3,8 +3,10 @@
 #include <hdf5.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <system_error>
+#include <utility>
 
 #include "shape/core/error.h"
 
@@ -195,6 +197,180 @@ void FemDatasetWriter::AddPatient(const PatientRibcage& ribcage, const std::vect
 void FemDatasetWriter::Commit() {
   file_.reset();
   output_.CommitAll();
+}
+
+// ---- reading ----
+
+namespace {
+
+// Reads datasets of one open file, every failure an Error(kBadInput) naming the file and the dataset.
+class Reader {
+ public:
+  Reader(hid_t file, std::string name) : file_(file), name_(std::move(name)) {}
+  ~Reader() {
+    if (file_ >= 0) H5Fclose(file_);
+  }
+  Reader(const Reader&) = delete;
+  Reader& operator=(const Reader&) = delete;
+
+  [[noreturn]] void Bad(const std::string& what) const { ThrowBadInput(name_, what); }
+
+  // The numbers of dataset `path` as doubles, checked to have shape `dims` (0: any extent) and to be
+  // finite; `*shape` gets the dataset's shape.
+  std::vector<double> Numbers(const std::string& path, const std::vector<hsize_t>& dims,
+                              std::vector<hsize_t>* shape = nullptr) const {
+    if (H5Lexists(file_, path.c_str(), H5P_DEFAULT) <= 0) Bad("has no dataset /" + path);
+    const hid_t set = H5Dopen2(file_, path.c_str(), H5P_DEFAULT);
+    if (set < 0) Bad("/" + path + " is not a dataset");
+    std::vector<double> values;
+    std::string error;
+    const hid_t space = H5Dget_space(set), type = H5Dget_type(set);
+    const int rank = space < 0 ? -1 : H5Sget_simple_extent_ndims(space);
+    std::vector<hsize_t> extent(static_cast<std::size_t>(std::max(rank, 0)));
+    if (rank >= 0) H5Sget_simple_extent_dims(space, extent.data(), nullptr);
+    hsize_t count = 1;
+    for (hsize_t d : extent)
+      count = d == 0 || count <= (hsize_t{1} << 31) / d ? count * d : (hsize_t{1} << 32);
+    if (rank < 0 || type < 0) {
+      error = "/" + path + " cannot be read";
+    } else if (H5Tget_class(type) != H5T_FLOAT && H5Tget_class(type) != H5T_INTEGER) {
+      error = "/" + path + " is not numeric";
+    } else if (extent.size() != dims.size()) {
+      error = "/" + path + " has " + std::to_string(rank) + " dimensions, expected " +
+              std::to_string(dims.size());
+    } else if (count > (hsize_t{1} << 31)) {
+      error = "/" + path + " is too large (over 2^31 numbers)";
+    } else if (count > 0 && H5Dget_storage_size(set) == 0) {
+      error = "/" + path + " holds no data";
+    } else {
+      for (std::size_t i = 0; i < dims.size() && error.empty(); ++i) {
+        if (dims[i] != 0 && extent[i] != dims[i]) {
+          error = "/" + path + " has extent " + std::to_string(extent[i]) + " in dimension " +
+                  std::to_string(i + 1) + ", expected " + std::to_string(dims[i]);
+        }
+      }
+      values.resize(static_cast<std::size_t>(count));
+      if (error.empty() && count > 0 &&
+          H5Dread(set, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()) < 0) {
+        error = "/" + path + " cannot be read";
+      }
+    }
+    if (type >= 0) H5Tclose(type);
+    if (space >= 0) H5Sclose(space);
+    H5Dclose(set);
+    if (!error.empty()) Bad(error);
+    for (double v : values) {
+      if (!std::isfinite(v)) Bad("/" + path + " holds a non-finite number");
+    }
+    if (shape != nullptr) *shape = extent;
+    return values;
+  }
+
+  // The names of the members of group `path`.
+  std::vector<std::string> Members(const std::string& path) const {
+    if (H5Lexists(file_, path.c_str(), H5P_DEFAULT) <= 0) Bad("has no group /" + path);
+    H5O_info_t info;
+    if (H5Oget_info_by_name(file_, path.c_str(), &info, H5P_DEFAULT) < 0 || info.type != H5O_TYPE_GROUP)
+      Bad("/" + path + " is not a group");
+    std::vector<std::string> names;
+    const auto add = [](hid_t, const char* member, const H5L_info_t*, void* out) -> herr_t {
+      static_cast<std::vector<std::string>*>(out)->emplace_back(member);
+      return 0;
+    };
+    if (H5Literate_by_name(file_, path.c_str(), H5_INDEX_NAME, H5_ITER_INC, nullptr, add, &names,
+                           H5P_DEFAULT) < 0) {
+      Bad("cannot list /" + path);
+    }
+    return names;
+  }
+
+ private:
+  hid_t file_;
+  std::string name_;
+};
+
+// The dataset of an open file, checked against the layout of the header.
+FemDataset ReadOpenFemDataset(const Reader& r) {
+  FemDataset d;
+  const std::vector<double> position = r.Numbers("load_cases/position", {0});
+  const hsize_t cases = position.size();
+  if (cases == 0) r.Bad("/load_cases/position lists no load case");
+  const std::vector<double> force = r.Numbers("load_cases/force_n", {cases});
+  d.position = Eigen::Map<const Eigen::VectorXd>(position.data(), static_cast<Eigen::Index>(cases));
+  d.force_n = Eigen::Map<const Eigen::VectorXd>(force.data(), static_cast<Eigen::Index>(cases));
+  if ((d.position.array() < 0.0).any() || (d.position.array() > 1.0).any())
+    r.Bad("/load_cases/position must be fractions of the sternal length (0 to 1)");
+
+  std::vector<hsize_t> shape;
+  const std::vector<double> faces = r.Numbers("topology/faces", {0, 3}, &shape);
+  const hsize_t nf = shape[0];
+  const std::vector<double> region = r.Numbers("topology/face_region", {nf});
+  const std::vector<double> part = r.Numbers("topology/face_part", {nf});
+  d.faces.resize(static_cast<Eigen::Index>(nf), 3);
+  d.face_region.resize(static_cast<Eigen::Index>(nf));
+  d.face_part.resize(static_cast<Eigen::Index>(nf));
+  for (std::size_t f = 0; f < nf; ++f) {
+    for (std::size_t c = 0; c < 3; ++c) {
+      const double v = faces[3 * f + c];
+      if (v != std::floor(v) || v < 0 || v > 2e9)
+        r.Bad("/topology/faces holds " + std::to_string(v) + ", not a node index");
+      d.faces(static_cast<Eigen::Index>(f), static_cast<Eigen::Index>(c)) = static_cast<std::int32_t>(v);
+    }
+    if (region[f] != 0 && region[f] != 1 && region[f] != 2)
+      r.Bad("/topology/face_region holds a region other than 0, 1, 2");
+    if (part[f] != std::floor(part[f]) || std::abs(part[f]) > 1e6)
+      r.Bad("/topology/face_part holds a part that is not a rib number");
+    d.face_region[static_cast<Eigen::Index>(f)] = static_cast<int>(region[f]);
+    d.face_part[static_cast<Eigen::Index>(f)] = static_cast<int>(part[f]);
+  }
+
+  for (const std::string& id : r.Members("patients")) {
+    FemDataset::Patient p;
+    p.id = id;
+    const std::string group = "patients/" + id + "/";
+    const std::vector<double> nodes = r.Numbers(group + "nodes", {0, 3}, &shape);
+    const hsize_t n = shape[0];
+    if (!d.patients.empty() && static_cast<Eigen::Index>(n) != d.patients.front().nodes_mm.rows())
+      r.Bad("/" + group + "nodes has " + std::to_string(n) + " nodes, the first patient " +
+            std::to_string(d.patients.front().nodes_mm.rows()));
+    if (nf > 0 && static_cast<Eigen::Index>(n) <= d.faces.maxCoeff())
+      r.Bad("/topology/faces refers to node " + std::to_string(d.faces.maxCoeff()) + " of " +
+            std::to_string(n) + " surface nodes");
+    p.nodes_mm = Eigen::Map<const Points3>(nodes.data(), static_cast<Eigen::Index>(n), 3);
+    const std::vector<double> u = r.Numbers(group + "displacements", {cases, n, 3});
+    for (std::size_t k = 0; k < cases; ++k)
+      p.displacements_mm.push_back(
+          Eigen::Map<const Points3>(u.data() + k * n * 3, static_cast<Eigen::Index>(n), 3));
+    const std::vector<double> lift = r.Numbers(group + "sternum_lift", {cases});
+    p.sternum_lift_mm = Eigen::Map<const Eigen::VectorXd>(lift.data(), static_cast<Eigen::Index>(cases));
+    d.patients.push_back(std::move(p));
+  }
+  return d;
+}
+
+}  // namespace
+
+FemDataset ReadFemDataset(const std::filesystem::path& path) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) ThrowBadInput(path.string(), "no such file");
+  const hid_t file = H5Fis_hdf5(path.c_str()) > 0 ? H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT) : -1;
+  if (file < 0) ThrowBadInput(path.string(), "is not an HDF5 file");
+  return ReadOpenFemDataset(Reader(file, path.string()));
+}
+
+FemDataset ParseFemDataset(std::string_view bytes, const std::string& name) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  // The core (memory) driver over a copy of the bytes, never written back: HDF5's file image.
+  const hid_t access = H5Pcreate(H5P_FILE_ACCESS);
+  hid_t file = -1;
+  if (access >= 0 && !bytes.empty() && H5Pset_fapl_core(access, 1 << 16, /*backing_store=*/false) >= 0 &&
+      H5Pset_file_image(access, const_cast<char*>(bytes.data()), bytes.size()) >= 0) {
+    file = H5Fopen(name.c_str(), H5F_ACC_RDONLY, access);
+  }
+  if (access >= 0) H5Pclose(access);
+  if (file < 0) ThrowBadInput(name, "is not an HDF5 file");
+  return ReadOpenFemDataset(Reader(file, name));
 }
 
 }  // namespace pectus::planner

@@ -20,13 +20,40 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "planner_plugin/ribcage/generic_ribcage.h"
 #include "planner_plugin/ribcage/ribcage_fem.h"
 #include "shape/core/atomic_file.h"
+#include "shape/core/geometry.h"
 
 namespace pectus::planner {
+
+/// The FE dataset as read back (layout above): the load cases, the shared topology, every patient.
+struct FemDataset {
+  /// One patient's arrays.
+  struct Patient {
+    std::string id;                         ///< the group name under /patients
+    Points3 nodes_mm;                       ///< #surface nodes by 3, undeformed positions
+    std::vector<Points3> displacements_mm;  ///< one #surface nodes by 3 block per load case
+    Eigen::VectorXd sternum_lift_mm;        ///< one per load case
+  };
+  Eigen::VectorXd position;     ///< #cases, bar position as a fraction of the sternal length (0-1)
+  Eigen::VectorXd force_n;      ///< #cases, bar force, N
+  Faces3 faces;                 ///< triangles over the surface nodes
+  Eigen::VectorXi face_region;  ///< per face: 0 sternum, 1 rib, 2 costal cartilage
+  Eigen::VectorXi face_part;    ///< per face: 0 sternum, k left rib k, -k right rib k
+  std::vector<Patient> patients;
+};
+
+/// Reads an FE dataset written by FemDatasetWriter. Throws Error(kBadInput) naming the file and the
+/// dataset for anything missing, of the wrong shape, non-finite or out of range (a face index beyond
+/// the surface nodes, a region other than 0-2, a position outside 0-1).
+FemDataset ReadFemDataset(const std::filesystem::path& path);
+
+/// ReadFemDataset from a file held in memory (an HDF5 file image); `name` is the file named in errors.
+FemDataset ParseFemDataset(std::string_view bytes, const std::string& name);
 
 /// Writes the dataset patient by patient; nothing is visible at `path` until Commit().
 class FemDatasetWriter {

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "shape/core/error.h"
+#include "shape/io/csv_reader.h"
 #include "shape/io/text_scan.h"
 
 namespace pectus {
@@ -38,22 +39,9 @@ std::string Text(double value) {
   return buffer;
 }
 
-/// The cells of one CSV line, trimmed, one pair of enclosing double quotes removed.
-std::vector<std::string_view> SplitCsv(std::string_view line) {
-  std::vector<std::string_view> cells;
-  while (true) {
-    const std::size_t comma = line.find(',');
-    std::string_view cell = text::Trim(line.substr(0, comma));
-    if (cell.size() >= 2 && cell.front() == '"' && cell.back() == '"') cell = cell.substr(1, cell.size() - 2);
-    cells.push_back(cell);
-    if (comma == std::string_view::npos) return cells;
-    line.remove_prefix(comma + 1);
-  }
-}
-
 class RowParser {
  public:
-  RowParser(const std::string& name, std::int64_t line, const std::vector<std::string_view>& cells,
+  RowParser(const std::string& name, std::int64_t line, const std::vector<std::string>& cells,
             const std::map<std::string, std::size_t, std::less<>>& column)
       : name_(name), line_(line), cells_(cells), column_(column) {}
 
@@ -67,7 +55,7 @@ class RowParser {
     if (it == column_.end()) return fallback;
     if (it->second >= cells_.size() || cells_[it->second].empty()) Fail(column, "no value");
     double value = 0.0;
-    const std::string_view cell = cells_[it->second];
+    const std::string& cell = cells_[it->second];
     if (!text::ParseDouble(cell, &value) || !std::isfinite(value)) {
       Fail(column, text::Quoted(cell) + " is not a number");
     }
@@ -77,7 +65,7 @@ class RowParser {
  private:
   const std::string& name_;
   std::int64_t line_;
-  const std::vector<std::string_view>& cells_;
+  const std::vector<std::string>& cells_;
   const std::map<std::string, std::size_t, std::less<>>& column_;
 };
 
@@ -131,36 +119,34 @@ std::string ListPatients(const std::vector<PatientTableRow>& rows) {
 }  // namespace
 
 std::vector<PatientTableRow> ParsePatientTable(std::string_view text, const std::string& name) {
-  text::LineReader lines(text::StripBom(text));
-  std::string_view line;
+  CsvReader reader(text, name);
+  CsvRecord record;
   std::map<std::string, std::size_t, std::less<>> column;
   std::vector<PatientTableRow> rows;
   std::map<int, std::int64_t> line_of;
-  while (lines.Next(&line)) {
-    if (text::Trim(line).empty() || line.front() == '#') continue;
-    const std::vector<std::string_view> cells = SplitCsv(line);
+  while (reader.Next(&record)) {
+    const std::vector<std::string>& cells = record.fields;
     if (column.empty()) {
       for (std::size_t c = 0; c < cells.size(); ++c) {
         if (!column.emplace(std::string(cells[c]), c).second) {
-          ThrowBadInput(name, "the header names column '" + std::string(cells[c]) + "' twice",
-                        lines.number());
+          ThrowBadInput(name, "the header names column '" + std::string(cells[c]) + "' twice", record.line);
         }
       }
       for (const char* required :
            {"patient", kColumns[0].name, kColumns[1].name, kColumns[2].name, kColumns[3].name}) {
         if (!column.count(required)) {
-          ThrowBadInput(name, std::string("the header has no column '") + required + "'", lines.number());
+          ThrowBadInput(name, std::string("the header has no column '") + required + "'", record.line);
         }
       }
       continue;
     }
-    rows.push_back(ParseRow(RowParser(name, lines.number(), cells, column), lines.number()));
-    const auto [it, fresh] = line_of.emplace(rows.back().patient, lines.number());
+    rows.push_back(ParseRow(RowParser(name, record.line, cells, column), record.line));
+    const auto [it, fresh] = line_of.emplace(rows.back().patient, record.line);
     if (!fresh) {
       ThrowBadInput(name,
                     "column 'patient': patient " + std::to_string(rows.back().patient) +
                         " is already on line " + std::to_string(it->second),
-                    lines.number());
+                    record.line);
     }
   }
   if (column.empty()) ThrowBadInput(name, "empty patient table (no header)");

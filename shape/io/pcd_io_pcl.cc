@@ -104,8 +104,8 @@ const PCLPointField* FindField(const pcl::PCLPointCloud2& cloud, const std::stri
 // What the header of a PCD file declares, read by pectus before PCL sees the file: PCL trusts the header
 // and reads past the end of a truncated file (a crash) or allocates whatever WIDTH x HEIGHT asks for.
 struct PcdLayout {
-  std::string encoding;       // "ascii", "binary" or "binary_compressed"
-  std::uint64_t points = 0;   // POINTS, or WIDTH x HEIGHT
+  std::string encoding;           // "ascii", "binary" or "binary_compressed"
+  std::uint64_t points = 0;       // POINTS, or WIDTH x HEIGHT
   std::uint64_t point_bytes = 0;  // sum of SIZE x COUNT
   std::size_t data_offset = 0;    // first byte after the DATA line
 };
@@ -135,36 +135,40 @@ PcdLayout ReadPcdLayout(std::string_view bytes, const std::string& path) {
     const std::string_view key = text::NextToken(&rest);
     const std::int64_t number = lines.number();
     if (key.empty() || key.front() == '#') continue;
+    // Keywords in capitals, as PCL matches them: a header PCL reads otherwise than this check (e.g. a
+    // "VErSION" line) made PCL's reader dereference a null pointer (found by fuzzing).
     std::vector<std::string_view> values;
-    for (std::string_view t = text::NextToken(&rest); !t.empty(); t = text::NextToken(&rest)) values.push_back(t);
-    if (text::EqualsNoCase(key, "FIELDS") || text::EqualsNoCase(key, "COLUMNS")) {
+    for (std::string_view t = text::NextToken(&rest); !t.empty(); t = text::NextToken(&rest))
+      values.push_back(t);
+    if (key == "FIELDS" || key == "COLUMNS") {
       num_fields = values.size();
-    } else if (text::EqualsNoCase(key, "SIZE")) {
+    } else if (key == "SIZE") {
       for (std::string_view v : values) {
         sizes.push_back(HeaderNumber(v, path, number));
         if (sizes.back() != 1 && sizes.back() != 2 && sizes.back() != 4 && sizes.back() != 8) {
-          ThrowBadInput(path, "PCD header: field size " + text::Quoted(v) + " is not 1, 2, 4 or 8 bytes", number);
+          ThrowBadInput(path, "PCD header: field size " + text::Quoted(v) + " is not 1, 2, 4 or 8 bytes",
+                        number);
         }
       }
-    } else if (text::EqualsNoCase(key, "COUNT")) {
+    } else if (key == "COUNT") {
       for (std::string_view v : values) {
         counts.push_back(HeaderNumber(v, path, number));
-        if (counts.back() > 0x7FFFFFFF) ThrowBadInput(path, "PCD header: field count " + text::Quoted(v) + " is too large", number);
+        if (counts.back() > 0x7FFFFFFF)
+          ThrowBadInput(path, "PCD header: field count " + text::Quoted(v) + " is too large", number);
       }
-    } else if (text::EqualsNoCase(key, "WIDTH") && values.size() == 1) {
+    } else if (key == "WIDTH" && values.size() == 1) {
       width = HeaderNumber(values[0], path, number);
-    } else if (text::EqualsNoCase(key, "HEIGHT") && values.size() == 1) {
+    } else if (key == "HEIGHT" && values.size() == 1) {
       height = HeaderNumber(values[0], path, number);
-    } else if (text::EqualsNoCase(key, "POINTS") && values.size() == 1) {
+    } else if (key == "POINTS" && values.size() == 1) {
       layout.points = HeaderNumber(values[0], path, number);
       has_points = true;
-    } else if (text::EqualsNoCase(key, "DATA")) {
+    } else if (key == "DATA") {
       if (values.size() != 1) ThrowBadInput(path, "PCD header: DATA needs one word", number);
       layout.encoding = text::ToLowerAscii(values[0]);
       layout.data_offset = consumed;
       break;
-    } else if (!text::EqualsNoCase(key, "VERSION") && !text::EqualsNoCase(key, "TYPE") &&
-               !text::EqualsNoCase(key, "VIEWPOINT")) {
+    } else if (key != "VERSION" && key != "TYPE" && key != "VIEWPOINT") {
       ThrowBadInput(path, "not a PCD file: unexpected " + text::Quoted(key) + " in the header", number);
     }
   }
@@ -188,7 +192,8 @@ PcdLayout ReadPcdLayout(std::string_view bytes, const std::string& path) {
   const double needed = static_cast<double>(layout.points) * static_cast<double>(layout.point_bytes);
   const auto truncated = [&](const std::string& needs) {
     ThrowBadInput(path, "truncated PCD file: the header declares " + std::to_string(layout.points) +
-                            " points (" + needs + ") but the data holds " + std::to_string(available) + " bytes");
+                            " points (" + needs + ") but the data holds " + std::to_string(available) +
+                            " bytes");
   };
   if (layout.encoding == "ascii") {
     // Every value takes at least a digit and a separator.
@@ -197,7 +202,8 @@ PcdLayout ReadPcdLayout(std::string_view bytes, const std::string& path) {
       truncated(std::to_string(values_per_point) + " numbers each");
     }
   } else if (layout.encoding == "binary") {
-    if (needed > static_cast<double>(available)) truncated(std::to_string(layout.point_bytes) + " bytes each");
+    if (needed > static_cast<double>(available))
+      truncated(std::to_string(layout.point_bytes) + " bytes each");
   } else if (layout.points > 0) {
     // binary_compressed: uint32 compressed size, uint32 uncompressed size, then the LZF data.
     std::uint32_t sizes_le[2] = {0, 0};
@@ -206,8 +212,9 @@ PcdLayout ReadPcdLayout(std::string_view bytes, const std::string& path) {
     if (sizes_le[0] > available - 8) truncated(std::to_string(sizes_le[0]) + " compressed bytes");
     // LZF expands at most about 100-fold: a larger claim is a corrupt header, not a real file.
     if (static_cast<double>(sizes_le[1]) != needed || sizes_le[1] / 100 > sizes_le[0] + 64) {
-      ThrowBadInput(path, "PCD compressed block holds " + std::to_string(sizes_le[1]) + " bytes but the header's " +
-                              std::to_string(layout.points) + " points need " + std::to_string(needed));
+      ThrowBadInput(path, "PCD compressed block holds " + std::to_string(sizes_le[1]) +
+                              " bytes but the header's " + std::to_string(layout.points) + " points need " +
+                              std::to_string(needed));
     }
   }
   return layout;

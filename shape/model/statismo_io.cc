@@ -3,6 +3,7 @@
 #include <hdf5.h>
 
 #include <chrono>
+#include <cmath>
 #include <ctime>
 #include <string>
 #include <vector>
@@ -34,6 +35,9 @@ class Id {
   hid_t id_;
   herr_t (*close_)(hid_t);
 };
+
+// The largest dataset read, in numbers (2^31: beyond any shape model, and within Eigen's index).
+constexpr hsize_t kMaxElements = hsize_t{1} << 31;
 
 // Every HDF5 call of one file goes through this, so that a failure names the file and the object.
 struct File {
@@ -98,15 +102,27 @@ struct File {
     if (!set.ok()) Bad("cannot open /" + path);
     *dims = Dims(set.get(), path);
     hsize_t count = 1;
-    for (hsize_t d : *dims) count *= d;
+    for (hsize_t d : *dims) {
+      if (d > 0 && count > kMaxElements / d) Bad("/" + path + " is too large (over 2^31 numbers)");
+      count *= d;
+    }
     Id file_type(H5Dget_type(set.get()), H5Tclose);
     const H5T_class_t cls = H5Tget_class(file_type.get());
     if (cls != H5T_FLOAT && cls != H5T_INTEGER) Bad("/" + path + " is not numeric");
+    // A dataset may declare a shape without storing it (HDF5 then reads its fill value): not a model.
+    if (count > 0 && H5Dget_storage_size(set.get()) == 0) Bad("/" + path + " holds no data");
     std::vector<T> data(static_cast<std::size_t>(count));
     if (count > 0 && H5Dread(set.get(), memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()) < 0) {
       Bad("cannot read /" + path);
     }
     return data;
+  }
+  // Reads a numeric dataset that must hold exactly one number.
+  double ReadScalar(hid_t loc, const std::string& path) const {
+    std::vector<hsize_t> dims;
+    const std::vector<double> value = Read<double>(loc, path, H5T_NATIVE_DOUBLE, &dims);
+    if (value.size() != 1) Bad("/" + path + " must hold one number, not " + std::to_string(value.size()));
+    return value[0];
   }
   std::string ReadString(hid_t loc, const std::string& path) const {
     if (!Exists(loc, path)) Bad("has no dataset /" + path);
@@ -234,24 +250,22 @@ void WriteStatismoModel(const std::filesystem::path& path, const ShapeModel& mod
   output.CommitAll();
 }
 
-ShapeModel ReadStatismoModel(const std::filesystem::path& path, nlohmann::json* info) {
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  const File f{path.string()};
-  if (!std::filesystem::exists(path)) ThrowBadInput(path.string(), "no such file");
-  if (H5Fis_hdf5(path.c_str()) <= 0) f.Bad("is not an HDF5 file");
-  Id file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
-  if (!file.ok()) f.Bad("cannot be opened as HDF5");
-  const hid_t root = file.get();
+namespace {
 
-  int major = 0, minor = 8;  // statismo: a file without a version is 0.8
+// Reads the model of an open statismo file (from a path or from memory); `f` names it in errors.
+ShapeModel ReadOpenStatismoFile(const File& f, hid_t root, nlohmann::json* info) {
+  double major = 0, minor = 8;  // statismo: a file without a version is 0.8
   std::vector<hsize_t> dims;
   if (f.Exists(root, "version/majorVersion")) {
-    major = f.Read<std::int32_t>(root, "version/majorVersion", H5T_NATIVE_INT32, &dims).at(0);
-    minor = f.Read<std::int32_t>(root, "version/minorVersion", H5T_NATIVE_INT32, &dims).at(0);
+    major = f.ReadScalar(root, "version/majorVersion");
+    minor = f.ReadScalar(root, "version/minorVersion");
   }
   if (!(major == 0 && (minor == 8 || minor == 9)) && major != 1) {
-    f.Bad("statismo version " + std::to_string(major) + "." + std::to_string(minor) +
-          " is not supported (0.8, 0.9, 1.x)");
+    const auto number = [](double v) {
+      return v == std::floor(v) && std::abs(v) < 1e9 ? std::to_string(static_cast<std::int64_t>(v))
+                                                     : std::to_string(v);
+    };
+    f.Bad("statismo version " + number(major) + "." + number(minor) + " is not supported (0.8, 0.9, 1.x)");
   }
 
   ShapeModel model;
@@ -275,7 +289,7 @@ ShapeModel ReadStatismoModel(const std::filesystem::path& path, nlohmann::json* 
       if (model.variances[c] > 0.0) model.basis.col(c) /= std::sqrt(model.variances[c]);
     }
   }
-  model.noise_variance = f.Read<double>(root, "model/noiseVariance", H5T_NATIVE_DOUBLE, &dims).at(0);
+  model.noise_variance = f.ReadScalar(root, "model/noiseVariance");
 
   // Topology from the representer (the points themselves are the reference, not needed here).
   if (!f.Exists(root, "representer")) f.Bad("has no /representer group");
@@ -305,7 +319,7 @@ ShapeModel ReadStatismoModel(const std::filesystem::path& path, nlohmann::json* 
   }
   model.total_variance = model.variances.sum();
   if (f.Exists(root, "pectus/totalVariance")) {
-    model.total_variance = f.Read<double>(root, "pectus/totalVariance", H5T_NATIVE_DOUBLE, &dims).at(0);
+    model.total_variance = f.ReadScalar(root, "pectus/totalVariance");
   }
   if (info != nullptr) {
     *info = nlohmann::json::object();
@@ -314,8 +328,35 @@ ShapeModel ReadStatismoModel(const std::filesystem::path& path, nlohmann::json* 
       if (info->is_discarded()) f.Bad("/pectus/info is not JSON");
     }
   }
-  model.Validate(path.string());
+  model.Validate(f.name);
   return model;
+}
+
+}  // namespace
+
+ShapeModel ReadStatismoModel(const std::filesystem::path& path, nlohmann::json* info) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  const File f{path.string()};
+  if (!std::filesystem::exists(path)) ThrowBadInput(path.string(), "no such file");
+  if (H5Fis_hdf5(path.c_str()) <= 0) f.Bad("is not an HDF5 file");
+  Id file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  if (!file.ok()) f.Bad("cannot be opened as HDF5");
+  return ReadOpenStatismoFile(f, file.get(), info);
+}
+
+ShapeModel ParseStatismoModel(std::string_view bytes, const std::string& name, nlohmann::json* info) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  const File f{name};
+  if (bytes.empty()) f.Bad("is empty, not an HDF5 file");
+  // The core (memory) driver over a copy of the bytes, never written back: HDF5's file image.
+  Id access(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+  if (!access.ok() || H5Pset_fapl_core(access.get(), 1 << 16, /*backing_store=*/false) < 0 ||
+      H5Pset_file_image(access.get(), const_cast<char*>(bytes.data()), bytes.size()) < 0) {
+    f.Fail("hold the file in memory");
+  }
+  Id file(H5Fopen(name.c_str(), H5F_ACC_RDONLY, access.get()), H5Fclose);
+  if (!file.ok()) f.Bad("is not an HDF5 file");
+  return ReadOpenStatismoFile(f, file.get(), info);
 }
 
 }  // namespace pectus

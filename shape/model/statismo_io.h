@@ -4,6 +4,8 @@
 
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
 
 #include "shape/model/shape_model.h"
 
@@ -31,5 +33,9 @@ void WriteStatismoModel(const std::filesystem::path& path, const ShapeModel& mod
 /// @param[out] info  if not null, /pectus/info parsed (an empty object if absent)
 /// Throws Error(kBadInput) naming the file and the dataset for anything missing or inconsistent.
 ShapeModel ReadStatismoModel(const std::filesystem::path& path, nlohmann::json* info = nullptr);
+
+/// ReadStatismoModel from a file held in memory (an HDF5 file image); `name` is the file named in errors.
+ShapeModel ParseStatismoModel(std::string_view bytes, const std::string& name,
+                              nlohmann::json* info = nullptr);
 
 }  // namespace pectus

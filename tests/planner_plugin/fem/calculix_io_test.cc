@@ -122,6 +122,19 @@ TEST(Calculix, ReadsOnlyWellFormedResults) {
   EXPECT_THROW(ReadCalculixDisplacements(path, 2), Error);  // one node of two
   const Points3 u = ReadCalculixDisplacements(path, 1);
   EXPECT_EQ(u(0, 2), 3.0);
+  // A node listed twice (and so another never) was read as complete with NaN for the missing node.
+  WriteFileAtomically(path,
+                      "\n displacements (vx,vy,vz) for set NALL and time  0.1000000E+01\n\n"
+                      "         1  1.0E+00  2.0E+00  3.0E+00\n         1  1.0E+00  2.0E+00  3.0E+00\n");
+  try {
+    ReadCalculixDisplacements(path, 2);
+    ADD_FAILURE() << "no error for a node listed twice";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kBadInput);
+    EXPECT_EQ(e.line(), 5);
+    EXPECT_NE(std::string(e.what()).find("node 1 listed twice (first on line 4)"), std::string::npos)
+        << e.what();
+  }
   fs::remove(path);
 }
 

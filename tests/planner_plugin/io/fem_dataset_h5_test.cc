@@ -8,9 +8,12 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <utility>
 #include <vector>
 
 #include "planner_plugin/plugin/fem_dataset_run.h"
+#include "shape/core/error.h"
 
 namespace pectus::planner {
 namespace {
@@ -85,8 +88,71 @@ TEST(FemDataset, EveryPatientTimesTwentyFourLoadCasesReadsBack) {
   EXPECT_LT(worst, 1e-5 * largest);
   EXPECT_NEAR(lift[23], 40.0 * lift[16], 1e-9 * lift[23]);
   EXPECT_GT(lift[23], 0.0);
+  const hsize_t num_faces = Dims(file, "/topology/faces")[0];
   H5Fclose(file);
+
+  // pectus's own reader gives the same numbers as the HDF5 calls above.
+  const FemDataset d = ReadFemDataset(dir / "fem.h5");
+  ASSERT_EQ(d.position.size(), 24);
+  ASSERT_EQ(d.patients.size(), 2u);
+  EXPECT_EQ(d.position[9], positions[9]);
+  EXPECT_EQ(d.force_n[9], forces[9]);
+  EXPECT_EQ(d.faces.rows(), static_cast<Eigen::Index>(num_faces));
+  const FemDataset::Patient& p57 = d.patients[0].id == "57" ? d.patients[0] : d.patients[1];
+  EXPECT_EQ(p57.id, "57");
+  ASSERT_EQ(p57.displacements_mm.size(), 24u);
+  EXPECT_EQ(p57.nodes_mm.rows(), static_cast<Eigen::Index>(n));
+  EXPECT_EQ(p57.displacements_mm[23](5, 1), static_cast<double>(u[23 * n * 3 + 5 * 3 + 1]));
+  EXPECT_EQ(p57.sternum_lift_mm[23], lift[23]);
   fs::remove_all(dir);
+}
+
+// The message of the Error(kBadInput) `read` throws (fails the test for any other outcome).
+template <class F>
+std::string BadInputMessage(F&& read, const std::string& file) {
+  try {
+    read();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kBadInput) << e.what();
+    EXPECT_EQ(e.file(), file) << e.what();
+    return e.what();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "not pectus::Error: " << e.what();
+    return {};
+  }
+  ADD_FAILURE() << "no error";
+  return {};
+}
+
+TEST(FemDataset, MalformedFilesAreBadInputNamingTheDataset) {
+  const fs::path path = fs::temp_directory_path() / ("pectus_fem_bad_" + std::to_string(::getpid()) + ".h5");
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  // Two load-case positions but three forces.
+  const hid_t file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  const hid_t links = H5Pcreate(H5P_LINK_CREATE);
+  H5Pset_create_intermediate_group(links, 1);
+  for (const auto& [name, size] : {std::pair{"load_cases/position", 2}, std::pair{"load_cases/force_n", 3}}) {
+    const hsize_t dims = static_cast<hsize_t>(size);
+    const std::vector<double> values(dims, 0.5);
+    const hid_t space = H5Screate_simple(1, &dims, nullptr);
+    const hid_t set = H5Dcreate2(file, name, H5T_NATIVE_DOUBLE, space, links, H5P_DEFAULT, H5P_DEFAULT);
+    H5Dwrite(set, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data());
+    H5Dclose(set);
+    H5Sclose(space);
+  }
+  H5Pclose(links);
+  H5Fclose(file);
+  std::string what = BadInputMessage([&] { ReadFemDataset(path); }, path.string());
+  EXPECT_NE(what.find("/load_cases/force_n has extent 3 in dimension 1, expected 2"), std::string::npos)
+      << what;
+  std::ifstream in(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  what = BadInputMessage([&] { ParseFemDataset(bytes, "memory.h5"); }, "memory.h5");
+  EXPECT_NE(what.find("/load_cases/force_n has extent 3"), std::string::npos) << what;
+  BadInputMessage([&] { ParseFemDataset("hello", "memory.h5"); }, "memory.h5");
+  BadInputMessage([&] { ReadFemDataset(path.string() + ".missing"); }, path.string() + ".missing");
+  fs::remove(path);
 }
 
 }  // namespace

@@ -81,6 +81,26 @@ TEST(PatientTableIo, ColumnsByNameOptionalColumnsQuotesCommentsAndBom) {
   EXPECT_EQ(rows[0].line, 4);
 }
 
+TEST(PatientTableIo, QuotedCellsMayHoldCommasQuotesAndLineBreaks) {
+  // A note column of a spreadsheet export: a comma, an escaped quote and a line break inside its quotes
+  // must not shift the columns after it (a split on every comma read " \"\"deep\"\"" as haller_index).
+  const auto rows = ParsePatientTable(
+      "patient,note,haller_index,width_mm,sternal_length_mm,depth_mm,depression_mm\n"
+      "3,\"left, \"\"deep\"\"\nsee CT\",4.2,250,150,140,20\n"
+      "4,,4,250,150,140,21\n",
+      "t.csv");
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].patient, 3);
+  EXPECT_EQ(rows[0].haller_index, 4.2);
+  EXPECT_EQ(rows[0].depression_mm, 20);
+  EXPECT_EQ(rows[1].patient, 4);
+  EXPECT_EQ(rows[1].depression_mm, 21);
+  EXPECT_EQ(rows[1].line, 4);  // the quoted note spans lines 2 and 3
+  const Error e = ErrorOf(kHeader + "3,4.2,250,\"150,140,20\n");
+  EXPECT_EQ(e.line(), 2);
+  EXPECT_NE(std::string(e.what()).find("unterminated quoted field"), std::string::npos) << e.what();
+}
+
 TEST(PatientTableIo, EveryMistakeNamesTheFileTheLineAndTheColumn) {
   const Error number = ErrorOf(kHeader + "1,4.3,232,180,126,14\n2,4.3,2x3,145,153,25\n");
   EXPECT_EQ(number.kind(), ErrorKind::kBadInput);

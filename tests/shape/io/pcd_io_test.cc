@@ -127,6 +127,13 @@ TEST(PcdIo, MalformedFilesAreErrorsNamingTheFile) {
   }();
   const std::filesystem::path cut = dir.Write("cut.pcd", bytes.substr(0, bytes.size() - 200));
   EXPECT_TRUE(ThrowsBadInput([&] { ReadPcdFile(cut.string()); }, "PCD", "cut.pcd"));
+
+  // Found by fuzzing: PCL's reader dereferenced a null pointer on this header (a keyword PCL does not
+  // know, as it matches keywords in capitals only).
+  const std::filesystem::path odd =
+      dir.Write("odd.pcd", "VErSION\nFIELDS z\nSIZE 4\nPOINTS 2\nDATA ascii\n 00");
+  EXPECT_TRUE(
+      ThrowsBadInput([&] { ReadPcdFile(odd.string()); }, "unexpected 'VErSION' in the header", "odd.pcd", 1));
 }
 
 }  // namespace

@@ -7,7 +7,9 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <random>
+#include <vector>
 
 #include "shape/core/error.h"
 #include "shape/model/shape_grid.h"
@@ -152,6 +154,77 @@ TEST_F(StatismoIo, RoundTripKeepsTheModel) {
   EXPECT_EQ(info["grid"], nlohmann::json({4, 3}));
   // No temporary file is left beside it.
   EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 1);
+}
+
+// Replaces dataset `path` of the file by an empty vector or a declared but never written one.
+void ReplaceDataset(const fs::path& file, const char* path, hsize_t size, bool write) {
+  const hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  ASSERT_GE(f, 0);
+  ASSERT_GE(H5Ldelete(f, path, H5P_DEFAULT), 0);
+  const hid_t space = H5Screate_simple(1, &size, nullptr);
+  const hid_t set = H5Dcreate2(f, path, H5T_NATIVE_FLOAT, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  ASSERT_GE(set, 0);
+  const std::vector<float> zeros(size, 0.0f);
+  if (write) H5Dwrite(set, H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, zeros.data());
+  H5Dclose(set);
+  H5Sclose(space);
+  H5Fclose(f);
+}
+
+// The message of the Error(kBadInput) `read` throws (fails the test for any other outcome).
+template <class F>
+std::string BadInputMessage(F&& read, const std::string& file) {
+  try {
+    read();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kBadInput) << e.what();
+    EXPECT_EQ(e.file(), file) << e.what();
+    return e.what();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "not pectus::Error: " << e.what();
+    return {};
+  }
+  ADD_FAILURE() << "no error";
+  return {};
+}
+
+TEST_F(StatismoIo, EmptyScalarsAndUnstoredDatasetsAreBadInput) {
+  // Found by fuzzing: an empty /model/noiseVariance reached .at(0) and threw std::out_of_range.
+  for (const char* path : {"/model/noiseVariance", "/version/majorVersion", "/pectus/totalVariance"}) {
+    const fs::path file = dir_ / "empty_scalar.h5";
+    WriteStatismoModel(file, SmallModel());
+    ReplaceDataset(file, path, 0, false);
+    const std::string what = BadInputMessage([&] { ReadStatismoModel(file); }, file.string());
+    EXPECT_NE(what.find(std::string(path) + " must hold one number, not 0"), std::string::npos) << what;
+  }
+  // A mean that declares 36 numbers but stores none (HDF5 would read its fill value).
+  const fs::path file = dir_ / "unstored.h5";
+  WriteStatismoModel(file, SmallModel());
+  ReplaceDataset(file, "/model/mean", 36, false);
+  const std::string what = BadInputMessage([&] { ReadStatismoModel(file); }, file.string());
+  EXPECT_NE(what.find("/model/mean holds no data"), std::string::npos) << what;
+}
+
+TEST_F(StatismoIo, ParseReadsTheSameModelFromMemory) {
+  const ShapeModel m = SmallModel();
+  const fs::path path = dir_ / "model.h5";
+  WriteStatismoModel(path, m, {{"grid", {4, 3}}});
+  std::ifstream in(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  nlohmann::json info;
+  const ShapeModel r = ParseStatismoModel(bytes, "memory.h5", &info);
+  const ShapeModel f = ReadStatismoModel(path);
+  // The same bytes through the same reader: identical numbers.
+  EXPECT_EQ(r.mean, f.mean);
+  EXPECT_EQ(r.basis, f.basis);
+  EXPECT_EQ(r.variances, f.variances);
+  EXPECT_EQ(r.scores, f.scores);
+  EXPECT_EQ(r.faces, m.faces);
+  EXPECT_EQ(r.names, m.names);
+  EXPECT_EQ(info["grid"], nlohmann::json({4, 3}));
+  for (const std::string& bad : {std::string(), std::string("hello"), bytes.substr(0, bytes.size() / 2)}) {
+    BadInputMessage([&] { ParseStatismoModel(bad, "memory.h5"); }, "memory.h5");
+  }
 }
 
 TEST_F(StatismoIo, BadFilesNameTheFileAndTheDataset) {
