@@ -12,6 +12,7 @@
 #include "shape/surface/marching_cubes.h"
 #include "shape/surface/rbf_levels.h"
 #include "shape/surface/surface_normals.h"
+#include "shape/core/per_vertex_normals.h"
 
 namespace pectus {
 namespace {
@@ -47,23 +48,6 @@ void CheckNotDegenerate(const Points3& p, const std::string& what) {
     ThrowBadInput(what, "all " + std::to_string(p.rows()) +
                             " points lie on one line; a surface needs points spread in two directions");
   }
-}
-
-// Unit normals per vertex: area-weighted face normals.
-Points3 VertexNormals(const TriangleMesh& mesh) {
-  Points3 n = Points3::Zero(mesh.num_vertices(), 3);
-  for (Eigen::Index f = 0; f < mesh.num_faces(); ++f) {
-    const Eigen::Vector3d a = mesh.vertices.positions.row(mesh.faces(f, 0)).transpose();
-    const Eigen::Vector3d b = mesh.vertices.positions.row(mesh.faces(f, 1)).transpose();
-    const Eigen::Vector3d c = mesh.vertices.positions.row(mesh.faces(f, 2)).transpose();
-    const Eigen::RowVector3d fn = (b - a).cross(c - a).transpose();
-    for (int i = 0; i < 3; ++i) n.row(mesh.faces(f, i)) += fn;
-  }
-  for (Eigen::Index v = 0; v < n.rows(); ++v) {
-    const double len = n.row(v).norm();
-    n.row(v) = len > 0.0 ? Eigen::RowVector3d(n.row(v) / len) : Eigen::RowVector3d(0.0, 0.0, 1.0);
-  }
-  return n;
 }
 
 }  // namespace
@@ -201,7 +185,8 @@ ReconstructResult ReconstructSurface(const PointCloud& cloud, const ReconstructO
   if (result.mesh.num_faces() == 0) {
     ThrowFailure("reconstruct: no surface was found near the data (normals inconsistent?)", what);
   }
-  result.mesh.vertices.normals = VertexNormals(result.mesh);
+  result.mesh.vertices.normals =
+      PerVertexNormals(result.mesh.vertices.positions, result.mesh.faces, Eigen::RowVector3d(0.0, 0.0, 1.0));
   clock.Lap("trim");
 
   // 7. Fitting accuracy (dissertation Eq. 11) and the CGAL check.
