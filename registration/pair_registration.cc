@@ -30,13 +30,15 @@ bool PairRegistrationOptions::IsValid(std::string* why) const {
     if (why) *why = "patch_radius_mm must be >= 0";
     return false;
   }
-  if (!(max_landmark_rms_mm > 0.0)) {
-    if (why) *why = "max_landmark_rms_mm must be > 0";
-    return false;
-  }
-  if (!(max_landmark_shift_mm >= 0.0) || !std::isfinite(max_landmark_shift_mm)) {
-    if (why) *why = "max_landmark_shift_mm must be >= 0";
-    return false;
+  const std::pair<const char*, double> limits[] = {
+      {"max_landmark_rms_mm", max_landmark_rms_mm},
+      {"max_landmark_rms_increase_mm", max_landmark_rms_increase_mm},
+      {"max_landmark_shift_mm", max_landmark_shift_mm}};
+  for (const auto& [name, value] : limits) {
+    if (!(value >= 0.0) || !std::isfinite(value)) {
+      if (why) *why = std::string(name) + " must be >= 0 (0: off)";
+      return false;
+    }
   }
   return true;
 }
@@ -120,6 +122,7 @@ PairRegistrationResult RegisterPair(const IcpTarget& fixed, const PointCloud& mo
     }
     result.landmark_shift_mm = std::sqrt(shift2 / static_cast<double>(result.landmarks->labels.size()));
   }
+  result.refined = true;  // the fine step's pose, unless the fallback below replaces it
   if (result.success && with_landmarks && options.max_landmark_shift_mm > 0.0 &&
       result.landmark_shift_mm > options.max_landmark_shift_mm) {
     std::ostringstream msg;
@@ -131,7 +134,17 @@ PairRegistrationResult RegisterPair(const IcpTarget& fixed, const PointCloud& mo
     result.success = false;
     result.message = msg.str();
   }
-  if (result.success && with_landmarks && result.landmark_rms_mm > options.max_landmark_rms_mm) {
+  if (result.success && with_landmarks && options.max_landmark_rms_increase_mm > 0.0 &&
+      result.landmark_rms_mm > result.landmarks->rms_mm + options.max_landmark_rms_increase_mm) {
+    std::ostringstream msg;
+    msg.precision(3);
+    msg << "the fine step moved the landmarks " << result.landmark_rms_mm - result.landmarks->rms_mm
+        << " mm RMS away from the landmark fit (limit " << options.max_landmark_rms_increase_mm << " mm)";
+    result.success = false;
+    result.message = msg.str();
+  }
+  if (result.success && with_landmarks && options.max_landmark_rms_mm > 0.0 &&
+      result.landmark_rms_mm > options.max_landmark_rms_mm) {
     std::ostringstream msg;
     msg.precision(3);
     msg << "the surfaces slid away from the landmarks: landmark RMS " << result.landmark_rms_mm
@@ -139,6 +152,13 @@ PairRegistrationResult RegisterPair(const IcpTarget& fixed, const PointCloud& mo
         << result.landmarks->rms_mm << " mm after the landmark step)";
     result.success = false;
     result.message = msg.str();
+  }
+  if (!result.success && with_landmarks && options.fall_back_to_landmarks) {
+    result.T_target_source = result.landmarks->T_target_source;
+    result.landmark_rms_mm = result.landmarks->rms_mm;
+    result.refined = false;
+    result.success = true;
+    result.message = "fine step not kept (" + result.message + "); the landmark pose is used";
   }
   return result;
 }

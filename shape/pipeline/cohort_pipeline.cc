@@ -5,7 +5,7 @@
 #include <exception>
 #include <sstream>
 
-#include "registration/landmark_alignment.h"
+#include "registration/generalised_procrustes.h"
 #include "shape/surface/cloud_filter.h"
 #include "shape/core/error.h"
 #include "shape/io/landmark_io.h"
@@ -27,12 +27,6 @@ bool Matches(const std::string& name, const std::string& pattern) {
   const std::string prefix = pattern.substr(0, star), suffix = pattern.substr(star + 1);
   return name.size() >= prefix.size() + suffix.size() && name.compare(0, prefix.size(), prefix) == 0 &&
          name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
-LandmarkSet Transformed(const LandmarkSet& set, const Similarity3& T) {
-  LandmarkSet out = set;
-  for (Landmark& l : out.items) l.position = T * l.position;
-  return out;
 }
 
 // Runs one stage of one subject: times it, and turns an exception into the subject's failure.
@@ -90,29 +84,30 @@ void BuildSurface(const CohortSubject& in, const PipelineOptions& options, Subje
 void MoveSubject(const Similarity3& T, SubjectOutcome* s) {
   TransformInPlace(T, &s->grid.mesh);
   s->grid.shape_vector = ToShapeVector(s->grid.mesh.vertices.positions);
-  ChestRoi& roi = s->grid.roi;
-  roi.origin = T * roi.origin;
-  roi.lateral = T.rotation * roi.lateral;
-  roi.sternal = T.rotation * roi.sternal;
-  roi.normal = T.rotation * roi.normal;
+  s->grid.roi = s->grid.roi.Transformed(T);
   TransformInPlace(T, &s->surface);
-  s->landmarks = Transformed(s->landmarks, T);
+  s->landmarks = s->landmarks.Transformed(T);
   s->measures.deepest_point = T * s->measures.deepest_point;
-  s->T_reference_subject = Similarity3::FromMatrix(T.Matrix() * s->T_reference_subject.Matrix(), s->name);
+  s->T_reference_subject = T * s->T_reference_subject;
 }
 
-// Generalized Procrustes analysis, rigid: each grid moved onto the mean of all, `iterations` times.
+// Generalized Procrustes analysis, rigid, of the grids (no reference: the mean floats with the grids);
+// each subject moved with its grid.
 void AlignGridsToTheirMean(const std::vector<int>& good, int iterations, PipelineResult* result) {
-  for (int it = 0; it < iterations; ++it) {
-    Points3 mean = Points3::Zero(result->subjects[good[0]].grid.mesh.num_vertices(), 3);
-    for (int i : good) mean += result->subjects[i].grid.mesh.vertices.positions;
-    mean /= static_cast<double>(good.size());
-    for (int i : good) {
-      SubjectOutcome& s = result->subjects[i];
-      MoveSubject(UmeyamaAlignment(s.grid.mesh.vertices.positions, mean, {}, false, 0.0, s.name + " grid"),
-                  &s);
-    }
+  if (iterations <= 0) return;
+  std::vector<Points3> grids;
+  std::vector<std::string> names;
+  for (int i : good) {
+    grids.push_back(result->subjects[i].grid.mesh.vertices.positions);
+    names.push_back(result->subjects[i].name + " grid");
   }
+  ProcrustesOptions o;
+  o.reference.reset();
+  o.max_iterations = iterations - 1;  // each grid aligned `iterations` times
+  o.tolerance_mm = 0.0;
+  o.min_spread_ratio = 0.0;
+  const ProcrustesResult gpa = GeneralisedProcrustes(grids, o, names);
+  for (std::size_t k = 0; k < good.size(); ++k) MoveSubject(gpa.T_mean_shape[k], &result->subjects[good[k]]);
 }
 
 void AddSeconds(std::vector<std::pair<std::string, double>>* total, const SubjectOutcome& s) {
@@ -139,26 +134,21 @@ PointCloud CropToRoi(const PointCloud& cloud, const ChestRoi& roi, double margin
   return SelectRows(cloud, rows);
 }
 
-void RegisterToReference(const IcpTarget& reference_surface, const LandmarkSet& reference_landmarks,
-                         const PipelineOptions& options, SubjectOutcome* s) {
+void RegisterSubject(const IcpTarget& reference_surface, const LandmarkSet& reference_landmarks,
+                     const PipelineOptions& options, SubjectOutcome* s) {
   const PairRegistrationResult r = RegisterPair(reference_surface, s->surface.vertices, &reference_landmarks,
                                                 &s->landmarks, {}, options.registration);
-  const double landmark_fit_rms = r.landmarks->rms_mm;
   s->icp_rms_mm = r.icp ? r.icp->rms_mm : 0.0;
-  s->icp_accepted = r.success && r.landmark_rms_mm <= landmark_fit_rms + options.max_landmark_shift_mm;
-  s->T_reference_subject = s->icp_accepted ? r.T_target_source : r.landmarks->T_target_source;
-  s->landmark_rms_mm = s->icp_accepted ? r.landmark_rms_mm : landmark_fit_rms;
+  s->icp_accepted = r.success && r.refined;
+  s->T_reference_subject = r.T_target_source;
+  s->landmark_rms_mm = r.landmark_rms_mm;
   s->registration_message = r.message;
-  if (!s->icp_accepted) {
-    s->registration_message =
-        "ICP refinement not kept (" +
-        (r.success ? "it moved the landmarks " + std::to_string(r.landmark_rms_mm - landmark_fit_rms) +
-                         " mm away from the landmark fit"
-                   : r.message) +
-        "); the landmark pose is used";
-  }
   TransformInPlace(s->T_reference_subject, &s->surface);
-  s->landmarks = Transformed(s->landmarks, s->T_reference_subject);
+  s->landmarks = s->landmarks.Transformed(s->T_reference_subject);
+}
+
+void ResampleSubject(const PipelineOptions& options, SubjectOutcome* s) {
+  s->grid = ResampleSurface(s->surface, s->landmarks, options.roi, options.resample, s->name);
 }
 
 std::vector<CohortSubject> FindCohortSubjects(const fs::path& folder, const std::string& sweep_pattern,
@@ -192,12 +182,11 @@ bool PipelineOptions::IsValid(std::string* why) const {
       !resample.IsValid(why) || !model.IsValid(why)) {
     return false;
   }
-  if (!(crop_margin_mm >= 0.0) || min_sweep_points < 10 || !(max_landmark_shift_mm >= 0.0) ||
-      procrustes_iterations < 0) {
+  if (!(crop_margin_mm >= 0.0) || min_sweep_points < 10 || procrustes_iterations < 0) {
     if (why != nullptr) {
       *why =
-          "the crop margin and the landmark shift must be >= 0 mm, a sweep needs at least 10 points and the "
-          "Procrustes iterations must be >= 0";
+          "the crop margin must be >= 0 mm, a sweep needs at least 10 points and the Procrustes iterations "
+          "must be >= 0";
     }
     return false;
   }
@@ -257,11 +246,9 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
         s.registration_message = "the reference";
         return;
       }
-      RegisterToReference(target, reference_landmarks, options, &s);
+      RegisterSubject(target, reference_landmarks, options, &s);
     });
-    RunStage(&s, "resample", [&] {
-      s.grid = ResampleSurface(s.surface, s.landmarks, options.roi, options.resample, s.name);
-    });
+    RunStage(&s, "resample", [&] { ResampleSubject(options, &s); });
     if (options.measures) {
       RunStage(&s, "measures", [&] {
         try {

@@ -77,6 +77,9 @@ TEST(CohortPipeline, GridsLieOnTheTrueSurfacesAndTheDepressionStandsOut) {
       }
     }
     const DistanceMapResult e = ComputeDistanceMap(s.surface.vertices.positions(inside, Eigen::all), truth);
+    // Measured: 0.45, 0.40 and 0.75 mm RMS (subject_002, the 34 mm depression, smoothed most), each within
+    // 0.05 mm of its reconstructed surface (e, below). 1.0 mm is 1.3 times the largest: the surface's own
+    // smoothing of 4 mm sweeps, not the registration or resampling, sets this figure.
     EXPECT_LT(d.stats.rms, 1.0) << s.name;
     EXPECT_LT(d.stats.rms, e.stats.rms + 0.05) << s.name;
     EXPECT_LT(d.stats.max_abs, e.stats.max_abs + 0.2) << s.name;
