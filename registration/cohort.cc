@@ -1,8 +1,10 @@
 #include "registration/cohort.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <memory>
+#include <sstream>
 
 #include "registration/pose_error.h"
 #include "registration/voxel_downsample.h"
@@ -27,6 +29,17 @@ bool CohortOptions::IsValid(std::string* why) const {
 
 bool CohortResult::all_succeeded() const {
   return std::all_of(success.begin(), success.end(), [](bool s) { return s; });
+}
+
+std::string CohortResult::BriefReport() const {
+  const auto good = std::count(success.begin(), success.end(), true);
+  std::ostringstream s;
+  s.precision(3);
+  s << good << " of " << success.size() << " scans registered";
+  if (procrustes) s << ", landmark Procrustes RMS " << procrustes->rms_mm << " mm";
+  if (iterations > 0) s << ", " << iterations << " groupwise rounds" << (converged ? "" : " (not settled)");
+  s << ", " << timings_s.Total() << " s";
+  return s.str();
 }
 
 CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptions& options) {
@@ -61,6 +74,10 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
   };
 
   // Every scan to the reference: the whole of kToReference, and the start of kGroupwise without landmarks.
+  auto since = [](std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
+  auto t0 = std::chrono::steady_clock::now();
   if (options.mode == CohortMode::kToReference || !landmarks) {
     const CohortScan& r = scans[ref];
     const IcpTarget target = r.cloud.has_normals()
@@ -76,6 +93,7 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
       }
       progress.Advance();
     }
+    result.timings_s.Add("register", since(t0));
     if (options.mode == CohortMode::kToReference) return result;
   } else {
     // Groupwise with landmarks: generalised Procrustes of the landmarks gives the start.
@@ -92,7 +110,9 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
     result.procrustes = GeneralisedProcrustes(sets, po, names);
     result.T_frame_scan = result.procrustes->T_mean_shape;
     for (std::size_t i = 0; i < n; ++i) result.messages[i] = "landmark Procrustes";
+    result.timings_s.Add("procrustes", since(t0));
   }
+  t0 = std::chrono::steady_clock::now();
 
   // Groupwise refinement on the surfaces. Each scan is prepared once as an ICP target (positions scaled by
   // its fixed scale); the mean surface, sampled at points of the reference scan, is moved onto each scan.
@@ -191,6 +211,7 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
     }
   }
   result.mean_points = mean;
+  result.timings_s.Add("groupwise", since(t0));
   return result;
 }
 

@@ -64,7 +64,11 @@ struct CohortResult {
   std::optional<LandmarkProcrustesResult> procrustes;  ///< kGroupwise with landmarks: the landmark GPA
   int iterations = 0;                          ///< kGroupwise: rounds run
   bool converged = true;                       ///< kGroupwise: stopped on the tolerance
+  /// Wall time (s): "register" (to the reference), "procrustes" (landmarks), "groupwise".
+  Timings timings_s;
   bool all_succeeded() const;
+  /// One line for a log: "4 of 4 scans registered, 6 groupwise rounds, 3.2 s".
+  std::string BriefReport() const;
 };
 
 /// Aligns a cohort (see CohortMode). The reference scan gets the identity (kToReference). A scan whose

@@ -11,6 +11,7 @@
 #include "registration/normals.h"
 #include "shape/core/geometry.h"
 #include "shape/core/landmarks.h"
+#include "shape/core/timings.h"
 
 namespace pectus {
 
@@ -65,9 +66,13 @@ struct PairRegistrationResult {
   bool success = false;            ///< false: the fit is poor, see message
   bool refined = false;            ///< T_target_source is the fine step's (else landmarks or initial)
   std::string message;
-  double normal_seconds = 0.0;   ///< estimating missing normals
-  double prepare_seconds = 0.0;  ///< centring the fixed scan and building its k-d tree
-  double seconds = 0.0;          ///< everything
+  /// Wall time (s): "prepare" (centring the fixed scan, its k-d tree), "normals" (estimating missing
+  /// normals of either scan), "landmarks", "icp".
+  Timings timings_s;
+
+  /// One line for a log: "success, landmarks RMS 2.1 mm, ICP 14 iterations, RMS 0.21 mm, 97.1 % inliers,
+  /// landmark RMS at the end 2.3 mm, 0.52 s", with the message when it failed or the fine step was not kept.
+  std::string BriefReport() const;
 };
 
 /// Registers `moving` to `fixed`: T_target_source = landmark alignment (when both landmark sets are

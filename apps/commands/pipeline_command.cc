@@ -46,8 +46,9 @@ class PipelineCommand : public Command {
     app->add_option("--crop-margin", options_.crop_margin_mm,
                     "Sweeps cut to the landmark ROI widened by this, mm (0: whole sweeps)")
         ->default_val(options_.crop_margin_mm);
-    app->add_option("--surface-spacing", options_.reconstruct.spacing, "Isosurface step of the surfaces, mm")
-        ->default_val(options_.reconstruct.spacing);
+    app->add_option("--surface-spacing", options_.reconstruct.spacing_mm,
+                    "Isosurface step of the surfaces, mm")
+        ->default_val(options_.reconstruct.spacing_mm);
     app->add_option("--merge-spacing", options_.merge.target_spacing_mm,
                     "Merged cloud decimated to this spacing, mm")
         ->default_val(options_.merge.target_spacing_mm);
@@ -95,7 +96,7 @@ class PipelineCommand : public Command {
         progress.Advance();
       });
     }
-    for (const auto& [stage, t] : result.seconds) context->report.AddTime(stage, t);
+    context->report.AddTimes(result.timings_s);
 
     // 9. Files: the model, tables, meshes per subject, and the report with its figures (the library writes
     // them; the app stages each one for the run's transaction).
@@ -106,11 +107,12 @@ class PipelineCommand : public Command {
                    {"profile fit", fit_},
                    {"threads", context->threads}};
     const fs::path html_target = out / "report.html";
-    WritePipelineOutputs(result, report_,
-                         {{"source", "pectus pipeline"}, {"cohort", cohort_}, {"reference", result.reference}},
-                         out, [&](const fs::path& target) {
-                           return target == html_target ? html : StageOutput(context, *this, target);
-                         });
+    WritePipelineOutputs(
+        result, report_,
+        {{"source", "pectus pipeline"}, {"cohort", cohort_}, {"reference", result.reference}}, out,
+        [&](const fs::path& target) {
+          return target == html_target ? html : StageOutput(context, *this, target);
+        });
     nlohmann::json summary = PipelineJson(result);
     for (const auto& [key, value] : summary.items()) context->report[key] = value;
     context->report["cohort"] = cohort_;
@@ -119,7 +121,7 @@ class PipelineCommand : public Command {
     context->report["grid"] = {{"lateral", options_.resample.grid.lateral},
                                {"sternal", options_.resample.grid.sternal}};
     context->report["profile_fit"] = ToString(options_.resample.fit.kind);
-    Info("pipeline: " + result.message + "; report: " + (out / "report.html").string());
+    Info("pipeline: " + result.BriefReport() + "; report: " + (out / "report.html").string());
   }
 
  private:

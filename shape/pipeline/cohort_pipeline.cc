@@ -6,11 +6,11 @@
 #include <sstream>
 
 #include "registration/generalised_procrustes.h"
-#include "shape/surface/cloud_filter.h"
 #include "shape/core/error.h"
 #include "shape/io/landmark_io.h"
 #include "shape/io/mesh_io.h"
 #include "shape/model/shape_grid.h"
+#include "shape/surface/cloud_filter.h"
 
 namespace pectus {
 namespace {
@@ -40,7 +40,7 @@ bool RunStage(SubjectOutcome* s, const std::string& stage, Fn fn) {
     s->failed_stage = stage;
     s->error = e.what();
   }
-  s->seconds.emplace_back(stage, Since(start));
+  s->timings_s.Add(stage, Since(start));
   return s->failed_stage.empty();
 }
 
@@ -110,16 +110,6 @@ void AlignGridsToTheirMean(const std::vector<int>& good, int iterations, Pipelin
   for (std::size_t k = 0; k < good.size(); ++k) MoveSubject(gpa.T_mean_shape[k], &result->subjects[good[k]]);
 }
 
-void AddSeconds(std::vector<std::pair<std::string, double>>* total, const SubjectOutcome& s) {
-  for (const auto& [stage, t] : s.seconds) {
-    auto it = std::find_if(total->begin(), total->end(), [&](const auto& e) { return e.first == stage; });
-    if (it == total->end())
-      total->emplace_back(stage, t);
-    else
-      it->second += t;
-  }
-}
-
 }  // namespace
 
 PointCloud CropToRoi(const PointCloud& cloud, const ChestRoi& roi, double margin_mm) {
@@ -175,6 +165,16 @@ std::vector<CohortSubject> FindCohortSubjects(const fs::path& folder, const std:
   }
   std::sort(subjects.begin(), subjects.end(), [](const auto& a, const auto& b) { return a.name < b.name; });
   return subjects;
+}
+
+std::string PipelineResult::BriefReport() const {
+  std::ostringstream s;
+  s.precision(3);
+  s << message;
+  if (quality && quality->generalization_mm.size() > 0)
+    s << "; generalization " << quality->generalization_mm[quality->generalization_mm.size() - 1] << " mm";
+  s << "; " << timings_s.Total() << " s of work";
+  return s.str();
 }
 
 bool PipelineOptions::IsValid(std::string* why) const {
@@ -277,20 +277,18 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
     for (std::size_t k = 0; k < good.size(); ++k) {
       shapes.row(static_cast<Eigen::Index>(k)) = result.subjects[good[k]].grid.shape_vector.transpose();
     }
-    result.model = BuildShapeModel(shapes, options.model, "resampled subjects");
-    for (int i : good) result.model.names.push_back(result.subjects[i].name);
-    result.model.faces = GridFaces(options.resample.grid);
-    result.has_model = true;
-    result.seconds.emplace_back("model", Since(start));
+    ShapeModel& model = result.model.emplace(BuildShapeModel(shapes, options.model, "resampled subjects"));
+    for (int i : good) model.names.push_back(result.subjects[i].name);
+    model.faces = GridFaces(options.resample.grid);
+    result.timings_s.Add("model", Since(start));
     if (options.quality && good.size() >= 3) {
       start = Clock::now();
       result.quality = EvaluateModelQuality(shapes, options.quality_options);
-      result.has_quality = true;
-      result.seconds.emplace_back("quality", Since(start));
+      result.timings_s.Add("quality", Since(start));
     }
     // 8. Each subject's distance to the mean, and the mean's own measures (on the mean landmark ROI).
     start = Clock::now();
-    const TriangleMesh mean = result.model.ToMesh(result.model.mean);
+    const TriangleMesh mean = model.ToMesh(model.mean);
     LandmarkSet mean_landmarks = result.subjects[good[0]].landmarks;
     for (Landmark& l : mean_landmarks.items) {
       Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -303,7 +301,7 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
     for (std::size_t k = 0; k < good.size(); ++k) {
       SubjectOutcome& s = result.subjects[good[k]];
       s.to_mean = ComputeDistanceMap(s.grid.mesh.vertices.positions, mean, options.distance, "mean shape");
-      s.scores = result.model.scores.row(static_cast<Eigen::Index>(k)).transpose();
+      s.scores = model.scores.row(static_cast<Eigen::Index>(k)).transpose();
     }
     try {
       result.mean_measures =
@@ -311,13 +309,16 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
     } catch (const Error& e) {
       result.mean_measures.message = e.what();
     }
-    result.seconds.emplace_back("distance", Since(start));
+    result.timings_s.Add("distance", Since(start));
   }
-  for (const SubjectOutcome& s : result.subjects) AddSeconds(&result.seconds, s);
+  Timings subjects;
+  for (const SubjectOutcome& s : result.subjects) subjects.Add(s.timings_s);
+  subjects.Add(result.timings_s);
+  result.timings_s = std::move(subjects);
   std::ostringstream msg;
   msg << result.succeeded << " of " << n << " subjects made it to the model (reference " << result.reference
       << ")";
-  if (result.has_model) msg << "; " << result.model.num_modes() << " modes";
+  if (result.model) msg << "; " << result.model->num_modes() << " modes";
   result.message = msg.str();
   return result;
 }

@@ -6,12 +6,14 @@
 
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "registration/pair_registration.h"
 #include "shape/core/geometry.h"
 #include "shape/core/landmarks.h"
+#include "shape/core/timings.h"
 #include "shape/model/chest_measures.h"
 #include "shape/model/cross_section_resampler.h"
 #include "shape/model/distance_map.h"
@@ -56,7 +58,7 @@ struct PipelineOptions {
   }();
   ReconstructOptions reconstruct = [] {
     ReconstructOptions o;
-    o.spacing = 1.0;  // isosurface step (mm), as fine as the merged cloud
+    o.spacing_mm = 1.0;  // isosurface step (mm), as fine as the merged cloud
     o.check = false;  // the CGAL manifold check costs as much as the rest; `pectus reconstruct` has it
     return o;
   }();
@@ -121,7 +123,7 @@ struct SubjectOutcome {
   ChestMeasures measures;            ///< when options.measures (depth 0 and a message if it failed)
   DistanceMapResult to_mean;         ///< distances of the grid vertices to the mean shape, mm
   Eigen::VectorXd scores;            ///< model scores (mm)
-  std::vector<std::pair<std::string, double>> seconds;  ///< wall time per stage
+  Timings timings_s;                 ///< wall time per stage (s): "read", "merge", ..., "measures"
 };
 
 /// The whole cohort's result.
@@ -129,13 +131,15 @@ struct PipelineResult {
   std::vector<SubjectOutcome> subjects;  ///< in input order, failed ones included
   std::string reference;                 ///< the reference subject's name
   int succeeded = 0;
-  bool has_model = false;  ///< at least 2 subjects made it
-  ShapeModel model;        ///< names = the succeeded subjects
-  bool has_quality = false;
-  ModelQualityCurves quality;
-  ChestMeasures mean_measures;                          ///< of the mean shape (its grid)
-  std::vector<std::pair<std::string, double>> seconds;  ///< wall time per stage, summed over subjects
+  std::optional<ShapeModel> model;            ///< when at least 2 subjects made it; names = theirs
+  std::optional<ModelQualityCurves> quality;  ///< when options.quality and at least 3 made it
+  ChestMeasures mean_measures;                ///< of the mean shape (its grid)
+  /// Wall time (s) per stage: the subjects' stages summed over subjects, then "model", "quality", "distance".
+  Timings timings_s;
   std::string message;
+
+  /// One line for a log: how many subjects made it, the reference, the modes, the wall time.
+  std::string BriefReport() const;
 };
 
 /// The points of `cloud` whose ROI coordinates (u, v) lie within `margin_mm` of the ROI rectangle, with

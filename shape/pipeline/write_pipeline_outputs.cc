@@ -22,8 +22,8 @@ std::vector<fs::path> WritePipelineOutputs(const PipelineResult& result, const P
     return stage(folder / name);
   };
   // The model and its tables.
-  if (result.has_model) {
-    const ShapeModel& m = result.model;
+  if (result.model) {
+    const ShapeModel& m = *result.model;
     WriteStatismoModel(target("model.h5"), m, model_info);
     WriteMesh(target("mean.ply"), m.ToMesh(m.mean));
     std::vector<std::string> header{"subject"};
@@ -36,11 +36,11 @@ std::vector<fs::path> WritePipelineOutputs(const PipelineResult& result, const P
     eigen.col(3) = m.CumulativeFraction();
     WriteCsv(target("eigen.csv"), {"mode", "eigenvalue_mm2", "explained", "cumulative"}, eigen);
   }
-  if (result.has_quality) {
-    const ModelQualityCurves& q = result.quality;
+  if (result.quality) {
+    const ModelQualityCurves& q = *result.quality;
     Eigen::MatrixXd table(q.modes.size(), 7);
-    table << q.modes.cast<double>(), q.compactness, q.compactness_sd, q.generalization_mm, q.generalization_sd,
-        q.specificity_mm, q.specificity_sd;
+    table << q.modes.cast<double>(), q.compactness, q.compactness_sd, q.generalization_mm,
+        q.generalization_sd, q.specificity_mm, q.specificity_sd;
     WriteCsv(target("quality.csv"),
              {"modes", "compactness_mm2", "compactness_sd_mm2", "generalization_mm", "generalization_sd_mm",
               "specificity_mm", "specificity_sd_mm"},
