@@ -7,7 +7,8 @@
 # Within shape/{render,surface,model}: model may draw with render; render, surface and model use nothing
 # else of each other. The planner plugin proper (everything but planner_plugin/host, the host side that
 # reads the shape model) is loaded into other programs and sees only shape/core and shape/io.
-# tests/ may include anything and is not checked.
+# A header in an internal/ sub-folder of a library (registration/internal/icp_steps.h) is included only by
+# that library's own files. tests/ may include anything and is not checked.
 if(NOT ROOT)
   message(FATAL_ERROR "PectusCheckLayers: pass -DROOT=<source tree>")
 endif()
@@ -78,6 +79,16 @@ foreach(layer ${layers})
       if(found EQUAL -1)
         message("${file}:${n}: includes \"${header}\": ${layer} may not use ${target_layer}")
         math(EXPR violations "${violations} + 1")
+      endif()
+      # A header in an internal/ folder belongs to its library: only files of that library include it.
+      if(header MATCHES "^(.+)/internal/")
+        set(owner "${CMAKE_MATCH_1}")
+        string(LENGTH "${owner}/" len)
+        string(SUBSTRING "${file}" 0 ${len} head)
+        if(NOT head STREQUAL "${owner}/")
+          message("${file}:${n}: includes \"${header}\": an internal header of ${owner}")
+          math(EXPR violations "${violations} + 1")
+        endif()
       endif()
     endforeach()
   endforeach()

@@ -1,9 +1,10 @@
 #include "registration/cohort.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <memory>
-#include <set>
+#include <sstream>
 
 #include "registration/pose_error.h"
 #include "registration/voxel_downsample.h"
@@ -11,118 +12,6 @@
 #include "shape/core/log.h"
 
 namespace pectus {
-namespace {
-
-Points3 Apply(const Similarity3& T, const Points3& x) {
-  Points3 y(x.rows(), 3);
-  const Eigen::Matrix3d A = T.scale * T.rotation;
-  for (Eigen::Index i = 0; i < x.rows(); ++i)
-    y.row(i) = (A * x.row(i).transpose() + T.translation).transpose();
-  return y;
-}
-
-Rigid3 ToRigid(const Similarity3& T) {
-  Rigid3 r = Rigid3::Identity();
-  r.linear() = T.rotation;
-  r.translation() = T.translation;
-  return r;
-}
-
-std::string NameOf(const std::vector<std::string>& names, std::size_t i) {
-  return i < names.size() ? names[i] : "landmark set " + std::to_string(i + 1);
-}
-
-}  // namespace
-
-bool ProcrustesOptions::IsValid(std::string* why) const {
-  auto fail = [&](const char* text) {
-    if (why) *why = text;
-    return false;
-  };
-  if (reference < 0) return fail("reference must be >= 0");
-  if (max_iterations < 1) return fail("max_iterations must be >= 1");
-  if (!(tolerance_mm > 0.0)) return fail("tolerance_mm must be > 0");
-  if (!(min_spread_ratio >= 0.0 && min_spread_ratio < 1.0)) return fail("min_spread_ratio must be in [0, 1)");
-  return true;
-}
-
-ProcrustesResult GeneralisedProcrustes(const std::vector<LandmarkSet>& shapes,
-                                       const ProcrustesOptions& options,
-                                       const std::vector<std::string>& names) {
-  std::string why;
-  if (!options.IsValid(&why)) ThrowUsage("Procrustes: " + why);
-  if (shapes.size() < 2) ThrowBadInput("Procrustes", "needs at least two landmark sets");
-  const auto ref = static_cast<std::size_t>(options.reference);
-  if (ref >= shapes.size()) ThrowUsage("Procrustes: reference index out of range");
-  for (std::size_t i = 0; i < shapes.size(); ++i) shapes[i].Validate(NameOf(names, i));
-
-  // Labels present in every set, in the reference's order.
-  ProcrustesResult result;
-  std::vector<std::string> labels;
-  std::set<std::string> skipped;
-  for (const Landmark& l : shapes[ref].items) {
-    bool everywhere = true;
-    for (const LandmarkSet& s : shapes) everywhere = everywhere && s.Find(l.label) != nullptr;
-    if (everywhere) {
-      labels.push_back(l.label);
-    } else {
-      skipped.insert(l.label);
-    }
-  }
-  for (const LandmarkSet& s : shapes) {
-    for (const Landmark& l : s.items) {
-      if (std::find(labels.begin(), labels.end(), l.label) == labels.end()) skipped.insert(l.label);
-    }
-  }
-  result.skipped.assign(skipped.begin(), skipped.end());
-  if (labels.size() < 3) {
-    ThrowBadInput("Procrustes", "only " + std::to_string(labels.size()) +
-                                    " landmark labels are present in every set; need at least 3");
-  }
-  const auto L = static_cast<Eigen::Index>(labels.size());
-  std::vector<Points3> X(shapes.size(), Points3(L, 3));
-  for (std::size_t i = 0; i < shapes.size(); ++i) {
-    for (Eigen::Index k = 0; k < L; ++k) {
-      X[i].row(k) = shapes[i].Find(labels[static_cast<std::size_t>(k)])->position.transpose();
-    }
-  }
-
-  Points3 mean = X[ref];
-  result.T_mean_shape.resize(shapes.size());
-  const Eigen::VectorXd no_weights;
-  for (result.iterations = 1; result.iterations <= options.max_iterations; ++result.iterations) {
-    // Align every shape to the current mean, average.
-    Points3 next = Points3::Zero(L, 3);
-    for (std::size_t i = 0; i < shapes.size(); ++i) {
-      result.T_mean_shape[i] = UmeyamaAlignment(X[i], mean, no_weights, options.estimate_scale,
-                                                options.min_spread_ratio, NameOf(names, i));
-      next += Apply(result.T_mean_shape[i], X[i]);
-    }
-    next /= static_cast<double>(shapes.size());
-    // Fix the gauge: the mean in the reference's frame and, with scale, of the reference's size.
-    const Similarity3 G = UmeyamaAlignment(next, X[ref], no_weights, options.estimate_scale,
-                                           options.min_spread_ratio, "mean shape");
-    next = Apply(G, next);
-    const double moved = (next - mean).rowwise().norm().maxCoeff();
-    mean = next;
-    if (moved < options.tolerance_mm) {
-      result.converged = true;
-      break;
-    }
-  }
-  result.iterations = std::min(result.iterations, options.max_iterations);
-  double sum = 0.0;
-  for (std::size_t i = 0; i < shapes.size(); ++i) {
-    result.T_mean_shape[i] = UmeyamaAlignment(X[i], mean, no_weights, options.estimate_scale,
-                                              options.min_spread_ratio, NameOf(names, i));
-    sum += (Apply(result.T_mean_shape[i], X[i]) - mean).squaredNorm();
-  }
-  result.rms_mm = std::sqrt(sum / static_cast<double>(shapes.size() * static_cast<std::size_t>(L)));
-  for (Eigen::Index k = 0; k < L; ++k) {
-    result.mean.items.push_back({labels[static_cast<std::size_t>(k)], mean.row(k).transpose(), ""});
-  }
-  return result;
-}
 
 bool CohortOptions::IsValid(std::string* why) const {
   auto fail = [&](const char* text) {
@@ -140,6 +29,17 @@ bool CohortOptions::IsValid(std::string* why) const {
 
 bool CohortResult::all_succeeded() const {
   return std::all_of(success.begin(), success.end(), [](bool s) { return s; });
+}
+
+std::string CohortResult::BriefReport() const {
+  const auto good = std::count(success.begin(), success.end(), true);
+  std::ostringstream s;
+  s.precision(3);
+  s << good << " of " << success.size() << " scans registered";
+  if (procrustes) s << ", landmark Procrustes RMS " << procrustes->rms_mm << " mm";
+  if (iterations > 0) s << ", " << iterations << " groupwise rounds" << (converged ? "" : " (not settled)");
+  s << ", " << timings_s.Total() << " s";
+  return s.str();
 }
 
 CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptions& options) {
@@ -174,6 +74,10 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
   };
 
   // Every scan to the reference: the whole of kToReference, and the start of kGroupwise without landmarks.
+  auto since = [](std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
+  auto t0 = std::chrono::steady_clock::now();
   if (options.mode == CohortMode::kToReference || !landmarks) {
     const CohortScan& r = scans[ref];
     const IcpTarget target = r.cloud.has_normals()
@@ -189,6 +93,7 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
       }
       progress.Advance();
     }
+    result.timings_s.Add("register", since(t0));
     if (options.mode == CohortMode::kToReference) return result;
   } else {
     // Groupwise with landmarks: generalised Procrustes of the landmarks gives the start.
@@ -205,7 +110,9 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
     result.procrustes = GeneralisedProcrustes(sets, po, names);
     result.T_frame_scan = result.procrustes->T_mean_shape;
     for (std::size_t i = 0; i < n; ++i) result.messages[i] = "landmark Procrustes";
+    result.timings_s.Add("procrustes", since(t0));
   }
+  t0 = std::chrono::steady_clock::now();
 
   // Groupwise refinement on the surfaces. Each scan is prepared once as an ICP target (positions scaled by
   // its fixed scale); the mean surface, sampled at points of the reference scan, is moved onto each scan.
@@ -217,7 +124,7 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
     targets[i] = scans[i].cloud.has_normals()
                      ? std::make_unique<IcpTarget>(scaled, scans[i].cloud.normals, scans[i].name)
                      : std::make_unique<IcpTarget>(scaled, options.pair.normals, scans[i].name);
-    rigid[i] = ToRigid(result.T_frame_scan[i]);
+    rigid[i] = result.T_frame_scan[i].RigidPart();
   }
   const Points3& ref_points = scans[ref].cloud.positions;
   const double area = static_cast<double>(ref_points.rows()) * std::pow(targets[ref]->spacing_mm(), 2);
@@ -229,7 +136,7 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
   for (Eigen::Index k = 0; k < mean.rows(); ++k) {
     mean.row(k) = ref_points.row(rows.empty() ? k : rows[static_cast<std::size_t>(k)]);
   }
-  mean = Apply(result.T_frame_scan[ref], mean);
+  mean = result.T_frame_scan[ref].Apply(mean);
 
   IcpOptions icp = options.pair.icp;
   icp.patch_centres.clear();
@@ -258,7 +165,7 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
       if (2 * count(k) >= static_cast<int>(n)) next.row(k) = sum.row(k) / count(k);
     }
     // Gauge: the new mean placed on the old one, so that the cohort frame does not drift.
-    next = Apply(UmeyamaAlignment(next, mean, no_weights, false, 0.0, "mean surface"), next);
+    next = UmeyamaAlignment(next, mean, no_weights, false, 0.0, "mean surface").Apply(next);
     mean = next;
 
     // Every scan to the mean: ICP of the mean points onto the scan, inverted.
@@ -293,7 +200,7 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
   Similarity3 to_frame = Similarity3::FromRigid(gauge);
   to_frame.scale = 1.0 / ref_scale;
   to_frame.translation /= ref_scale;
-  mean = Apply(to_frame, mean);
+  mean = to_frame.Apply(mean);
   if (!result.converged) {
     for (std::size_t i = 0; i < n; ++i) {
       if (result.success[i]) {
@@ -304,6 +211,7 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
     }
   }
   result.mean_points = mean;
+  result.timings_s.Add("groupwise", since(t0));
   return result;
 }
 

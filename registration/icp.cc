@@ -9,7 +9,7 @@
 #include <limits>
 #include <sstream>
 
-#include "registration/icp_steps.h"
+#include "registration/internal/icp_steps.h"
 #include "registration/random_sample.h"
 #include "registration/voxel_downsample.h"
 #include "shape/core/error.h"
@@ -146,7 +146,7 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
   result.T_target_source = T_target_source_initial;
   auto finish = [&](const std::string& message) {
     result.message = message;
-    result.seconds = Seconds(start);
+    result.timings_s.Add("icp", Seconds(start));
     return result;
   };
 

@@ -11,6 +11,7 @@
 #include "registration/normals.h"
 #include "registration/robust_loss.h"
 #include "shape/core/geometry.h"
+#include "shape/core/timings.h"
 
 namespace pectus {
 
@@ -116,7 +117,7 @@ struct IcpResult {
   /// largest standard deviation of the rotation (degrees) and of the source centroid's position (mm).
   double rotation_sd_deg = 0.0;
   double translation_sd_mm = 0.0;
-  double seconds = 0.0;  ///< wall time of AlignIcp (target preparation not included)
+  Timings timings_s;  ///< "icp": wall time of AlignIcp (target preparation not included), s
   std::vector<IcpLevelReport> levels;
   std::string message;  ///< one line: what was found, or why it failed
 
@@ -135,7 +136,7 @@ class IcpTarget {
   /// Throws Error(kBadInput) naming `name` for mismatched sizes, too few points or non-finite values.
   IcpTarget(const Points3& positions, const Points3& normals, const std::string& name = "target");
   /// The same, estimating the normals with EstimateNormals on the target's own k-d tree (their sign is
-  /// irrelevant to ICP). normal_seconds() says what that cost.
+  /// irrelevant to ICP). timings_s() says what that cost.
   IcpTarget(const Points3& positions, const NormalOptions& normal_options,
             const std::string& name = "target");
   ~IcpTarget();
@@ -151,10 +152,8 @@ class IcpTarget {
   const KdTree3& tree() const { return *tree_; }
   /// Median distance between neighbouring target points (mm).
   double spacing_mm() const { return spacing_mm_; }
-  /// Seconds spent preparing (copy, centring, tree), normals excluded.
-  double seconds() const { return seconds_; }
-  /// Seconds spent estimating normals (0 when they were given).
-  double normal_seconds() const { return normal_seconds_; }
+  /// Wall time (s) of "prepare" (copy, centring, tree) and, when they were estimated, "normals".
+  const Timings& timings_s() const { return timings_s_; }
 
  private:
   Eigen::Vector3d origin_;
@@ -162,8 +161,7 @@ class IcpTarget {
   Points3 normals_;
   std::unique_ptr<KdTree3> tree_;
   double spacing_mm_ = 0.0;
-  double seconds_ = 0.0;
-  double normal_seconds_ = 0.0;
+  Timings timings_s_;
   void Prepare(const Points3& positions, const std::string& name);
 };
 

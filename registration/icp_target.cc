@@ -23,7 +23,7 @@ void IcpTarget::Prepare(const Points3& positions, const std::string& name) {
   centred_ = positions.rowwise() - origin_.transpose();
   tree_ = std::make_unique<KdTree3>(centred_);
   spacing_mm_ = MedianPointSpacing(centred_, *tree_);
-  seconds_ = Seconds(start);
+  timings_s_.Add("prepare", Seconds(start));
 }
 
 IcpTarget::IcpTarget(const Points3& positions, const Points3& normals, const std::string& name) {
@@ -35,7 +35,7 @@ IcpTarget::IcpTarget(const Points3& positions, const Points3& normals, const std
   Prepare(positions, name);
   const auto start = std::chrono::steady_clock::now();
   normals_ = normals;
-  seconds_ += Seconds(start);
+  timings_s_.Add("prepare", Seconds(start));
 }
 
 IcpTarget::IcpTarget(const Points3& positions, const NormalOptions& normal_options, const std::string& name) {
@@ -44,7 +44,7 @@ IcpTarget::IcpTarget(const Points3& positions, const NormalOptions& normal_optio
   o.viewpoint -= origin_;
   NormalResult normals = EstimateNormals(centred_, o, tree_.get());
   normals_ = std::move(normals.normals);
-  normal_seconds_ = normals.seconds;
+  timings_s_.Add(normals.timings_s);
 }
 
 IcpTarget::~IcpTarget() = default;

@@ -189,7 +189,8 @@ NormalResult EstimateNormals(const Points3& points, const NormalOptions& options
     const Graph graph = SymmetricGraph(graph_knn, graph_counts, graph_k);
     result.num_components = OrientByPropagation(points, graph, &result.normals);
   }
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.timings_s.Add("normals",
+                       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   return result;
 }
 

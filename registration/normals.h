@@ -6,6 +6,7 @@
 
 #include "registration/kdtree.h"
 #include "shape/core/geometry.h"
+#include "shape/core/timings.h"
 
 namespace pectus {
 
@@ -37,7 +38,7 @@ struct NormalResult {
   Eigen::VectorXd curvature;        ///< #points surface variation lambda_min / (sum of lambdas), in [0, 1/3]
   std::int64_t num_degenerate = 0;  ///< points with fewer than 3 neighbours (zero normal)
   std::int64_t num_components = 0;  ///< kPropagate: connected components of the orientation graph
-  double seconds = 0.0;             ///< wall time
+  Timings timings_s;                ///< "normals": wall time (s)
 };
 
 /// Normals by principal component analysis of the k nearest neighbours (the eigenvector of the smallest

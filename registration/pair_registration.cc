@@ -1,6 +1,5 @@
 #include "registration/pair_registration.h"
 
-#include <chrono>
 #include <cmath>
 #include <sstream>
 
@@ -8,10 +7,6 @@
 
 namespace pectus {
 namespace {
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
 
 double LandmarkRms(const LandmarkAlignmentResult& lm, const LandmarkSet& moving, const LandmarkSet& fixed,
                    const Similarity3& T) {
@@ -30,13 +25,15 @@ bool PairRegistrationOptions::IsValid(std::string* why) const {
     if (why) *why = "patch_radius_mm must be >= 0";
     return false;
   }
-  if (!(max_landmark_rms_mm > 0.0)) {
-    if (why) *why = "max_landmark_rms_mm must be > 0";
-    return false;
-  }
-  if (!(max_landmark_shift_mm >= 0.0) || !std::isfinite(max_landmark_shift_mm)) {
-    if (why) *why = "max_landmark_shift_mm must be >= 0";
-    return false;
+  const std::pair<const char*, double> limits[] = {
+      {"max_landmark_rms_mm", max_landmark_rms_mm},
+      {"max_landmark_rms_increase_mm", max_landmark_rms_increase_mm},
+      {"max_landmark_shift_mm", max_landmark_shift_mm}};
+  for (const auto& [name, value] : limits) {
+    if (!(value >= 0.0) || !std::isfinite(value)) {
+      if (why) *why = std::string(name) + " must be >= 0 (0: off)";
+      return false;
+    }
   }
   return true;
 }
@@ -44,7 +41,6 @@ bool PairRegistrationOptions::IsValid(std::string* why) const {
 PairRegistrationResult RegisterPair(const IcpTarget& fixed, const PointCloud& moving,
                                     const LandmarkSet* fixed_landmarks, const LandmarkSet* moving_landmarks,
                                     const Similarity3& initial, const PairRegistrationOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage("registration: " + why);
   if ((fixed_landmarks == nullptr) != (moving_landmarks == nullptr)) {
@@ -55,12 +51,12 @@ PairRegistrationResult RegisterPair(const IcpTarget& fixed, const PointCloud& mo
     ThrowUsage("registration: surface patches are placed around landmarks; give landmarks for both scans");
   }
   PairRegistrationResult result;
-  result.prepare_seconds = fixed.seconds();
-  result.normal_seconds = fixed.normal_seconds();
+  result.timings_s.Add(fixed.timings_s());
 
   // Coarse step: landmarks matched by label (Umeyama), or the given pose.
   Similarity3 T = initial;
   if (with_landmarks) {
+    auto t = result.timings_s.Time("landmarks");
     result.landmarks = AlignLandmarks(*moving_landmarks, *fixed_landmarks, options.landmarks,
                                       options.moving_landmarks_name, options.fixed_landmarks_name);
     T = result.landmarks->T_target_source;
@@ -69,7 +65,6 @@ PairRegistrationResult RegisterPair(const IcpTarget& fixed, const PointCloud& mo
     if (with_landmarks)
       result.landmark_rms_mm =
           LandmarkRms(*result.landmarks, *moving_landmarks, *fixed_landmarks, result.T_target_source);
-    result.seconds = Seconds(start);
     return result;
   };
   if (!options.refine) {
@@ -91,7 +86,7 @@ PairRegistrationResult RegisterPair(const IcpTarget& fixed, const PointCloud& mo
     } else {
       NormalResult n = EstimateNormals(source, options.normals);
       source_normals = std::move(n.normals);
-      result.normal_seconds += n.seconds;
+      result.timings_s.Add(n.timings_s);
     }
   }
   IcpOptions icp = options.icp;
@@ -106,6 +101,7 @@ PairRegistrationResult RegisterPair(const IcpTarget& fixed, const PointCloud& mo
   start_pose.linear() = T.rotation;
   start_pose.translation() = T.translation;
   result.icp = AlignIcp(fixed, source, source_normals, start_pose, icp);
+  result.timings_s.Add(result.icp->timings_s);
   result.T_target_source.scale = T.scale;
   result.T_target_source.rotation = result.icp->T_target_source.linear();
   result.T_target_source.translation = result.icp->T_target_source.translation();
@@ -120,6 +116,7 @@ PairRegistrationResult RegisterPair(const IcpTarget& fixed, const PointCloud& mo
     }
     result.landmark_shift_mm = std::sqrt(shift2 / static_cast<double>(result.landmarks->labels.size()));
   }
+  result.refined = true;  // the fine step's pose, unless the fallback below replaces it
   if (result.success && with_landmarks && options.max_landmark_shift_mm > 0.0 &&
       result.landmark_shift_mm > options.max_landmark_shift_mm) {
     std::ostringstream msg;
@@ -131,7 +128,18 @@ PairRegistrationResult RegisterPair(const IcpTarget& fixed, const PointCloud& mo
     result.success = false;
     result.message = msg.str();
   }
-  if (result.success && with_landmarks && result.landmark_rms_mm > options.max_landmark_rms_mm) {
+  if (result.success && with_landmarks && options.max_landmark_rms_increase_mm > 0.0 &&
+      result.landmark_rms_mm > result.landmarks->rms_mm + options.max_landmark_rms_increase_mm) {
+    std::ostringstream msg;
+    msg.precision(3);
+    msg << "ICP moved the landmarks " << result.landmark_rms_mm - result.landmarks->rms_mm
+        << " mm RMS further from the fixed ones than the landmark fit left them (limit "
+        << options.max_landmark_rms_increase_mm << " mm)";
+    result.success = false;
+    result.message = msg.str();
+  }
+  if (result.success && with_landmarks && options.max_landmark_rms_mm > 0.0 &&
+      result.landmark_rms_mm > options.max_landmark_rms_mm) {
     std::ostringstream msg;
     msg.precision(3);
     msg << "the surfaces slid away from the landmarks: landmark RMS " << result.landmark_rms_mm
@@ -140,21 +148,39 @@ PairRegistrationResult RegisterPair(const IcpTarget& fixed, const PointCloud& mo
     result.success = false;
     result.message = msg.str();
   }
+  if (!result.success && with_landmarks && options.fall_back_to_landmarks) {
+    result.T_target_source = result.landmarks->T_target_source;
+    result.landmark_rms_mm = result.landmarks->rms_mm;
+    result.refined = false;
+    result.success = true;
+    result.message = "fine step not kept: " + result.message + "; the landmark pose is used";
+  }
   return result;
+}
+
+std::string PairRegistrationResult::BriefReport() const {
+  std::ostringstream s;
+  s.precision(3);
+  s << (success ? "success" : "FAILED");
+  if (landmarks) s << ", landmarks RMS " << landmarks->rms_mm << " mm";
+  if (icp) {
+    s << ", ICP " << (refined ? "" : "not kept: ") << icp->iterations << " iterations, RMS " << icp->rms_mm
+      << " mm, " << 100.0 * icp->inlier_fraction << " % inliers";
+  }
+  if (landmarks) s << ", landmark RMS at the end " << landmark_rms_mm << " mm";
+  s << ", " << timings_s.Total() << " s";
+  if (!success || (icp && !refined)) s << ": " << message;
+  return s.str();
 }
 
 PairRegistrationResult RegisterPair(const PointCloud& fixed, const PointCloud& moving,
                                     const LandmarkSet* fixed_landmarks, const LandmarkSet* moving_landmarks,
                                     const Similarity3& initial, const PairRegistrationOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage("registration: " + why);
   const IcpTarget target = fixed.has_normals() ? IcpTarget(fixed.positions, fixed.normals, "fixed scan")
                                                : IcpTarget(fixed.positions, options.normals, "fixed scan");
-  PairRegistrationResult result =
-      RegisterPair(target, moving, fixed_landmarks, moving_landmarks, initial, options);
-  result.seconds = Seconds(start);
-  return result;
+  return RegisterPair(target, moving, fixed_landmarks, moving_landmarks, initial, options);
 }
 
 }  // namespace pectus

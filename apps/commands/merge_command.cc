@@ -140,12 +140,7 @@ class MergeCommand : public Command {
       auto t = context->report.Stage("merge");
       result = MergeSweeps(clouds, start, options_);
     }
-    context->report.AddTime("normals", result.seconds_normals);
-    context->report.AddTime("overlap", result.seconds_overlap);
-    context->report.AddTime("pairwise_icp", result.seconds_pairwise);
-    context->report.AddTime("global_adjustment", result.seconds_global);
-    context->report.AddTime("blend", result.seconds_blend);
-    context->report.AddTime("filter", result.seconds_filter);
+    context->report.AddTimes(result.timings_s);
     {
       auto t = context->report.Stage("write");
       WritePointCloud(staged, result.merged);
@@ -185,7 +180,7 @@ class MergeCommand : public Command {
     r["spacing_mm"] = options_.target_spacing_mm;
     r["output"] = output_;
     r["message"] = result.message;
-    Info(result.message);
+    Info(result.BriefReport());
   }
 
  private:

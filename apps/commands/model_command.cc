@@ -7,6 +7,7 @@
 #include "shape/core/error.h"
 #include "shape/core/log.h"
 #include "shape/core/number_format.h"
+#include "shape/io/csv_writer.h"
 #include "shape/io/mesh_io.h"
 #include "shape/model/model_quality.h"
 #include "shape/model/shape_grid.h"
@@ -77,20 +78,6 @@ Training ReadGrids(const std::vector<std::string>& files, Report* report) {
     training.names.push_back(fs::path(files[k]).stem().string());
   }
   return training;
-}
-
-std::string Csv(const Eigen::MatrixXd& values, const std::vector<std::string>& header,
-                const std::vector<std::string>& row_names = {}) {
-  std::ostringstream out;
-  out.precision(10);
-  for (std::size_t c = 0; c < header.size(); ++c) out << (c ? "," : "") << header[c];
-  out << '\n';
-  for (Eigen::Index r = 0; r < values.rows(); ++r) {
-    if (!row_names.empty()) out << row_names[static_cast<std::size_t>(r)] << ',';
-    for (Eigen::Index c = 0; c < values.cols(); ++c) out << (c ? "," : "") << values(r, c);
-    out << '\n';
-  }
-  return out.str();
 }
 
 nlohmann::json VarianceJson(const ShapeModel& model, int rows) {
@@ -200,7 +187,7 @@ class ModelCommand : public Command {
     if (!scores_csv_.empty()) {
       std::vector<std::string> header{"subject"};
       for (int k = 1; k <= model.num_modes(); ++k) header.push_back("mode" + std::to_string(k) + "_mm");
-      WriteFileAtomically(StageOutput(context, *this, scores_csv_), Csv(model.scores, header, model.names));
+      WriteCsv(StageOutput(context, *this, scores_csv_), header, model.scores, model.names);
     }
     if (!eigen_csv_.empty()) {
       Eigen::MatrixXd table(model.num_modes(), 4);
@@ -208,8 +195,8 @@ class ModelCommand : public Command {
       table.col(1) = model.variances;
       table.col(2) = model.ExplainedFraction();
       table.col(3) = model.CumulativeFraction();
-      WriteFileAtomically(StageOutput(context, *this, eigen_csv_),
-                          Csv(table, {"mode", "eigenvalue_mm2", "explained", "cumulative"}));
+      WriteCsv(StageOutput(context, *this, eigen_csv_), {"mode", "eigenvalue_mm2", "explained", "cumulative"},
+               table);
     }
     if (!mean_mesh_.empty()) WriteMesh(StageOutput(context, *this, mean_mesh_), model.ToMesh(model.mean));
 #ifdef PECTUS_HAVE_RENDER
@@ -311,9 +298,10 @@ class ModelCommand : public Command {
     table << q.modes.cast<double>(), q.compactness, q.compactness_sd, q.generalization_mm,
         q.generalization_sd, q.specificity_mm, q.specificity_sd;
     if (!csv.empty()) {
-      WriteFileAtomically(csv,
-                          Csv(table, {"modes", "compactness_mm2", "compactness_sd_mm2", "generalization_mm",
-                                      "generalization_sd_mm", "specificity_mm", "specificity_sd_mm"}));
+      WriteCsv(csv,
+               {"modes", "compactness_mm2", "compactness_sd_mm2", "generalization_mm", "generalization_sd_mm",
+                "specificity_mm", "specificity_sd_mm"},
+               table);
     }
 #ifdef PECTUS_HAVE_RENDER
     if (!png.empty()) WriteQualityCurvesPng(png, q);

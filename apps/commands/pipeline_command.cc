@@ -1,37 +1,19 @@
 // pectus pipeline COHORT_DIR --out OUT_DIR: the main job. From a folder of raw subjects (sweeps +
 // landmarks, as `pectus synth cohort` writes them) to the average chest with its modes, model quality,
 // each subject's distance to the mean, and one HTML report (pictures and numbers).
-#include <sstream>
-
 #include "apps/command.h"
 #include "shape/core/error.h"
 #include "shape/core/log.h"
-#include "shape/io/landmark_io.h"
-#include "shape/io/mesh_io.h"
+#include "shape/model/profile_fit.h"
+#include "shape/model/shape_grid.h"
 #include "shape/pipeline/cohort_pipeline.h"
-#include "shape/model/model_figures.h"
 #include "shape/pipeline/pipeline_report.h"
-#include "shape/model/statismo_io.h"
+#include "shape/pipeline/write_pipeline_outputs.h"
 
 namespace pectus::cli {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string Csv(const std::vector<std::string>& header, const std::vector<std::vector<double>>& rows,
-                const std::vector<std::string>& row_names = {}) {
-  std::ostringstream out;
-  out.precision(10);
-  for (std::size_t c = 0; c < header.size(); ++c) out << (c ? "," : "") << header[c];
-  out << '\n';
-  for (std::size_t r = 0; r < rows.size(); ++r) {
-    if (!row_names.empty()) out << row_names[r];
-    for (std::size_t c = 0; c < rows[r].size(); ++c)
-      out << (c || !row_names.empty() ? "," : "") << rows[r][c];
-    out << '\n';
-  }
-  return out.str();
-}
 
 class PipelineCommand : public Command {
  public:
@@ -64,8 +46,9 @@ class PipelineCommand : public Command {
     app->add_option("--crop-margin", options_.crop_margin_mm,
                     "Sweeps cut to the landmark ROI widened by this, mm (0: whole sweeps)")
         ->default_val(options_.crop_margin_mm);
-    app->add_option("--surface-spacing", options_.reconstruct.spacing, "Isosurface step of the surfaces, mm")
-        ->default_val(options_.reconstruct.spacing);
+    app->add_option("--surface-spacing", options_.reconstruct.spacing_mm,
+                    "Isosurface step of the surfaces, mm")
+        ->default_val(options_.reconstruct.spacing_mm);
     app->add_option("--merge-spacing", options_.merge.target_spacing_mm,
                     "Merged cloud decimated to this spacing, mm")
         ->default_val(options_.merge.target_spacing_mm);
@@ -113,64 +96,23 @@ class PipelineCommand : public Command {
         progress.Advance();
       });
     }
-    for (const auto& [stage, t] : result.seconds) context->report.AddTime(stage, t);
+    context->report.AddTimes(result.timings_s);
 
-    // 9. Files: the model, tables, meshes per subject, and the report with its figures.
+    // 9. Files: the model, tables, meshes per subject, and the report with its figures (the library writes
+    // them; the app stages each one for the run's transaction).
     auto t = context->report.Stage("write");
-    if (result.has_model) {
-      const ShapeModel& m = result.model;
-      WriteStatismoModel(
-          StageOutput(context, *this, out / "model.h5"), m,
-          {{"source", "pectus pipeline"}, {"cohort", cohort_}, {"reference", result.reference}});
-      WriteMesh(StageOutput(context, *this, out / "mean.ply"), m.ToMesh(m.mean));
-      std::vector<std::string> header{"subject"};
-      for (int k = 1; k <= m.num_modes(); ++k) header.push_back("mode" + std::to_string(k) + "_mm");
-      std::vector<std::vector<double>> rows;
-      for (Eigen::Index r = 0; r < m.scores.rows(); ++r)
-        rows.emplace_back(m.scores.row(r).data(), m.scores.row(r).data() + m.num_modes());
-      WriteFileAtomically(StageOutput(context, *this, out / "scores.csv"), Csv(header, rows, m.names));
-      rows.clear();
-      const Eigen::VectorXd f = m.ExplainedFraction(), c = m.CumulativeFraction();
-      for (int k = 0; k < m.num_modes(); ++k) rows.push_back({double(k + 1), m.variances[k], f[k], c[k]});
-      WriteFileAtomically(StageOutput(context, *this, out / "eigen.csv"),
-                          Csv({"mode", "eigenvalue_mm2", "explained", "cumulative"}, rows));
-    }
-    if (result.has_quality) {
-      const ModelQualityCurves& q = result.quality;
-      std::vector<std::vector<double>> rows;
-      for (Eigen::Index k = 0; k < q.modes.size(); ++k) {
-        rows.push_back({double(q.modes[k]), q.compactness[k], q.compactness_sd[k], q.generalization_mm[k],
-                        q.generalization_sd[k], q.specificity_mm[k], q.specificity_sd[k]});
-      }
-      WriteFileAtomically(StageOutput(context, *this, out / "quality.csv"),
-                          Csv({"modes", "compactness_mm2", "compactness_sd_mm2", "generalization_mm",
-                               "generalization_sd_mm", "specificity_mm", "specificity_sd_mm"},
-                              rows));
-    }
-    for (const SubjectOutcome& s : result.subjects) {
-      const fs::path dir = out / "subjects" / s.name;
-      if (options_.keep_surfaces && s.surface.num_faces() > 0)
-        WriteMesh(StageOutput(context, *this, dir / "surface.ply"), s.surface);
-      if (!s.ok) continue;
-      WriteMesh(StageOutput(context, *this, dir / "grid.ply"), s.grid.mesh);
-      WriteLandmarks(StageOutput(context, *this, dir / "landmarks.mrk.json"), s.landmarks);
-      if (s.to_mean.distances.size() > 0) {
-        TriangleMesh coloured = s.grid.mesh;
-        coloured.vertices.scalars["distance_mm"] = s.to_mean.distances;
-        const double r = std::max(1.0, s.to_mean.stats.max_abs);
-        coloured.vertices.colors = ColorsForValues(s.to_mean.distances, -r, r);
-        WriteMesh(StageOutput(context, *this, dir / "distance_to_mean.ply"), coloured);
-      }
-    }
     report_.run = {{"command", "pectus pipeline " + cohort_ + " --out " + out_},
                    {"subjects", subjects_.size()},
                    {"grid", grid_},
                    {"profile fit", fit_},
                    {"threads", context->threads}};
-    for (const ReportFile& file : MakePipelineReport(result, report_)) {
-      WriteFileAtomically(file.path == "report.html" ? html : StageOutput(context, *this, out / file.path),
-                          file.bytes);
-    }
+    const fs::path html_target = out / "report.html";
+    WritePipelineOutputs(
+        result, report_,
+        {{"source", "pectus pipeline"}, {"cohort", cohort_}, {"reference", result.reference}}, out,
+        [&](const fs::path& target) {
+          return target == html_target ? html : StageOutput(context, *this, target);
+        });
     nlohmann::json summary = PipelineJson(result);
     for (const auto& [key, value] : summary.items()) context->report[key] = value;
     context->report["cohort"] = cohort_;
@@ -179,7 +121,7 @@ class PipelineCommand : public Command {
     context->report["grid"] = {{"lateral", options_.resample.grid.lateral},
                                {"sternal", options_.resample.grid.sternal}};
     context->report["profile_fit"] = ToString(options_.resample.fit.kind);
-    Info("pipeline: " + result.message + "; report: " + (out / "report.html").string());
+    Info("pipeline: " + result.BriefReport() + "; report: " + (out / "report.html").string());
   }
 
  private:

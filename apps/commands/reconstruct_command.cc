@@ -5,25 +5,12 @@
 #include "apps/command.h"
 #include "shape/core/error.h"
 #include "shape/core/log.h"
-#include "shape/core/number_format.h"
 #include "shape/io/mesh_io.h"
 #include "shape/surface/reconstruct.h"
 
 namespace pectus::cli {
 namespace {
 namespace fs = std::filesystem;
-
-// The summary line: the size of the surface and how far the fit's on-surface points are from it (RMS and
-// 95th percentile). Carr's maximum residual is left to the report: it is set by the points the fit
-// rejects as outliers and reads as an error it is not.
-std::string SummaryLine(const ReconstructResult& r) {
-  std::ostringstream out;
-  out << r.mesh.num_vertices() << " vertices, " << r.mesh.num_faces() << " triangles from " << r.used_points
-      << " points; " << r.trim.holes_filled << " holes filled"
-      << (r.trim.boundary_edges == 0 ? ", watertight" : "") << "; on-surface residual RMS "
-      << FormatMm(r.accuracy.on_surface_rms_mm) << ", p95 " << FormatMm(r.accuracy.on_surface_p95_mm);
-  return out.str();
-}
 
 class ReconstructCommand : public Command {
  public:
@@ -43,7 +30,7 @@ class ReconstructCommand : public Command {
                     "Surface mesh: .ply (with normals and data distance), .stl or .obj")
         ->required();
     app->add_option("--input-units", units_, "Unit of the cloud: mm, cm, m, in")->default_val("mm");
-    app->add_option("--spacing", options_.spacing,
+    app->add_option("--spacing", options_.spacing_mm,
                     "Grid step of the isosurface (mm); 0 = 1.5 x point spacing")
         ->default_val(0.0)
         ->check(CLI::NonNegativeNumber);
@@ -51,7 +38,7 @@ class ReconstructCommand : public Command {
                     "With --spacing 0: choose the step for about this many triangles")
         ->default_val(0)
         ->check(CLI::NonNegativeNumber);
-    app->add_option("--detail", options_.detail,
+    app->add_option("--detail", options_.detail_mm,
                     "Spacing of the RBF centres (mm), the finest detail kept; 0 = automatic")
         ->default_val(0.0)
         ->check(CLI::NonNegativeNumber);
@@ -59,10 +46,11 @@ class ReconstructCommand : public Command {
                     "Bending-energy weight of the local fits; larger = smoother")
         ->default_val(options_.smoothing)
         ->check(CLI::NonNegativeNumber);
-    app->add_option("--fill-holes", options_.fill_holes, "Fill holes up to this width (mm); 0 = none")
-        ->default_val(options_.fill_holes)
+    app->add_option("--fill-holes", options_.fill_holes_mm, "Fill holes up to this width (mm); 0 = none")
+        ->default_val(options_.fill_holes_mm)
         ->check(CLI::NonNegativeNumber);
-    app->add_option("--margin", options_.margin, "Keep surface this far (mm) beyond the data; 0 = automatic")
+    app->add_option("--margin", options_.margin_mm,
+                    "Keep surface this far (mm) beyond the data; 0 = automatic")
         ->default_val(0.0)
         ->check(CLI::NonNegativeNumber);
     app->add_option("--normal-neighbours", options_.normal_neighbours, "Neighbours per point for PCA normals")
@@ -100,7 +88,7 @@ class ReconstructCommand : public Command {
       auto t = context->report.Stage("reconstruct");
       result = ReconstructSurface(cloud, options_, input_);
     }
-    for (const auto& [stage, seconds] : result.timings_s) context->report.AddTime(stage, seconds);
+    context->report.AddTimes(result.timings_s);
     if (result.check && (!result.check->manifold || result.check->self_intersecting)) {
       ThrowFailure("reconstruct: the surface failed the CGAL check (" + result.check->message + ")", input_);
     }
@@ -134,7 +122,7 @@ class ReconstructCommand : public Command {
     r["holes"] = {{"filled", result.trim.holes_filled},
                   {"largest_filled_mm", result.trim.largest_hole_filled_mm},
                   {"left_open", result.trim.holes_left_open},
-                  {"fill_limit_mm", options_.fill_holes}};
+                  {"fill_limit_mm", options_.fill_holes_mm}};
     r["border_edges"] = result.trim.boundary_edges;
     r["watertight"] = result.trim.boundary_edges == 0;
     if (result.check) {
@@ -144,9 +132,8 @@ class ReconstructCommand : public Command {
                     {"components", result.check->components},
                     {"area_mm2", result.check->area_mm2}};
     }
-    const std::string summary = SummaryLine(result);
-    r["message"] = summary;
-    Info(summary);
+    r["message"] = result.message;
+    Info(result.BriefReport());
   }
 
  private:

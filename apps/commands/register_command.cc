@@ -173,7 +173,7 @@ class RegisterCommand : public Command {
       }
     }
     if (r.icp) report["icp"] = IcpJson(*r.icp);
-    report["normal_seconds"] = r.normal_seconds;
+    report.AddTimes(r.timings_s);
     report["transform"] = TransformToJson(r.T_target_source);
     report["success"] = r.success;
     report["message"] = r.message;
@@ -181,7 +181,7 @@ class RegisterCommand : public Command {
       ThrowFailure("registration of " + moving_ + " to " + fixed_ + " failed: " + r.message +
                    " (nothing written; see --max-rms, --min-inliers, --max-distance, --final-distance)");
     }
-    Info("registered " + moving_ + " to " + fixed_ + ": " + r.message);
+    Info("registered " + moving_ + " to " + fixed_ + ": " + r.BriefReport());
 
     auto t = report.Stage("write");
     if (!transform_.empty()) {
@@ -269,9 +269,8 @@ class RegisterCommand : public Command {
       }
     }
     WriteFileAtomically(staged_summary, summary.dump(2) + "\n");
-    Info("registered " + std::to_string(files.size() - failed.size()) + " of " +
-         std::to_string(files.size()) + " scans into the frame of " +
-         summary["reference"].get<std::string>() + " -> " + output_);
+    Info(r.BriefReport() + " into the frame of " + summary["reference"].get<std::string>() + " -> " +
+         output_);
   }
 
   std::string moving_, fixed_, moving_landmarks_, fixed_landmarks_, initial_, output_, transform_, cohort_,

@@ -43,7 +43,7 @@ nlohmann::json IcpJson(const IcpResult& r) {
           {"converged", r.converged},
           {"success", r.success},
           {"conditioning", r.conditioning},
-          {"seconds", r.seconds},
+          {"timings_s", r.timings_s.ToJson()},
           {"levels", levels},
           {"message", r.message}};
 }

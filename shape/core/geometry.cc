@@ -115,6 +115,19 @@ Similarity3 Similarity3::Inverse() const {
   return inv;
 }
 
+Similarity3 Similarity3::operator*(const Similarity3& other) const {
+  Similarity3 T;
+  T.scale = scale * other.scale;
+  T.rotation = rotation * other.rotation;
+  T.translation = scale * (rotation * other.translation) + translation;
+  return T;
+}
+
+Points3 Similarity3::Apply(const Points3& points) const {
+  const Eigen::Matrix3d A = scale * rotation;
+  return (points * A.transpose()).rowwise() + translation.transpose();
+}
+
 Similarity3 Similarity3::FromRigid(const Rigid3& T) {
   Similarity3 S;
   S.rotation = T.linear();
@@ -143,9 +156,7 @@ Similarity3 Similarity3::FromMatrix(const Eigen::Matrix4d& M, const std::string&
 }
 
 void TransformInPlace(const Similarity3& T, PointCloud* cloud) {
-  const Eigen::Matrix3d A = T.scale * T.rotation;
-  const Eigen::RowVector3d t = T.translation.transpose();
-  cloud->positions = (cloud->positions * A.transpose()).rowwise() + t;
+  cloud->positions = T.Apply(cloud->positions);
   if (cloud->has_normals()) cloud->normals = cloud->normals * T.rotation.transpose();
 }
 

@@ -81,6 +81,10 @@ struct Similarity3 {
   Similarity3 Inverse() const;
   /// Applies to one point.
   Eigen::Vector3d operator*(const Eigen::Vector3d& x) const { return scale * (rotation * x) + translation; }
+  /// The composition: T_a_b * T_b_c = T_a_c (`other` applied first).
+  Similarity3 operator*(const Similarity3& other) const;
+  /// Applies to #n by 3 points (mm); returns #n by 3 points.
+  Points3 Apply(const Points3& points) const;
   static Similarity3 FromRigid(const Rigid3& T);
   /// Throws Error(kBadInput) naming `what` unless M is [sR t; 0 0 0 1] with R a rotation and s > 0.
   static Similarity3 FromMatrix(const Eigen::Matrix4d& M, const std::string& what);

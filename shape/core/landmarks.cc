@@ -29,4 +29,10 @@ void LandmarkSet::Validate(const std::string& what) const {
   }
 }
 
+LandmarkSet LandmarkSet::Transformed(const Similarity3& T) const {
+  LandmarkSet out = *this;
+  for (Landmark& l : out.items) l.position = T * l.position;
+  return out;
+}
+
 }  // namespace pectus

@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "shape/core/geometry.h"
+
 namespace pectus {
 
 /// One named landmark. Position in mm in the pectus frame, which is the frame of the scan it was placed
@@ -26,6 +28,8 @@ struct LandmarkSet {
   /// Throws Error(kBadInput) naming `what` on an empty or duplicate label or a non-finite position.
   void Validate(const std::string& what) const;
   std::size_t size() const { return items.size(); }
+  /// The set moved by T (every position x becomes T x; labels and descriptions kept).
+  LandmarkSet Transformed(const Similarity3& T) const;
 };
 
 }  // namespace pectus

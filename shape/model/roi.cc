@@ -39,6 +39,19 @@ Points3 ChestRoi::FromRoi(const Points3& uvw) const {
   return x;
 }
 
+ChestRoi ChestRoi::Transformed(const Similarity3& T) const {
+  ChestRoi out = *this;
+  out.origin = T * origin;
+  out.lateral = T.rotation * lateral;
+  out.sternal = T.rotation * sternal;
+  out.normal = T.rotation * normal;
+  out.u_min = T.scale * u_min;
+  out.u_max = T.scale * u_max;
+  out.v_min = T.scale * v_min;
+  out.v_max = T.scale * v_max;
+  return out;
+}
+
 nlohmann::json ChestRoi::ToJson() const {
   auto v = [](const Eigen::Vector3d& a) { return nlohmann::json::array({a.x(), a.y(), a.z()}); };
   return {{"origin", v(origin)}, {"lateral", v(lateral)},        {"sternal", v(sternal)},

@@ -52,6 +52,9 @@ struct ChestRoi {
   }
   double width() const { return u_max - u_min; }   ///< lateral extent, mm
   double height() const { return v_max - v_min; }  ///< sternal extent, mm
+  /// The ROI moved by T: the origin mapped, the axes rotated, the extents scaled by T.scale (so that a
+  /// point's ROI coordinates in the new frame are T.scale times those in the old).
+  ChestRoi Transformed(const Similarity3& T) const;
   /// {"origin", "lateral", "sternal", "normal", "u_range_mm", "v_range_mm"}.
   nlohmann::json ToJson() const;
 };

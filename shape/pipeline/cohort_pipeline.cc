@@ -5,12 +5,12 @@
 #include <exception>
 #include <sstream>
 
-#include "registration/landmark_alignment.h"
-#include "shape/surface/cloud_filter.h"
+#include "registration/generalised_procrustes.h"
 #include "shape/core/error.h"
 #include "shape/io/landmark_io.h"
 #include "shape/io/mesh_io.h"
 #include "shape/model/shape_grid.h"
+#include "shape/surface/cloud_filter.h"
 
 namespace pectus {
 namespace {
@@ -29,12 +29,6 @@ bool Matches(const std::string& name, const std::string& pattern) {
          name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-LandmarkSet Transformed(const LandmarkSet& set, const Similarity3& T) {
-  LandmarkSet out = set;
-  for (Landmark& l : out.items) l.position = T * l.position;
-  return out;
-}
-
 // Runs one stage of one subject: times it, and turns an exception into the subject's failure.
 template <class Fn>
 bool RunStage(SubjectOutcome* s, const std::string& stage, Fn fn) {
@@ -46,7 +40,7 @@ bool RunStage(SubjectOutcome* s, const std::string& stage, Fn fn) {
     s->failed_stage = stage;
     s->error = e.what();
   }
-  s->seconds.emplace_back(stage, Since(start));
+  s->timings_s.Add(stage, Since(start));
   return s->failed_stage.empty();
 }
 
@@ -90,39 +84,30 @@ void BuildSurface(const CohortSubject& in, const PipelineOptions& options, Subje
 void MoveSubject(const Similarity3& T, SubjectOutcome* s) {
   TransformInPlace(T, &s->grid.mesh);
   s->grid.shape_vector = ToShapeVector(s->grid.mesh.vertices.positions);
-  ChestRoi& roi = s->grid.roi;
-  roi.origin = T * roi.origin;
-  roi.lateral = T.rotation * roi.lateral;
-  roi.sternal = T.rotation * roi.sternal;
-  roi.normal = T.rotation * roi.normal;
+  s->grid.roi = s->grid.roi.Transformed(T);
   TransformInPlace(T, &s->surface);
-  s->landmarks = Transformed(s->landmarks, T);
+  s->landmarks = s->landmarks.Transformed(T);
   s->measures.deepest_point = T * s->measures.deepest_point;
-  s->T_reference_subject = Similarity3::FromMatrix(T.Matrix() * s->T_reference_subject.Matrix(), s->name);
+  s->T_reference_subject = T * s->T_reference_subject;
 }
 
-// Generalized Procrustes analysis, rigid: each grid moved onto the mean of all, `iterations` times.
+// Generalized Procrustes analysis, rigid, of the grids (no reference: the mean floats with the grids);
+// each subject moved with its grid.
 void AlignGridsToTheirMean(const std::vector<int>& good, int iterations, PipelineResult* result) {
-  for (int it = 0; it < iterations; ++it) {
-    Points3 mean = Points3::Zero(result->subjects[good[0]].grid.mesh.num_vertices(), 3);
-    for (int i : good) mean += result->subjects[i].grid.mesh.vertices.positions;
-    mean /= static_cast<double>(good.size());
-    for (int i : good) {
-      SubjectOutcome& s = result->subjects[i];
-      MoveSubject(UmeyamaAlignment(s.grid.mesh.vertices.positions, mean, {}, false, 0.0, s.name + " grid"),
-                  &s);
-    }
+  if (iterations <= 0) return;
+  std::vector<Points3> grids;
+  std::vector<std::string> names;
+  for (int i : good) {
+    grids.push_back(result->subjects[i].grid.mesh.vertices.positions);
+    names.push_back(result->subjects[i].name + " grid");
   }
-}
-
-void AddSeconds(std::vector<std::pair<std::string, double>>* total, const SubjectOutcome& s) {
-  for (const auto& [stage, t] : s.seconds) {
-    auto it = std::find_if(total->begin(), total->end(), [&](const auto& e) { return e.first == stage; });
-    if (it == total->end())
-      total->emplace_back(stage, t);
-    else
-      it->second += t;
-  }
+  ProcrustesOptions o;
+  o.reference.reset();
+  o.max_iterations = iterations - 1;  // each grid aligned `iterations` times
+  o.tolerance_mm = 0.0;
+  o.min_spread_ratio = 0.0;
+  const ProcrustesResult gpa = GeneralisedProcrustes(grids, o, names);
+  for (std::size_t k = 0; k < good.size(); ++k) MoveSubject(gpa.T_mean_shape[k], &result->subjects[good[k]]);
 }
 
 }  // namespace
@@ -139,26 +124,21 @@ PointCloud CropToRoi(const PointCloud& cloud, const ChestRoi& roi, double margin
   return SelectRows(cloud, rows);
 }
 
-void RegisterToReference(const IcpTarget& reference_surface, const LandmarkSet& reference_landmarks,
-                         const PipelineOptions& options, SubjectOutcome* s) {
+void RegisterSubject(const IcpTarget& reference_surface, const LandmarkSet& reference_landmarks,
+                     const PipelineOptions& options, SubjectOutcome* s) {
   const PairRegistrationResult r = RegisterPair(reference_surface, s->surface.vertices, &reference_landmarks,
                                                 &s->landmarks, {}, options.registration);
-  const double landmark_fit_rms = r.landmarks->rms_mm;
   s->icp_rms_mm = r.icp ? r.icp->rms_mm : 0.0;
-  s->icp_accepted = r.success && r.landmark_rms_mm <= landmark_fit_rms + options.max_landmark_shift_mm;
-  s->T_reference_subject = s->icp_accepted ? r.T_target_source : r.landmarks->T_target_source;
-  s->landmark_rms_mm = s->icp_accepted ? r.landmark_rms_mm : landmark_fit_rms;
+  s->icp_accepted = r.success && r.refined;
+  s->T_reference_subject = r.T_target_source;
+  s->landmark_rms_mm = r.landmark_rms_mm;
   s->registration_message = r.message;
-  if (!s->icp_accepted) {
-    s->registration_message =
-        "ICP refinement not kept (" +
-        (r.success ? "it moved the landmarks " + std::to_string(r.landmark_rms_mm - landmark_fit_rms) +
-                         " mm away from the landmark fit"
-                   : r.message) +
-        "); the landmark pose is used";
-  }
   TransformInPlace(s->T_reference_subject, &s->surface);
-  s->landmarks = Transformed(s->landmarks, s->T_reference_subject);
+  s->landmarks = s->landmarks.Transformed(s->T_reference_subject);
+}
+
+void ResampleSubject(const PipelineOptions& options, SubjectOutcome* s) {
+  s->grid = ResampleSurface(s->surface, s->landmarks, options.roi, options.resample, s->name);
 }
 
 std::vector<CohortSubject> FindCohortSubjects(const fs::path& folder, const std::string& sweep_pattern,
@@ -187,17 +167,26 @@ std::vector<CohortSubject> FindCohortSubjects(const fs::path& folder, const std:
   return subjects;
 }
 
+std::string PipelineResult::BriefReport() const {
+  std::ostringstream s;
+  s.precision(3);
+  s << message;
+  if (quality && quality->generalization_mm.size() > 0)
+    s << "; generalization " << quality->generalization_mm[quality->generalization_mm.size() - 1] << " mm";
+  s << "; " << timings_s.Total() << " s of work";
+  return s.str();
+}
+
 bool PipelineOptions::IsValid(std::string* why) const {
   if (!merge.IsValid(why) || !reconstruct.IsValid(why) || !registration.IsValid(why) || !roi.IsValid(why) ||
       !resample.IsValid(why) || !model.IsValid(why)) {
     return false;
   }
-  if (!(crop_margin_mm >= 0.0) || min_sweep_points < 10 || !(max_landmark_shift_mm >= 0.0) ||
-      procrustes_iterations < 0) {
+  if (!(crop_margin_mm >= 0.0) || min_sweep_points < 10 || procrustes_iterations < 0) {
     if (why != nullptr) {
       *why =
-          "the crop margin and the landmark shift must be >= 0 mm, a sweep needs at least 10 points and the "
-          "Procrustes iterations must be >= 0";
+          "the crop margin must be >= 0 mm, a sweep needs at least 10 points and the Procrustes iterations "
+          "must be >= 0";
     }
     return false;
   }
@@ -257,11 +246,9 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
         s.registration_message = "the reference";
         return;
       }
-      RegisterToReference(target, reference_landmarks, options, &s);
+      RegisterSubject(target, reference_landmarks, options, &s);
     });
-    RunStage(&s, "resample", [&] {
-      s.grid = ResampleSurface(s.surface, s.landmarks, options.roi, options.resample, s.name);
-    });
+    RunStage(&s, "resample", [&] { ResampleSubject(options, &s); });
     if (options.measures) {
       RunStage(&s, "measures", [&] {
         try {
@@ -290,20 +277,18 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
     for (std::size_t k = 0; k < good.size(); ++k) {
       shapes.row(static_cast<Eigen::Index>(k)) = result.subjects[good[k]].grid.shape_vector.transpose();
     }
-    result.model = BuildShapeModel(shapes, options.model, "resampled subjects");
-    for (int i : good) result.model.names.push_back(result.subjects[i].name);
-    result.model.faces = GridFaces(options.resample.grid);
-    result.has_model = true;
-    result.seconds.emplace_back("model", Since(start));
+    ShapeModel& model = result.model.emplace(BuildShapeModel(shapes, options.model, "resampled subjects"));
+    for (int i : good) model.names.push_back(result.subjects[i].name);
+    model.faces = GridFaces(options.resample.grid);
+    result.timings_s.Add("model", Since(start));
     if (options.quality && good.size() >= 3) {
       start = Clock::now();
       result.quality = EvaluateModelQuality(shapes, options.quality_options);
-      result.has_quality = true;
-      result.seconds.emplace_back("quality", Since(start));
+      result.timings_s.Add("quality", Since(start));
     }
     // 8. Each subject's distance to the mean, and the mean's own measures (on the mean landmark ROI).
     start = Clock::now();
-    const TriangleMesh mean = result.model.ToMesh(result.model.mean);
+    const TriangleMesh mean = model.ToMesh(model.mean);
     LandmarkSet mean_landmarks = result.subjects[good[0]].landmarks;
     for (Landmark& l : mean_landmarks.items) {
       Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -316,7 +301,7 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
     for (std::size_t k = 0; k < good.size(); ++k) {
       SubjectOutcome& s = result.subjects[good[k]];
       s.to_mean = ComputeDistanceMap(s.grid.mesh.vertices.positions, mean, options.distance, "mean shape");
-      s.scores = result.model.scores.row(static_cast<Eigen::Index>(k)).transpose();
+      s.scores = model.scores.row(static_cast<Eigen::Index>(k)).transpose();
     }
     try {
       result.mean_measures =
@@ -324,13 +309,16 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
     } catch (const Error& e) {
       result.mean_measures.message = e.what();
     }
-    result.seconds.emplace_back("distance", Since(start));
+    result.timings_s.Add("distance", Since(start));
   }
-  for (const SubjectOutcome& s : result.subjects) AddSeconds(&result.seconds, s);
+  Timings subjects;
+  for (const SubjectOutcome& s : result.subjects) subjects.Add(s.timings_s);
+  subjects.Add(result.timings_s);
+  result.timings_s = std::move(subjects);
   std::ostringstream msg;
   msg << result.succeeded << " of " << n << " subjects made it to the model (reference " << result.reference
       << ")";
-  if (result.has_model) msg << "; " << result.model.num_modes() << " modes";
+  if (result.model) msg << "; " << result.model->num_modes() << " modes";
   result.message = msg.str();
   return result;
 }

@@ -6,12 +6,14 @@
 
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "registration/pair_registration.h"
 #include "shape/core/geometry.h"
 #include "shape/core/landmarks.h"
+#include "shape/core/timings.h"
 #include "shape/model/chest_measures.h"
 #include "shape/model/cross_section_resampler.h"
 #include "shape/model/distance_map.h"
@@ -56,16 +58,21 @@ struct PipelineOptions {
   }();
   ReconstructOptions reconstruct = [] {
     ReconstructOptions o;
-    o.spacing = 1.0;  // isosurface step (mm), as fine as the merged cloud
+    o.spacing_mm = 1.0;  // isosurface step (mm), as fine as the merged cloud
     o.check = false;  // the CGAL manifold check costs as much as the rest; `pectus reconstruct` has it
     return o;
   }();
   /// Landmarks then ICP, to the reference subject. Two chests differ by millimetres (a depression by
   /// centimetres), so ICP may slide longer before it settles and its acceptance is wider than for two
-  /// scans of one surface; the robust loss and the shrinking gate keep it on the parts that agree.
+  /// scans of one surface; the robust loss and the shrinking gate keep it on the parts that agree. The
+  /// ICP refinement is kept only if it succeeds and makes the landmarks' RMS distance to the reference's
+  /// at most 5 mm worse than the landmark fit's; otherwise the landmark pose is kept and the subject is
+  /// flagged (SubjectOutcome::icp_accepted). RegisterPair decides it (fall_back_to_landmarks).
   PairRegistrationOptions registration = [] {
     PairRegistrationOptions o;
-    o.max_landmark_rms_mm = 1e3;  // two chests' landmarks differ by centimetres; see max_landmark_shift_mm
+    o.max_landmark_rms_mm = 0.0;  // off: two chests' landmarks differ by centimetres
+    o.max_landmark_rms_increase_mm = 5.0;
+    o.fall_back_to_landmarks = true;
     o.icp.auto_max_iterations = 60;
     o.icp.rotation_tolerance_deg = 1e-2;
     o.icp.translation_tolerance_mm = 1e-2;
@@ -73,14 +80,11 @@ struct PipelineOptions {
     o.icp.min_inlier_fraction = 0.1;
     return o;
   }();
-  /// The ICP refinement is kept only if it succeeds and moves the landmarks' RMS distance to the
-  /// reference's by at most this much (mm) from the landmark fit; otherwise the landmark pose is kept
-  /// and the subject is flagged (SubjectOutcome::icp_accepted).
-  double max_landmark_shift_mm = 5.0;
   ChestRoiOptions roi;           ///< landmarks and margins that bound the grid
   CrossSectionOptions resample;  ///< grid size (51 x 101) and profile fit
   /// Before the model, the resampled grids are aligned rigidly to their mean (generalized Procrustes
-  /// analysis, `procrustes_iterations` rounds; 0: off). The registration to one reference subject leaves
+  /// analysis, GeneralisedProcrustes with no reference: every grid aligned `procrustes_iterations` times,
+  /// to means updated in between; 0: off). The registration to one reference subject leaves
   /// each grid a pose that is not shape (ICP between two different chests may slide by millimetres); the
   /// surfaces, landmarks and T_reference_subject follow their grid.
   int procrustes_iterations = 5;
@@ -119,7 +123,7 @@ struct SubjectOutcome {
   ChestMeasures measures;            ///< when options.measures (depth 0 and a message if it failed)
   DistanceMapResult to_mean;         ///< distances of the grid vertices to the mean shape, mm
   Eigen::VectorXd scores;            ///< model scores (mm)
-  std::vector<std::pair<std::string, double>> seconds;  ///< wall time per stage
+  Timings timings_s;                 ///< wall time per stage (s): "read", "merge", ..., "measures"
 };
 
 /// The whole cohort's result.
@@ -127,25 +131,31 @@ struct PipelineResult {
   std::vector<SubjectOutcome> subjects;  ///< in input order, failed ones included
   std::string reference;                 ///< the reference subject's name
   int succeeded = 0;
-  bool has_model = false;  ///< at least 2 subjects made it
-  ShapeModel model;        ///< names = the succeeded subjects
-  bool has_quality = false;
-  ModelQualityCurves quality;
-  ChestMeasures mean_measures;                          ///< of the mean shape (its grid)
-  std::vector<std::pair<std::string, double>> seconds;  ///< wall time per stage, summed over subjects
+  std::optional<ShapeModel> model;            ///< when at least 2 subjects made it; names = theirs
+  std::optional<ModelQualityCurves> quality;  ///< when options.quality and at least 3 made it
+  ChestMeasures mean_measures;                ///< of the mean shape (its grid)
+  /// Wall time (s) per stage: the subjects' stages summed over subjects, then "model", "quality", "distance".
+  Timings timings_s;
   std::string message;
+
+  /// One line for a log: how many subjects made it, the reference, the modes, the wall time.
+  std::string BriefReport() const;
 };
 
 /// The points of `cloud` whose ROI coordinates (u, v) lie within `margin_mm` of the ROI rectangle, with
 /// their attributes.
 PointCloud CropToRoi(const PointCloud& cloud, const ChestRoi& roi, double margin_mm);
 
-/// Stage 5 for one subject, as the pipeline does it: landmarks then ICP to the reference, the ICP kept
-/// only if it succeeds and stays with the landmarks (PipelineOptions::max_landmark_shift_mm). Sets the
+/// Stage 5 for one subject, as the pipeline does it: RegisterPair of its surface and landmarks to the
+/// reference's with options.registration (which decides whether the ICP refinement is kept). Sets the
 /// subject's pose, registration figures and message, and moves its surface and landmarks into the
 /// reference frame. Throws as RegisterPair (unusable landmarks).
-void RegisterToReference(const IcpTarget& reference_surface, const LandmarkSet& reference_landmarks,
-                         const PipelineOptions& options, SubjectOutcome* subject);
+void RegisterSubject(const IcpTarget& reference_surface, const LandmarkSet& reference_landmarks,
+                     const PipelineOptions& options, SubjectOutcome* subject);
+
+/// Stage 6 for one subject, as the pipeline does it: its registered surface resampled on the grid of its
+/// landmarks' ROI (ResampleSurface with options.roi and options.resample) into subject->grid.
+void ResampleSubject(const PipelineOptions& options, SubjectOutcome* subject);
 
 /// Called after each subject's stage ("merge", "register", ...), for progress and logs; may be empty.
 using PipelineObserver = std::function<void(const SubjectOutcome& subject, const std::string& stage)>;

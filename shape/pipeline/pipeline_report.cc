@@ -49,13 +49,6 @@ nlohmann::json MatrixJson(const Eigen::Matrix4d& M) {
   return rows;
 }
 
-double Seconds(const std::vector<std::pair<std::string, double>>& seconds, const std::string& stage) {
-  for (const auto& [name, t] : seconds) {
-    if (name == stage) return t;
-  }
-  return 0.0;
-}
-
 }  // namespace
 
 nlohmann::json PipelineJson(const PipelineResult& r) {
@@ -86,34 +79,32 @@ nlohmann::json PipelineJson(const PipelineResult& r) {
       j["measures"] = s.measures.ToJson();
     }
     if (s.to_mean.distances.size() > 0) j["distance_to_mean"] = s.to_mean.stats.ToJson();
-    nlohmann::json seconds = nlohmann::json::object();
-    for (const auto& [stage, t] : s.seconds) seconds[stage] = t;
-    j["seconds"] = seconds;
+    j["timings_s"] = s.timings_s.ToJson();
     subjects.push_back(j);
   }
   nlohmann::json out = {
       {"subjects", subjects}, {"reference", r.reference}, {"succeeded", r.succeeded}, {"message", r.message}};
-  if (r.has_model) {
+  if (r.model) {
     nlohmann::json modes = nlohmann::json::array();
-    const Eigen::VectorXd f = r.model.ExplainedFraction(), c = r.model.CumulativeFraction();
-    for (int k = 0; k < r.model.num_modes(); ++k) {
+    const Eigen::VectorXd f = r.model->ExplainedFraction(), c = r.model->CumulativeFraction();
+    for (int k = 0; k < r.model->num_modes(); ++k) {
       modes.push_back({{"mode", k + 1},
-                       {"eigenvalue_mm2", r.model.variances[k]},
+                       {"eigenvalue_mm2", r.model->variances[k]},
                        {"explained", f[k]},
                        {"cumulative", c[k]}});
     }
-    out["model"] = {{"points", r.model.num_points()},
+    out["model"] = {{"points", r.model->num_points()},
                     {"modes", modes},
-                    {"total_variance_mm2", r.model.total_variance},
+                    {"total_variance_mm2", r.model->total_variance},
                     {"mean_measures", r.mean_measures.ToJson()}};
   }
-  if (r.has_quality) {
+  if (r.quality) {
     nlohmann::json q = nlohmann::json::array();
-    for (Eigen::Index m = 0; m < r.quality.modes.size(); ++m) {
-      q.push_back({{"modes", r.quality.modes[m]},
-                   {"compactness_mm2", r.quality.compactness[m]},
-                   {"generalization_mm", r.quality.generalization_mm[m]},
-                   {"specificity_mm", r.quality.specificity_mm[m]}});
+    for (Eigen::Index m = 0; m < r.quality->modes.size(); ++m) {
+      q.push_back({{"modes", r.quality->modes[m]},
+                   {"compactness_mm2", r.quality->compactness[m]},
+                   {"generalization_mm", r.quality->generalization_mm[m]},
+                   {"specificity_mm", r.quality->specificity_mm[m]}});
     }
     out["quality"] = q;
   }
@@ -141,7 +132,7 @@ std::vector<ReportFile> MakePipelineReport(const PipelineResult& r, const Pipeli
     html << "<tr><th>" << Escape(key) << "</th><td class=\"l\">"
          << Escape(value.is_string() ? value.get<std::string>() : value.dump()) << "</td></tr>";
   }
-  for (const auto& [stage, t] : r.seconds)
+  for (const auto& [stage, t] : r.timings_s.stages())
     html << "<tr><th>" << Escape(stage) << " (s, summed)</th><td>" << Num(t) << "</td></tr>";
   html << "</table>\n";
 
@@ -152,8 +143,7 @@ std::vector<ReportFile> MakePipelineReport(const PipelineResult& r, const Pipeli
           "<th>largest data gap mm</th><th>depression mm</th><th>to mean RMS mm</th><th>to mean max mm</th>"
           "<th>time s</th></tr>\n";
   for (const SubjectOutcome& s : r.subjects) {
-    double total = 0.0;
-    for (const auto& st : s.seconds) total += st.second;
+    const double total = s.timings_s.Total();
     html << "<tr" << (s.ok ? "" : " class=\"bad\"") << "><td class=\"l\">" << Escape(s.name)
          << (s.name == r.reference ? " (reference)" : "") << "</td><td class=\"l\">"
          << (s.ok ? "ok" : "failed at " + Escape(s.failed_stage)) << "</td><td>" << s.sweeps << "</td><td>"
@@ -173,14 +163,14 @@ std::vector<ReportFile> MakePipelineReport(const PipelineResult& r, const Pipeli
       html << "<p class=\"bad\"><b>" << Escape(s.name) << "</b> failed at " << Escape(s.failed_stage) << ": "
            << Escape(s.error) << "</p>\n";
   }
-  if (!r.has_model) {
+  if (!r.model) {
     html << "<p class=\"bad\">Fewer than two subjects made it: no model.</p></body></html>\n";
     files.push_back({"report.html", html.str()});
     return files;
   }
 
   // The average chest and its variability.
-  const ShapeModel& m = r.model;
+  const ShapeModel& m = *r.model;
   const TriangleMesh mean = m.ToMesh(m.mean);
   const Eigen::VectorXd sd = VertexSd(m);
   SurfaceMapFigure sd_figure;
@@ -211,8 +201,8 @@ std::vector<ReportFile> MakePipelineReport(const PipelineResult& r, const Pipeli
   html << "</div>\n";
 
   // Model quality.
-  if (r.has_quality) {
-    const ModelQualityCurves& q = r.quality;
+  if (r.quality) {
+    const ModelQualityCurves& q = *r.quality;
     html << "<h2>Model quality (Styner et al. 2003)</h2>\n<img src=\""
          << figure("quality.png", QualityCurvesImage(q))
          << "\">\n<table><tr><th>modes M</th><th>compactness mm&sup2;</th><th>generalization mm</th>"
@@ -252,10 +242,10 @@ std::vector<ReportFile> MakePipelineReport(const PipelineResult& r, const Pipeli
          << " mm</div>";
   }
   html << "</div>\n<p>Stage times per subject are in the JSON report; merge "
-       << Num(Seconds(r.seconds, "merge"), 1) << " s, reconstruct "
-       << Num(Seconds(r.seconds, "reconstruct"), 1) << " s, register "
-       << Num(Seconds(r.seconds, "register"), 1) << " s, resample " << Num(Seconds(r.seconds, "resample"), 1)
-       << " s (summed over subjects).</p>\n</body></html>\n";
+       << Num(r.timings_s.Seconds("merge"), 1) << " s, reconstruct "
+       << Num(r.timings_s.Seconds("reconstruct"), 1) << " s, register "
+       << Num(r.timings_s.Seconds("register"), 1) << " s, resample "
+       << Num(r.timings_s.Seconds("resample"), 1) << " s (summed over subjects).</p>\n</body></html>\n";
   files.push_back({"report.html", html.str()});
   return files;
 }

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <limits>
 
+#include "shape/core/per_vertex_normals.h"
+
 namespace pectus::render {
 namespace {
 
@@ -67,21 +69,6 @@ Rgb ToRgb(const Eigen::Vector3d& c) {
   return {k(c.x()), k(c.y()), k(c.z())};
 }
 
-// Area-weighted vertex normals, for smooth shading of meshes that carry none.
-Points3 VertexNormals(const TriangleMesh& mesh) {
-  if (mesh.vertices.has_normals()) return mesh.vertices.normals;
-  Points3 n = Points3::Zero(mesh.num_vertices(), 3);
-  const Points3& V = mesh.vertices.positions;
-  for (Eigen::Index f = 0; f < mesh.num_faces(); ++f) {
-    const auto a = mesh.faces(f, 0), b = mesh.faces(f, 1), c = mesh.faces(f, 2);
-    const Eigen::RowVector3d fn = (V.row(b) - V.row(a)).cross(V.row(c) - V.row(a));
-    n.row(a) += fn;
-    n.row(b) += fn;
-    n.row(c) += fn;
-  }
-  return n;
-}
-
 }  // namespace
 
 View View::Front(int width, int height) {
@@ -115,7 +102,8 @@ Image RenderMesh(const TriangleMesh& mesh, const View& view, const Colors3* colo
   const Points3& V = mesh.vertices.positions;
   if (V.rows() == 0) return image;
   const Camera cam = MakeCamera(view, V);
-  const Points3 N = VertexNormals(mesh);
+  // Meshes that carry no normals are shaded smoothly with area-weighted ones.
+  const Points3 N = mesh.vertices.has_normals() ? mesh.vertices.normals : PerVertexNormals(V, mesh.faces);
   std::vector<Eigen::Vector3d> screen(static_cast<std::size_t>(V.rows()));
   std::vector<Eigen::Vector3d> lit(static_cast<std::size_t>(V.rows()));
   for (Eigen::Index i = 0; i < V.rows(); ++i) {

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "shape/core/error.h"
-#include "shape/surface/sparse_grid.h"
+#include "shape/surface/internal/sparse_grid.h"
 
 namespace pectus {
 namespace {
@@ -141,7 +141,7 @@ bool MarchingCubesOptions::IsValid(std::string* why) const {
     if (why) *why = text;
     return false;
   };
-  if (!(spacing > 0.0) || !std::isfinite(spacing)) return fail("marching cubes spacing must be > 0 mm");
+  if (!(spacing_mm > 0.0) || !std::isfinite(spacing_mm)) return fail("marching cubes spacing must be > 0 mm");
   if (!origin.allFinite()) return fail("marching cubes origin must be finite");
   if (max_cubes < 1) return fail("max cubes must be >= 1");
   return true;
@@ -152,7 +152,7 @@ MarchingCubesResult ExtractIsosurface(const ScalarField& field, const Points3& s
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage(why);
   const CaseTable& table = Table();
-  const double h = options.spacing;
+  const double h = options.spacing_mm;
   MarchingCubesResult result;
   if (seeds.rows() == 0) return result;
   const Bounds3 b = ComputeBounds(seeds);

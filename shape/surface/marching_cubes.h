@@ -17,7 +17,7 @@ using ScalarField = std::function<void(const Points3& points, Eigen::VectorXd* v
 
 /// Options of ExtractIsosurface.
 struct MarchingCubesOptions {
-  double spacing = 1.0;                              ///< grid step (mm), > 0
+  double spacing_mm = 1.0;                           ///< grid step (mm), > 0
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< a grid corner (mm)
   std::int64_t max_cubes = 100'000'000;              ///< stop (reached_limit) after this many cubes
 

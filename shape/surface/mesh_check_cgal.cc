@@ -39,7 +39,8 @@ MeshCheck CheckMesh(const TriangleMesh& mesh) {
     }
   }
   auto finish = [&]() {
-    check.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    check.timings_s.Add("check",
+                        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     return check;
   };
   if (!PMP::is_polygon_soup_a_polygon_mesh(polygons)) {

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "shape/core/geometry.h"
+#include "shape/core/timings.h"
 
 namespace pectus {
 
@@ -20,7 +21,7 @@ struct MeshCheck {
   std::int64_t border_edges = 0;   ///< edges with one face
   std::int64_t components = 0;     ///< connected pieces
   double area_mm2 = 0.0;           ///< total area
-  double seconds = 0.0;            ///< wall time of the check
+  Timings timings_s;               ///< "check": wall time (s)
   std::string message;             ///< empty when manifold and not self-intersecting, else why not
 };
 

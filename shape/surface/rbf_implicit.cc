@@ -11,9 +11,9 @@
 
 #include "registration/kdtree.h"
 #include "shape/core/error.h"
+#include "shape/surface/internal/sparse_grid.h"
 #include "shape/surface/local_rbf.h"
 #include "shape/surface/rbf_levels.h"
-#include "shape/surface/sparse_grid.h"
 
 namespace pectus {
 
@@ -23,26 +23,27 @@ bool RbfImplicitOptions::IsValid(std::string* why) const {
     return false;
   };
   auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
-  if (!positive(cell_size)) return fail("cell size must be > 0 mm");
+  if (!positive(cell_size_mm)) return fail("cell size must be > 0 mm");
   if (!(fit_radius_factor >= 1.0) || !std::isfinite(fit_radius_factor)) {
     return fail("fit radius factor must be >= 1 (a fit must cover its cell's support)");
   }
   if (!(hole_context >= 0.0) || !std::isfinite(hole_context)) return fail("hole context must be >= 0");
-  if (!positive(centre_spacing)) return fail("centre spacing must be > 0 mm");
-  if (!positive(off_surface_distance)) return fail("off-surface distance must be > 0 mm");
+  if (!positive(centre_spacing_mm)) return fail("centre spacing must be > 0 mm");
+  if (!positive(off_surface_distance_mm)) return fail("off-surface distance must be > 0 mm");
   if (!positive(off_surface_weight)) return fail("off-surface weight must be > 0");
   if (!(smoothing >= 0.0) || !std::isfinite(smoothing)) return fail("smoothing must be >= 0");
-  if (!(max_fill_distance >= 0.0) || !std::isfinite(max_fill_distance)) {
+  if (!(max_fill_distance_mm >= 0.0) || !std::isfinite(max_fill_distance_mm)) {
     return fail("max fill distance must be >= 0 mm");
   }
   if (max_centres < 4 || max_centres > 400) return fail("max centres must be in [4, 400]");
-  if (!(max_hole_size >= 0.0) || !std::isfinite(max_hole_size)) return fail("max hole size must be >= 0 mm");
+  if (!(max_hole_size_mm >= 0.0) || !std::isfinite(max_hole_size_mm))
+    return fail("max hole size must be >= 0 mm");
   return true;
 }
 
 struct RbfImplicit::Impl {
   RbfImplicitOptions options;
-  std::deque<RbfLevel> levels;       // [0] constraints at centre_spacing / 2, [1] centres, coarser after
+  std::deque<RbfLevel> levels;       // [0] constraints at centre_spacing_mm / 2, [1] centres, coarser after
   Eigen::Vector3d grid_origin;       // corner of cell (0, 0, 0)
   GridKeyMap<std::int32_t> cell_of;  // cell key -> index into fits, -1 = undefined
   std::vector<LocalRbf> fits;
@@ -50,7 +51,7 @@ struct RbfImplicit::Impl {
   std::int64_t undefined_cells = 0;
 
   Eigen::Vector3d CellCentre(GridKey key) const {
-    return grid_origin + (UnpackGridKey(key).cast<double>().array() + 0.5).matrix() * options.cell_size;
+    return grid_origin + (UnpackGridKey(key).cast<double>().array() + 0.5).matrix() * options.cell_size_mm;
   }
 
   // The local fit of one cell, or nullopt if the cell is undefined.
@@ -58,20 +59,20 @@ struct RbfImplicit::Impl {
     const Eigen::Vector3d c = CellCentre(key);
     std::uint32_t nearest;
     double d2;
-    if (!levels[0].tree->NearestWithin(c, options.max_fill_distance, &nearest, &d2)) return std::nullopt;
+    if (!levels[0].tree->NearestWithin(c, options.max_fill_distance_mm, &nearest, &d2)) return std::nullopt;
     // How far the cell is from data along the surface: the offset from the nearest point within its
     // tangent plane (a cell just above or below the data has none; one over a hole, the hole's radius).
     const Eigen::Vector3d offset = c - levels[0].positions.row(nearest).transpose();
     const Eigen::Vector3d normal = levels[0].normals.row(nearest).transpose();
     const Eigen::Vector3d tangential = offset - normal.dot(offset) * normal;
     const double along = tangential.norm();
-    // Over a hole at most max_hole_size wide, the far rim lies within max_hole_size - along of the cell,
-    // beyond it as seen from the nearest data point p; beyond the edge of the data nothing does (every
+    // Over a hole at most max_hole_size_mm wide, the far rim lies within max_hole_size_mm - along of the
+    // cell, beyond it as seen from the nearest data point p; beyond the edge of the data nothing does (every
     // data point x has (x - c).(c - p) < 0), and the cell is left undefined rather than fitted and then
     // trimmed away.
-    const double edge_test = std::max(0.5 * options.cell_size, 0.2 * options.max_hole_size);
-    if (options.max_hole_size > 0.0 && along > edge_test) {
-      const double reach = options.max_hole_size - along + 0.5 * options.cell_size;
+    const double edge_test = std::max(0.5 * options.cell_size_mm, 0.2 * options.max_hole_size_mm);
+    if (options.max_hole_size_mm > 0.0 && along > edge_test) {
+      const double reach = options.max_hole_size_mm - along + 0.5 * options.cell_size_mm;
       if (reach <= 0.0) return std::nullopt;
       std::vector<std::pair<std::uint32_t, double>> around;
       levels[0].tree->Radius(c, reach, &around, false);
@@ -80,7 +81,7 @@ struct RbfImplicit::Impl {
       });
       if (!far_side) return std::nullopt;
     }
-    const double radius = options.fit_radius_factor * options.cell_size + options.hole_context * along;
+    const double radius = options.fit_radius_factor * options.cell_size_mm + options.hole_context * along;
     // Centres: the finest level with at most 4 max_centres in the ball, thinned evenly (the k-d tree
     // returns them in leaf order, so every n-th is spread over the ball) to at most max_centres.
     // Constraints: the finest level with at most 8 max_centres in the ball, and never coarser than the
@@ -115,7 +116,7 @@ struct RbfImplicit::Impl {
   // Fits every cell that a query needs and that is not known yet.
   void EnsureCells(const Points3& queries) {
     const Eigen::Index n = queries.rows();
-    const double h = options.cell_size;
+    const double h = options.cell_size_mm;
     std::vector<std::vector<GridKey>> missing(static_cast<std::size_t>(omp_get_max_threads()));
 #pragma omp parallel
     {
@@ -165,7 +166,7 @@ struct RbfImplicit::Impl {
   }
 
   double EvaluateOne(const Eigen::Vector3d& x) const {
-    const double h = options.cell_size;
+    const double h = options.cell_size_mm;
     const Eigen::Vector3d u = (x - grid_origin) / h - Eigen::Vector3d::Constant(0.5);
     const std::int64_t a = std::int64_t(std::floor(u.x())), b = std::int64_t(std::floor(u.y())),
                        c = std::int64_t(std::floor(u.z()));
@@ -201,20 +202,20 @@ RbfImplicit::RbfImplicit(const Points3& positions, const Points3& normals, const
   Impl& im = *impl_;
   im.options = options;
   const Bounds3 bounds = ComputeBounds(positions);
-  const double margin = options.max_fill_distance + 2.0 * options.cell_size;
-  CheckGridFits(bounds.extent().maxCoeff() + 2.0 * margin, options.cell_size, "RBF cell grid");
+  const double margin = options.max_fill_distance_mm + 2.0 * options.cell_size_mm;
+  CheckGridFits(bounds.extent().maxCoeff() + 2.0 * margin, options.cell_size_mm, "RBF cell grid");
   im.grid_origin = bounds.min;
 
   // Level 0 (constraints) at half the centre spacing, level 1 (centres) at the centre spacing, then
   // doubled until a level is small enough to hold every hole cell's centres.
   im.levels.emplace_back();
-  AverageByVoxel(positions, normals, counts, 0.5 * options.centre_spacing, &im.levels.back());
-  for (double spacing = options.centre_spacing;; spacing *= 2.0) {
+  AverageByVoxel(positions, normals, counts, 0.5 * options.centre_spacing_mm, &im.levels.back());
+  for (double spacing = options.centre_spacing_mm;; spacing *= 2.0) {
     // In place: a level's k-d tree refers to its positions (a deque never moves its elements).
     im.levels.emplace_back();
     const RbfLevel& prev = im.levels[im.levels.size() - 2];
     AverageByVoxel(prev.positions, prev.normals, prev.counts, spacing, &im.levels.back());
-    SetOffSurfaceDistances(im.levels[0], options.off_surface_distance, &im.levels.back());
+    SetOffSurfaceDistances(im.levels[0], options.off_surface_distance_mm, &im.levels.back());
     if (im.levels.back().positions.rows() <= options.max_centres / 2 || im.levels.size() > 24) break;
   }
 }

@@ -13,35 +13,35 @@ namespace pectus {
 
 /// Options of RbfImplicit. Lengths in mm.
 struct RbfImplicitOptions {
-  /// Edge of a partition-of-unity cell (mm). Cell i blends in with weight W(|x - c_i| / cell_size),
+  /// Edge of a partition-of-unity cell (mm). Cell i blends in with weight W(|x - c_i| / cell_size_mm),
   /// W the Wendland function (1 - r)^4 (4 r + 1), so every point has at least one cell covering it.
-  double cell_size = 4.0;
-  /// A cell next to data fits the data within fit_radius_factor * cell_size of its centre.
+  double cell_size_mm = 4.0;
+  /// A cell next to data fits the data within fit_radius_factor * cell_size_mm of its centre.
   double fit_radius_factor = 1.25;
   /// A cell whose centre lies a distance d from the data along the surface (over a hole, or beyond the
   /// edge of an open scan; d is measured in the tangent plane of the nearest point, so a cell just above
-  /// or below the data has d = 0) fits the data within fit_radius_factor * cell_size + hole_context * d,
+  /// or below the data has d = 0) fits the data within fit_radius_factor * cell_size_mm + hole_context * d,
   /// so that it sees the rim all around a hole.
   double hole_context = 3.0;
   /// Spacing of the RBF centres next to data (mm): the points averaged per cube of this side. Cells
   /// over holes use coarser centres (doubled spacing per level) so a fit never has more than
   /// max_centres kernels. The on-surface constraints are the points averaged at half this spacing.
-  double centre_spacing = 2.0;
+  double centre_spacing_mm = 2.0;
   /// Off-surface constraints at y +- eps n with values +-eps (Carr et al. 2001, Sec. 3.1), per centre;
   /// eps is halved (up to three times, then dropped) where the point would lie nearer other data.
-  double off_surface_distance = 1.0;
+  double off_surface_distance_mm = 1.0;
   /// Weight of an off-surface constraint relative to the on-surface data it stands for.
   double off_surface_weight = 0.5;
   /// Bending-energy weight of each local fit (dimensionless, see LocalRbf); larger = smoother.
   double smoothing = 1e-3;
   /// Cells whose centre is farther than this from every data point are undefined (mm): the surface
   /// ends there. Holes up to about twice this wide get a surface.
-  double max_fill_distance = 20.0;
+  double max_fill_distance_mm = 20.0;
   /// Widest hole to be filled (mm). A cell more than half a cell from the data along the surface is
   /// fitted only if data lies ahead of it (away from its nearest data) within this width, i.e. it is over
   /// a hole; beyond the edge of an open scan it is undefined (the surface there would be trimmed away).
-  /// 0 = every cell within max_fill_distance is fitted.
-  double max_hole_size = 0.0;
+  /// 0 = every cell within max_fill_distance_mm is fitted.
+  double max_hole_size_mm = 0.0;
   /// At most this many kernels per local fit.
   int max_centres = 60;
 

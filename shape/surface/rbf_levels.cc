@@ -5,7 +5,7 @@
 #include <utility>
 #include <vector>
 
-#include "shape/surface/sparse_grid.h"
+#include "shape/surface/internal/sparse_grid.h"
 
 namespace pectus {
 

@@ -7,8 +7,10 @@
 #include <sstream>
 
 #include "registration/kdtree.h"
-#include "shape/surface/cloud_scales.h"
+#include "shape/core/number_format.h"
 #include "shape/core/error.h"
+#include "shape/core/per_vertex_normals.h"
+#include "shape/surface/internal/cloud_scales.h"
 #include "shape/surface/marching_cubes.h"
 #include "shape/surface/rbf_levels.h"
 #include "shape/surface/surface_normals.h"
@@ -24,15 +26,15 @@ constexpr double kCentreNoiseLevels = 22.0;
 
 class StageClock {
  public:
-  explicit StageClock(std::vector<std::pair<std::string, double>>* out) : out_(out) {}
+  explicit StageClock(Timings* out) : out_(out) {}
   void Lap(const std::string& stage) {
     const auto now = std::chrono::steady_clock::now();
-    out_->emplace_back(stage, std::chrono::duration<double>(now - last_).count());
+    out_->Add(stage, std::chrono::duration<double>(now - last_).count());
     last_ = now;
   }
 
  private:
-  std::vector<std::pair<std::string, double>>* out_;
+  Timings* out_;
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
 
@@ -49,23 +51,6 @@ void CheckNotDegenerate(const Points3& p, const std::string& what) {
   }
 }
 
-// Unit normals per vertex: area-weighted face normals.
-Points3 VertexNormals(const TriangleMesh& mesh) {
-  Points3 n = Points3::Zero(mesh.num_vertices(), 3);
-  for (Eigen::Index f = 0; f < mesh.num_faces(); ++f) {
-    const Eigen::Vector3d a = mesh.vertices.positions.row(mesh.faces(f, 0)).transpose();
-    const Eigen::Vector3d b = mesh.vertices.positions.row(mesh.faces(f, 1)).transpose();
-    const Eigen::Vector3d c = mesh.vertices.positions.row(mesh.faces(f, 2)).transpose();
-    const Eigen::RowVector3d fn = (b - a).cross(c - a).transpose();
-    for (int i = 0; i < 3; ++i) n.row(mesh.faces(f, i)) += fn;
-  }
-  for (Eigen::Index v = 0; v < n.rows(); ++v) {
-    const double len = n.row(v).norm();
-    n.row(v) = len > 0.0 ? Eigen::RowVector3d(n.row(v) / len) : Eigen::RowVector3d(0.0, 0.0, 1.0);
-  }
-  return n;
-}
-
 }  // namespace
 
 bool ReconstructOptions::IsValid(std::string* why) const {
@@ -74,13 +59,13 @@ bool ReconstructOptions::IsValid(std::string* why) const {
     return false;
   };
   auto non_negative = [](double v) { return v >= 0.0 && std::isfinite(v); };
-  if (!non_negative(spacing)) return fail("spacing must be >= 0 mm (0 = automatic)");
+  if (!non_negative(spacing_mm)) return fail("spacing must be >= 0 mm (0 = automatic)");
   if (target_faces < 0) return fail("target faces must be >= 0");
-  if (!non_negative(detail)) return fail("detail must be >= 0 mm (0 = automatic)");
+  if (!non_negative(detail_mm)) return fail("detail must be >= 0 mm (0 = automatic)");
   if (!non_negative(smoothing)) return fail("smoothing must be >= 0");
-  if (!non_negative(fill_holes)) return fail("fill-holes size must be >= 0 mm");
-  if (!non_negative(margin)) return fail("margin must be >= 0 mm (0 = automatic)");
-  if (!non_negative(off_surface_distance))
+  if (!non_negative(fill_holes_mm)) return fail("fill-holes size must be >= 0 mm");
+  if (!non_negative(margin_mm)) return fail("margin must be >= 0 mm (0 = automatic)");
+  if (!non_negative(off_surface_distance_mm))
     return fail("off-surface distance must be >= 0 mm (0 = automatic)");
   if (normal_neighbours < 3 || normal_neighbours > 256) return fail("normal neighbours must be in [3, 256]");
   if (viewpoint && !viewpoint->allFinite()) return fail("viewpoint must be finite");
@@ -112,15 +97,15 @@ ReconstructResult ReconstructSurface(const PointCloud& cloud, const ReconstructO
   // resolution however many points sample it, and noisier points need larger centres to average over.
   const double s = result.point_spacing_mm;
   result.noise_mm = NoiseLevel(cloud.positions, s);
-  double h = options.spacing;
+  double h = options.spacing_mm;
   if (h == 0.0 && options.target_faces > 0) {
     // Marching cubes gives about 2.2 triangles per h^2 of area; the area is about points * s^2.
     h = std::sqrt(2.2 * double(cloud.size()) * s * s / double(options.target_faces));
   }
   if (h == 0.0) h = 1.5 * s;
   const double detail =
-      options.detail > 0.0
-          ? options.detail
+      options.detail_mm > 0.0
+          ? options.detail_mm
           : std::max({2.0 * h, kCentrePointSpacings * s, kCentreNoiseLevels * result.noise_mm});
   result.spacing_mm = h;
   result.centre_spacing_mm = detail;
@@ -167,19 +152,20 @@ ReconstructResult ReconstructSurface(const PointCloud& cloud, const ReconstructO
   clock.Lap("normals");
 
   RbfImplicitOptions ro;
-  ro.centre_spacing = detail;
-  ro.cell_size = 2.0 * detail;
-  ro.off_surface_distance = options.off_surface_distance > 0.0 ? options.off_surface_distance : 0.5 * detail;
+  ro.centre_spacing_mm = detail;
+  ro.cell_size_mm = 2.0 * detail;
+  ro.off_surface_distance_mm =
+      options.off_surface_distance_mm > 0.0 ? options.off_surface_distance_mm : 0.5 * detail;
   ro.smoothing = options.smoothing;
-  ro.max_fill_distance = 0.5 * options.fill_holes + ro.cell_size;
-  ro.max_hole_size = options.fill_holes;
-  result.cell_size_mm = ro.cell_size;
+  ro.max_fill_distance_mm = 0.5 * options.fill_holes_mm + ro.cell_size_mm;
+  ro.max_hole_size_mm = options.fill_holes_mm;
+  result.cell_size_mm = ro.cell_size_mm;
 
   // 5. The implicit s(x), fitted lazily where marching cubes asks for it.
   RbfImplicit implicit(positions, oriented, weights, ro);
   clock.Lap("centres");
   MarchingCubesOptions mo;
-  mo.spacing = h;
+  mo.spacing_mm = h;
   mo.origin = ComputeBounds(positions).min;
   MarchingCubesResult mc = ExtractIsosurface(
       [&](const Points3& q, Eigen::VectorXd* v) { implicit.Evaluate(q, v); }, implicit.Seeds(), mo);
@@ -194,14 +180,15 @@ ReconstructResult ReconstructSurface(const PointCloud& cloud, const ReconstructO
 
   // 6. Trim to the scanned region, keeping hole fillings.
   TrimOptions to;
-  to.margin = options.margin > 0.0 ? options.margin : detail;
-  to.max_hole_size = options.fill_holes;
+  to.margin_mm = options.margin_mm > 0.0 ? options.margin_mm : detail;
+  to.max_hole_size_mm = options.fill_holes_mm;
   result.trim = TrimToData(tree, &mc.mesh, to);
   result.mesh = std::move(mc.mesh);
   if (result.mesh.num_faces() == 0) {
     ThrowFailure("reconstruct: no surface was found near the data (normals inconsistent?)", what);
   }
-  result.mesh.vertices.normals = VertexNormals(result.mesh);
+  result.mesh.vertices.normals =
+      PerVertexNormals(result.mesh.vertices.positions, result.mesh.faces, Eigen::RowVector3d(0.0, 0.0, 1.0));
   clock.Lap("trim");
 
   // 7. Fitting accuracy (dissertation Eq. 11) and the CGAL check.
@@ -211,13 +198,20 @@ ReconstructResult ReconstructSurface(const PointCloud& cloud, const ReconstructO
     result.check = CheckMesh(result.mesh);
     clock.Lap("check");
   }
+  // The summary: the surface's size and how far the fit's on-surface points are from it (RMS and 95th
+  // percentile). Carr's maximum residual stays in `accuracy`: it is set by the points the fit rejects as
+  // outliers and reads as an error it is not.
   std::ostringstream msg;
   msg << result.mesh.num_vertices() << " vertices, " << result.mesh.num_faces() << " triangles from "
       << result.used_points << " points; " << result.trim.holes_filled << " holes filled"
-      << (result.trim.boundary_edges == 0 ? ", watertight" : "") << "; fitting accuracy "
-      << result.accuracy.fitting_accuracy_mm << " mm";
+      << (result.trim.boundary_edges == 0 ? ", watertight" : "") << "; on-surface residual RMS "
+      << FormatMm(result.accuracy.on_surface_rms_mm) << ", p95 " << FormatMm(result.accuracy.on_surface_p95_mm);
   result.message = msg.str();
   return result;
+}
+
+std::string ReconstructResult::BriefReport() const {
+  return message + "; " + FormatSignificant(timings_s.Total()) + " s";
 }
 
 }  // namespace pectus

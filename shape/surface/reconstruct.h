@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "shape/core/geometry.h"
+#include "shape/core/timings.h"
 #include "shape/surface/mesh_check_cgal.h"
 #include "shape/surface/rbf_implicit.h"
 #include "shape/surface/trim_to_data.h"
@@ -20,22 +21,22 @@ namespace pectus {
 struct ReconstructOptions {
   /// Step of the isosurface grid (mm): sets the size of the triangles. 0 = from target_faces if set,
   /// else 1.5 times the point spacing (the side of the square each point covers).
-  double spacing = 0.0;
-  /// When spacing is 0 and this is > 0: the spacing that gives about this many triangles.
+  double spacing_mm = 0.0;
+  /// When spacing_mm is 0 and this is > 0: the spacing that gives about this many triangles.
   std::int64_t target_faces = 0;
   /// Spacing of the RBF centres (mm), the finest detail the surface follows. 0 = the largest of twice
   /// the grid step, 4 point spacings (a centre averages several points of a sparse cloud) and 22 noise
   /// levels (it averages the noise): it does not shrink when more points sample the same surface.
-  double detail = 0.0;
+  double detail_mm = 0.0;
   /// Bending-energy weight of the local fits (RbfImplicitOptions::smoothing); larger = smoother.
   double smoothing = 1e-3;
   /// Holes up to this width (mm) are filled; wider gaps and everything beyond the edge of an open scan
   /// are trimmed away. 0 fills nothing.
-  double fill_holes = 30.0;
+  double fill_holes_mm = 30.0;
   /// Triangles within this distance (mm) of data are kept however they lie. 0 = the RBF centre spacing.
-  double margin = 0.0;
+  double margin_mm = 0.0;
   /// Off-surface constraint distance eps (mm). 0 = half the RBF centre spacing.
-  double off_surface_distance = 0.0;
+  double off_surface_distance_mm = 0.0;
   /// Neighbours per point for PCA normals.
   int normal_neighbours = 16;
   /// Estimate normals even if the cloud has them.
@@ -66,8 +67,12 @@ struct ReconstructResult {
   std::int64_t used_points = 0;     ///< working points with a usable normal
   std::int64_t cells = 0;           ///< local fits made (undefined ones included)
   std::int64_t surface_cubes = 0;   ///< marching cubes the surface crossed
-  std::vector<std::pair<std::string, double>> timings_s;  ///< wall time per stage, in order
-  std::string message;                                    ///< one line: what was made
+  Timings timings_s;                ///< wall time per stage (s), in order
+  std::string message;              ///< one line: what was made
+
+  /// One line for a log: the message, then the on-surface residual RMS and 95th percentile (what a user
+  /// reads as the error; Carr's maximum stays in `accuracy`) and the wall time.
+  std::string BriefReport() const;
 };
 
 /// Reconstructs a surface. Throws Error(kBadInput) naming `what` for a cloud that cannot give one

@@ -3,12 +3,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 
 #include "registration/voxel_downsample.h"
-#include "shape/surface/cloud_filter.h"
 #include "shape/core/error.h"
 #include "shape/core/log.h"
+#include "shape/surface/cloud_filter.h"
 #include "shape/surface/pose_adjustment.h"
 #include "shape/surface/sweep_graph.h"
 
@@ -72,13 +73,13 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
   std::vector<Rigid3> P_start(n), P(n);
   for (std::size_t s = 0; s < n; ++s) P[s] = P_start[s] = T_centred_world * start[s];
   OrientSweeps(P, options.overlap_distance_mm, options.anchor, &sweeps);
-  result.seconds_normals = Since(t0);
+  result.timings_s.Add("normals", Since(t0));
 
   // 2. Which sweeps overlap, at the starting poses.
   t0 = Clock::now();
   const std::vector<SweepLink> links =
       FindSweepLinks(sweeps, P, options.overlap_distance_mm, options.min_overlap_fraction);
-  result.seconds_overlap = Since(t0);
+  result.timings_s.Add("overlap", Since(t0));
   if (n > 1) {
     for (std::size_t s = 0; s < n; ++s) {
       if (std::none_of(links.begin(), links.end(),
@@ -114,7 +115,7 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
       }
     }
     PosesFromTree(links, relative, pairwise_ok, options.anchor, &P);
-    result.seconds_pairwise = Since(t0);
+    result.timings_s.Add("pairwise_icp", Since(t0));
 
     // 4. Joint point-to-plane adjustment of all poses, with fresh correspondences every round.
     t0 = Clock::now();
@@ -138,7 +139,7 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
       }
       if (change_mm < 0.01 * spacing) break;
     }
-    result.seconds_global = Since(t0);
+    result.timings_s.Add("global_adjustment", Since(t0));
   }
 
   // Back to the caller's world frame; corrections and overlap residuals.
@@ -181,7 +182,7 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
     merged.Append(c);
   }
   BlendAlongNormals(options.smoothing_mm, &merged);
-  result.seconds_blend = Since(t0);
+  result.timings_s.Add("blend", Since(t0));
 
   // 6. Statistical outlier removal, then decimation to the target spacing.
   t0 = Clock::now();
@@ -193,7 +194,7 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
   result.merged = SelectRows(merged, keep);
   result.merged.positions.rowwise() += T_world_centred.translation().transpose();
   result.points_out = result.merged.size();
-  result.seconds_filter = Since(t0);
+  result.timings_s.Add("filter", Since(t0));
 
   double worst_after = 0;
   for (const auto& pr : result.pairs) worst_after = std::max(worst_after, pr.rms_after_mm);
@@ -203,6 +204,13 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
                 worst_after, static_cast<long long>(result.points_out));
   result.message = text;
   return result;
+}
+
+std::string SweepMergeResult::BriefReport() const {
+  char text[160];
+  std::snprintf(text, sizeof text, "; joint RMS %.3f -> %.3f mm; %.2f s", global_rms_before_mm,
+                global_rms_after_mm, timings_s.Total());
+  return message + text;
 }
 
 }  // namespace pectus

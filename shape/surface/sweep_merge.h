@@ -7,6 +7,7 @@
 
 #include "registration/icp.h"
 #include "shape/core/geometry.h"
+#include "shape/core/timings.h"
 #include "shape/surface/sweep_surface.h"
 
 namespace pectus {
@@ -70,9 +71,12 @@ struct SweepMergeResult {
   std::int64_t points_in = 0;
   std::int64_t outliers_removed = 0;
   std::int64_t points_out = 0;
-  double seconds_normals = 0, seconds_overlap = 0, seconds_pairwise = 0, seconds_global = 0,
-         seconds_blend = 0, seconds_filter = 0;
+  /// Wall time (s): "normals", "overlap", "pairwise_icp", "global_adjustment", "blend", "filter".
+  Timings timings_s;
   std::string message;  ///< one line on what happened
+
+  /// One line for a log: the message, the joint solve's RMS before and after, and the wall time.
+  std::string BriefReport() const;
 };
 
 /// Aligns and merges sweeps: orients every sweep's normals to one side, finds the overlapping pairs,

@@ -128,8 +128,9 @@ bool TrimOptions::IsValid(std::string* why) const {
     if (why) *why = text;
     return false;
   };
-  if (!(margin > 0.0) || !std::isfinite(margin)) return fail("trim margin must be > 0 mm");
-  if (!(max_hole_size >= 0.0) || !std::isfinite(max_hole_size)) return fail("hole size must be >= 0 mm");
+  if (!(margin_mm > 0.0) || !std::isfinite(margin_mm)) return fail("trim margin must be > 0 mm");
+  if (!(max_hole_size_mm >= 0.0) || !std::isfinite(max_hole_size_mm))
+    return fail("hole size must be >= 0 mm");
   if (!(min_component_fraction >= 0.0 && min_component_fraction <= 1.0)) {
     return fail("minimum component fraction must be in [0, 1]");
   }
@@ -154,12 +155,12 @@ TrimResult TrimToData(const KdTree3& tree, TriangleMesh* mesh, const TrimOptions
     distance(v) = std::sqrt(d2);
   }
 
-  // Uncovered regions: keep the enclosed ones no wider than max_hole_size.
+  // Uncovered regions: keep the enclosed ones no wider than max_hole_size_mm.
   const auto neighbours = FaceNeighbours(faces);
   std::vector<char> keep(static_cast<std::size_t>(nf)), uncovered(static_cast<std::size_t>(nf));
   for (Eigen::Index f = 0; f < nf; ++f) {
     const double d = std::max({distance(faces(f, 0)), distance(faces(f, 1)), distance(faces(f, 2))});
-    keep[std::size_t(f)] = d <= options.margin;
+    keep[std::size_t(f)] = d <= options.margin_mm;
     uncovered[std::size_t(f)] = !keep[std::size_t(f)];
   }
   std::vector<std::int32_t> label;
@@ -177,7 +178,7 @@ TrimResult TrimToData(const KdTree3& tree, TriangleMesh* mesh, const TrimOptions
   std::vector<char> fill(std::size_t(regions), 0);
   for (std::int32_t r = 0; r < regions; ++r) {
     if (touches_border[std::size_t(r)]) continue;
-    if (width[std::size_t(r)] <= options.max_hole_size) {
+    if (width[std::size_t(r)] <= options.max_hole_size_mm) {
       fill[std::size_t(r)] = 1;
       ++result.holes_filled;
       result.largest_hole_filled_mm = std::max(result.largest_hole_filled_mm, width[std::size_t(r)]);

@@ -13,11 +13,11 @@ namespace pectus {
 /// Options of TrimToData. Lengths in mm.
 struct TrimOptions {
   /// A triangle is "covered" when all its vertices lie within this distance of a data point.
-  double margin = 2.0;
+  double margin_mm = 2.0;
   /// A connected region of uncovered triangles that is surrounded by covered ones (it touches no border
   /// of the mesh) is a hole; it is kept (filled) when its width, twice the largest distance from its
   /// vertices to the data, is at most this. Other uncovered regions are removed. 0 fills nothing.
-  double max_hole_size = 30.0;
+  double max_hole_size_mm = 30.0;
   /// Connected pieces with fewer triangles than this fraction of the largest piece are removed.
   double min_component_fraction = 0.01;
 
@@ -30,7 +30,7 @@ struct TrimResult {
   std::int64_t faces_removed = 0;       ///< uncovered, small pieces and fan repairs together
   std::int64_t holes_filled = 0;        ///< uncovered regions kept as hole fillings
   double largest_hole_filled_mm = 0.0;  ///< width of the widest of them
-  std::int64_t holes_left_open = 0;     ///< enclosed uncovered regions wider than max_hole_size
+  std::int64_t holes_left_open = 0;     ///< enclosed uncovered regions wider than max_hole_size_mm
   std::int64_t components_removed = 0;  ///< small pieces removed
   std::int64_t fans_removed = 0;        ///< extra triangle fans removed at non-manifold vertices
   std::int64_t boundary_edges = 0;      ///< edges with one triangle after trimming (0: watertight)

@@ -170,9 +170,10 @@ int main(int argc, char** argv) {
         "\"global_s\": %.2f, \"start_worst_rms_mm\": %.2f, \"points_in\": %lld, \"points_out\": %lld,\n"
         "   \"gauge_free_rms_mm\": %s, \"worst_gauge_free_mm\": %.3f,\n"
         "   \"anchored_wall_s\": %.2f, \"anchored_rms_mm\": %s, \"worst_anchored_mm\": %.3f}%s\n",
-        1000 + seed, seconds, cpu, r.seconds_normals, r.seconds_pairwise, r.seconds_global, start_worst,
-        (long long)r.points_in, (long long)r.points_out, g.json.c_str(), g.worst, seconds_anchored,
-        a.json.c_str(), a.worst, seed + 1 < seeds ? "," : "");
+        1000 + seed, seconds, cpu, r.timings_s.Seconds("normals"), r.timings_s.Seconds("pairwise_icp"),
+        r.timings_s.Seconds("global_adjustment"), start_worst, (long long)r.points_in,
+        (long long)r.points_out, g.json.c_str(), g.worst, seconds_anchored, a.json.c_str(), a.worst,
+        seed + 1 < seeds ? "," : "");
     std::fflush(stdout);
   }
   std::printf("]\n");

@@ -61,8 +61,9 @@ inline double RmsMm(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   return std::sqrt(d.squaredNorm() / double(d.size()));
 }
 
-/// A surface of the generator through the pipeline's chain: tessellated, cut to its ROI + margin (as the
-/// sweeps are), registered to the reference, resampled. Returns the grid's shape vector. Thread-safe (the
+/// A surface of the generator through the pipeline's chain, by the library's own stages: tessellated, cut
+/// to its ROI + margin (CropToRoi, as the sweeps are), registered to the reference (RegisterSubject),
+/// resampled (ResampleSubject). Returns the grid's shape vector. Thread-safe (the
 /// pipeline runs the same calls on its subjects in parallel).
 inline Eigen::VectorXd ThroughChain(const datasets::ChestSurface& surface, const IcpTarget& reference,
                                     const LandmarkSet& reference_landmarks, const PipelineOptions& options) {
@@ -71,9 +72,10 @@ inline Eigen::VectorXd ThroughChain(const datasets::ChestSurface& surface, const
   s.landmarks = datasets::TrueLandmarks(surface);
   s.surface.vertices =
       CropToRoi(mesh.vertices, ComputeChestRoi(s.landmarks, options.roi), options.crop_margin_mm);
-  RegisterToReference(reference, reference_landmarks, options, &s);
-  return ResampleSurface(s.surface, s.landmarks, options.roi, options.resample, "generator surface")
-      .shape_vector;
+  s.name = "generator surface";
+  RegisterSubject(reference, reference_landmarks, options, &s);
+  ResampleSubject(options, &s);
+  return s.grid.shape_vector;
 }
 
 }  // namespace pectus::bench

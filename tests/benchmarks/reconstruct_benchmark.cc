@@ -64,14 +64,14 @@ int RunChild(const std::string& method, const std::string& in, const std::string
   const double c0 = CpuSeconds();
   if (method == "pectus" || method == "pectus_normals") {
     ReconstructOptions o;
-    o.spacing = spacing;
-    o.fill_holes = 30.0;
+    o.spacing_mm = spacing;
+    o.fill_holes_mm = 30.0;
     o.check = false;
     o.recompute_normals = method == "pectus_normals";
     ReconstructResult r = ReconstructSurface(cloud, o, in);
     j["seconds"] = Since(t0);
     j["surface_cpu_s"] = CpuSeconds() - c0;
-    for (const auto& [stage, s] : r.timings_s) j["stages"][stage] = s;
+    for (const auto& [stage, s] : r.timings_s.stages()) j["stages"][stage] = s;
     j["fitting_accuracy_mm"] = r.accuracy.fitting_accuracy_mm;
     j["scales_mm"] = {{"point_spacing", r.point_spacing_mm},
                       {"noise", r.noise_mm},
@@ -83,7 +83,7 @@ int RunChild(const std::string& method, const std::string& in, const std::string
                   {"self_intersecting", check.self_intersecting},
                   {"closed", check.closed},
                   {"components", check.components},
-                  {"seconds", check.seconds}};
+                  {"seconds", check.timings_s.Total()}};
   } else if (method == "pcl") {
     mesh = PclPoissonSurface(cloud, 8);
     j["seconds"] = Since(t0);

@@ -206,9 +206,9 @@ inline std::string LoadAverage() {
 inline nlohmann::json CrossCheckMarchingCubesRbf(int n) {
   const PointCloud cloud = testing_support::EllipsoidCloud(n);
   ReconstructOptions o;
-  o.spacing = 0.75;
+  o.spacing_mm = 0.75;
   o.smoothing = 0.0;
-  o.detail = 2.0;
+  o.detail_mm = 2.0;
   auto t0 = std::chrono::steady_clock::now();
   const ReconstructResult ours = ReconstructSurface(cloud, o, "ellipsoid");
   const double ours_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

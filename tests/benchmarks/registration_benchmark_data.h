@@ -125,7 +125,7 @@ ScanPair MakeScanPair(std::uint64_t seed) {
 void MoveFrame(const Rigid3& T_true, ScanPair* p) {
   p->T_true = T_true;
   TransformInPlace(Similarity3::FromRigid(T_true.inverse()), &p->moving);
-  for (Landmark& l : p->moving_landmarks.items) l.position = T_true.inverse() * l.position;
+  p->moving_landmarks = p->moving_landmarks.Transformed(Similarity3::FromRigid(T_true.inverse()));
 }
 
 LandmarkSet Noisy(LandmarkSet set, double sd_mm, std::mt19937_64* rng) {

@@ -36,8 +36,8 @@ json Speed(int repeat, bool peers) {
                  {"target_points", p.fixed.size()},
                  {"source_points", p.moving.size()},
                  {"start_error", ErrorJson(ErrorOf(start, p))},
-                 {"normals_seconds_target", nt.seconds},
-                 {"normals_seconds_source", ns.seconds},
+                 {"normals_seconds_target", nt.timings_s.Total()},
+                 {"normals_seconds_source", ns.timings_s.Total()},
                  {"normals",
                   "precomputed once with pectus EstimateNormals (k = 12) and given to every method; "
                   "not in any time below"}};

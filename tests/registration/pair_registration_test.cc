@@ -47,6 +47,48 @@ TEST(RegisterPair, LandmarksThenIcpBothDirections) {
   EXPECT_LT(eb.translation_mm, 0.1);
 }
 
+// Acceptance is decided in RegisterPair, each check under its own name. The moving scan's landmarks are
+// all placed 6 mm off (one translation), so the landmark fit absorbs the offset exactly (RMS 0) and
+// lands 6 mm from the truth; ICP on the surfaces recovers the truth, which leaves the landmarks 6 mm RMS
+// from the fixed ones: an increase of 6 mm over the landmark fit. A 3 mm limit rejects the fine step (with
+// fall_back_to_landmarks the landmark pose is kept), a 9 mm limit keeps it.
+TEST(RegisterPair, LandmarkRmsIncreaseDecidesAndFallsBackToTheLandmarkPose) {
+  const PointCloud fixed = testing::SampleChest(30000, 51, 0.1, -1.3, 0.9);
+  std::mt19937_64 rng(52);
+  const Similarity3 truth = Similarity3::FromRigid(testing::RandomPose(&rng, 20.0, 100.0));
+  const PointCloud moving = testing::Transformed(testing::SampleChest(30000, 53, 0.1, -0.9, 1.3),
+                                                 truth.Inverse().RigidPart());
+  const LandmarkSet fixed_lm = testing::ChestLandmarks({}, 0.0, 0);
+  Similarity3 offset;
+  offset.translation = Eigen::Vector3d(0.0, 0.0, 6.0);  // along the chest's axis, 6 mm
+  const LandmarkSet moving_lm = testing::ChestLandmarks(truth.Inverse(), 0.0, 0).Transformed(offset);
+  const Eigen::Vector3d c = moving.positions.colwise().mean().transpose();
+
+  PairRegistrationOptions o;
+  o.max_landmark_rms_mm = 0.0;  // off: only the increase is checked
+  o.max_landmark_rms_increase_mm = 9.0;
+  const PairRegistrationResult kept = RegisterPair(fixed, moving, &fixed_lm, &moving_lm, {}, o);
+  ASSERT_TRUE(kept.success) << kept.message;
+  EXPECT_TRUE(kept.refined);
+  EXPECT_NEAR(kept.landmarks->rms_mm, 0.0, 1e-6);       // the offset is a rigid motion: fitted exactly
+  EXPECT_NEAR(kept.landmark_rms_mm, 6.0, 0.1);          // ICP at the truth (to 0.1 mm, as above)
+  EXPECT_LT(ComparePoses(kept.T_target_source, truth, c).translation_mm, 0.1);
+
+  o.max_landmark_rms_increase_mm = 3.0;
+  const PairRegistrationResult rejected = RegisterPair(fixed, moving, &fixed_lm, &moving_lm, {}, o);
+  EXPECT_FALSE(rejected.success);
+  EXPECT_THAT(rejected.message, HasSubstr("further from the fixed ones than the landmark fit"));
+
+  o.fall_back_to_landmarks = true;
+  const PairRegistrationResult fallback = RegisterPair(fixed, moving, &fixed_lm, &moving_lm, {}, o);
+  ASSERT_TRUE(fallback.success) << fallback.message;
+  EXPECT_FALSE(fallback.refined);
+  EXPECT_THAT(fallback.message, HasSubstr("the landmark pose is used"));
+  EXPECT_NEAR(fallback.landmark_rms_mm, 0.0, 1e-6);
+  // The landmark pose: 6 mm from the truth at the moving scan's centroid.
+  EXPECT_NEAR(ComparePoses(fallback.T_target_source, truth, c).translation_mm, 6.0, 1e-6);
+}
+
 // With scale: the moving scan is the chest enlarged 1.06 times. Exact landmarks give the scale (to
 // 1e-9); ICP refines the rigid part. Both directions.
 TEST(RegisterPair, SimilarityBothDirections) {

@@ -17,9 +17,9 @@ namespace {
 TEST(SurfacePeers, AgreesWithPclMarchingCubesRbfOnASmallCloud) {
   const PointCloud cloud = testing_support::EllipsoidCloud(900);
   ReconstructOptions o;
-  o.spacing = 0.75;
+  o.spacing_mm = 0.75;
   o.smoothing = 0.0;  // interpolate, as PCL does
-  o.detail = 2.0;     // centres at about the point spacing (2.5 mm), as PCL's one per point
+  o.detail_mm = 2.0;  // centres at about the point spacing (2.5 mm), as PCL's one per point
   const ReconstructResult ours = ReconstructSurface(cloud, o);
   ASSERT_TRUE(ours.check && ours.check->closed);
   const TriangleMesh pcl = PclMarchingCubesRbf(cloud, 64, 1.0);

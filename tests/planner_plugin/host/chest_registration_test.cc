@@ -18,12 +18,6 @@ LandmarkSet Midline() {
   return set;
 }
 
-LandmarkSet Moved(const LandmarkSet& set, const Similarity3& T) {
-  LandmarkSet out = set;
-  for (Landmark& l : out.items) l.position = T * l.position;
-  return out;
-}
-
 Similarity3 KnownTransform(double scale) {
   Similarity3 T;
   T.scale = scale;
@@ -42,14 +36,14 @@ TEST(ChestRegistration, RecoversAKnownSimilarityFromMidlineLandmarksAndTheAnteri
   for (double scale : {1.0, 1.15, 0.8}) {
     const Similarity3 T = KnownTransform(scale);
     const ChestRegistrationResult r =
-        RegisterChestByLandmarks(source, anterior, Moved(source, T), T.rotation * anterior);
+        RegisterChestByLandmarks(source, anterior, source.Transformed(T), T.rotation * anterior);
     EXPECT_NEAR(r.T_target_source.scale, scale, 1e-12);
     EXPECT_LT((r.T_target_source.rotation - T.rotation).norm(), 1e-12);
     EXPECT_LT((r.T_target_source.translation - T.translation).norm(), 1e-9);
     EXPECT_LT(r.landmark_rms_mm, 1e-9);
     EXPECT_EQ(r.used, (std::vector<std::string>{"sternal_notch", "manubrium_centre", "xiphoid"}));
     const ChestRegistrationResult back =
-        RegisterChestByLandmarks(Moved(source, T), T.rotation * anterior, source, anterior);
+        RegisterChestByLandmarks(source.Transformed(T), T.rotation * anterior, source, anterior);
     EXPECT_NEAR(back.T_target_source.scale, 1.0 / scale, 1e-12);
   }
 }
@@ -64,7 +58,7 @@ TEST(ChestRegistration, RigidKeepsTheScaleAndTheAnteriorNeedNotBeExact) {
   const Eigen::Vector3d sternal =
       (source.Position("xiphoid", "") - source.Position("sternal_notch", "")).normalized();
   const ChestRegistrationResult r =
-      RegisterChestByLandmarks(source, Eigen::Vector3d(0, -1, 0) + 0.5 * sternal, Moved(source, T),
+      RegisterChestByLandmarks(source, Eigen::Vector3d(0, -1, 0) + 0.5 * sternal, source.Transformed(T),
                                T.rotation * Eigen::Vector3d(0, -1, 0), rigid);
   EXPECT_EQ(r.T_target_source.scale, 1.0);
   EXPECT_LT((r.T_target_source.rotation - T.rotation).norm(), 1e-12);

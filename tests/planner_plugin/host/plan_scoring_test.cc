@@ -41,9 +41,8 @@ Predicted MakePredicted(const Similarity3& T_patient_average, double bump_mm) {
   }
   const AverageChest a = Average();
   p.landmarks = a.landmarks;
-  for (Eigen::Index i = 0; i < x.rows(); ++i)
-    x.row(i) = (T_patient_average * Eigen::Vector3d(x.row(i).transpose())).transpose();
-  for (Landmark& l : p.landmarks.items) l.position = T_patient_average * l.position;
+  x = T_patient_average.Apply(x);
+  p.landmarks = p.landmarks.Transformed(T_patient_average);
   return p;
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "shape/core/error.h"
+#include "shape/core/landmarks.h"
 
 namespace pectus {
 namespace {
@@ -23,6 +24,42 @@ TEST(Similarity3, InverseComposesToIdentity) {
   EXPECT_LT((I - Eigen::Matrix4d::Identity()).norm(), 1e-12);
   const Eigen::Vector3d x(4, 5, 6);
   EXPECT_LT((S.Inverse() * (S * x) - x).norm(), 1e-12);
+}
+
+TEST(Similarity3, ComposeMatchesTheMatrixProductAndAppliesRightFirst) {
+  const Similarity3 A = MakeSimilarity(1.3, {1, 0, 2}, 0.4, {5, 6, -7});
+  const Similarity3 B = MakeSimilarity(0.6, {0, 3, 1}, -1.1, {-2, 8, 1});
+  const Similarity3 AB = A * B;
+  // The same map as the product of the homogeneous matrices; 1e-12 is a few ulps of entries of size 10.
+  EXPECT_LT((AB.Matrix() - A.Matrix() * B.Matrix()).norm(), 1e-12);
+  const Eigen::Vector3d x(4, -5, 6);
+  EXPECT_LT((AB * x - A * (B * x)).norm(), 1e-12);
+  EXPECT_NEAR(AB.scale, 1.3 * 0.6, 1e-15);
+  EXPECT_TRUE(((AB * B.Inverse()) * B).Matrix().isApprox(AB.Matrix(), 1e-12));
+  EXPECT_LT(((A * A.Inverse()).Matrix() - Eigen::Matrix4d::Identity()).norm(), 1e-12);
+}
+
+TEST(Similarity3, ApplyMovesEveryRowAsThePointOperator) {
+  const Similarity3 S = MakeSimilarity(2.0, {1, 1, 0}, 0.3, {1, 2, 3});
+  Points3 x(3, 3);
+  x << 1, 0, 0, 0, 1, 0, 3, -4, 5;
+  const Points3 y = S.Apply(x);
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    EXPECT_LT((y.row(i).transpose() - S * Eigen::Vector3d(x.row(i).transpose())).norm(), 1e-12);
+}
+
+TEST(LandmarkSet, TransformedMovesEveryPositionAndKeepsLabels) {
+  LandmarkSet s;
+  s.items.push_back({"a", {1, 2, 3}, "first"});
+  s.items.push_back({"b", {-4, 0, 9}, ""});
+  const Similarity3 T = MakeSimilarity(1.5, {0, 0, 1}, M_PI / 2, {10, 0, 0});
+  const LandmarkSet t = s.Transformed(T);
+  ASSERT_EQ(t.size(), 2u);
+  EXPECT_EQ(t.items[0].label, "a");
+  EXPECT_EQ(t.items[0].description, "first");
+  // Known answer: a quarter turn about z takes (1, 2, 3) to (-2, 1, 3); times 1.5, plus (10, 0, 0).
+  EXPECT_LT((t.items[0].position - Eigen::Vector3d(7, 1.5, 4.5)).norm(), 1e-12);
+  EXPECT_LT((t.items[1].position - T * Eigen::Vector3d(-4, 0, 9)).norm(), 1e-12);
 }
 
 TEST(Similarity3, FromMatrixRecoversScaleRotationTranslation) {

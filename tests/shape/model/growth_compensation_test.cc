@@ -17,11 +17,6 @@ LandmarkSet Pre() {
   return s;
 }
 
-LandmarkSet Apply(const Similarity3& T, LandmarkSet s) {
-  for (Landmark& l : s.items) l.position = T * l.position;
-  return s;
-}
-
 Similarity3 Growth() {
   Similarity3 T;
   T.scale = 1.08;
@@ -31,7 +26,7 @@ Similarity3 Growth() {
 }
 
 TEST(GrowthCompensation, EstimatesAKnownScaleFromLandmarks) {
-  const GrowthCompensationResult r = CompensateGrowth(Pre(), Apply(Growth(), Pre()));
+  const GrowthCompensationResult r = CompensateGrowth(Pre(), Pre().Transformed(Growth()));
   EXPECT_TRUE(r.estimated);
   EXPECT_NEAR(r.scale, 1.08, 1e-10);
   EXPECT_TRUE(r.T_post_pre.rotation.isApprox(Growth().rotation, 1e-10));
@@ -43,7 +38,7 @@ TEST(GrowthCompensation, EstimatesAKnownScaleFromLandmarks) {
 TEST(GrowthCompensation, KeepsAGivenScaleAndFitsThePose) {
   GrowthCompensationOptions o;
   o.scale = 1.08;
-  const GrowthCompensationResult r = CompensateGrowth(Pre(), Apply(Growth(), Pre()), o);
+  const GrowthCompensationResult r = CompensateGrowth(Pre(), Pre().Transformed(Growth()), o);
   EXPECT_FALSE(r.estimated);
   EXPECT_DOUBLE_EQ(r.scale, 1.08);
   const Eigen::Vector3d x(10, 50, 2);

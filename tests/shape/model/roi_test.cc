@@ -36,6 +36,24 @@ TEST(ChestRoi, AxesFollowTheLandmarksAndTheNormalIsAnterior) {
   EXPECT_NEAR(roi.u_min, -c(0, 0), 1e-9);
 }
 
+TEST(ChestRoi, TransformedIsTheRoiOfTheMovedLandmarks) {
+  Similarity3 T;
+  T.scale = 1.2;
+  T.rotation = Eigen::AngleAxisd(0.6, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
+  T.translation = Eigen::Vector3d(30, -4, 12);
+  // The ROI is defined by the landmarks alone, so moving it must give the ROI of the moved landmarks.
+  const ChestRoi moved = ComputeChestRoi(LpsLandmarks()).Transformed(T);
+  const ChestRoi of_moved = ComputeChestRoi(LpsLandmarks().Transformed(T));
+  EXPECT_LT((moved.origin - of_moved.origin).norm(), 1e-9);
+  EXPECT_LT((moved.lateral - of_moved.lateral).norm(), 1e-12);
+  EXPECT_LT((moved.sternal - of_moved.sternal).norm(), 1e-12);
+  EXPECT_LT((moved.normal - of_moved.normal).norm(), 1e-12);
+  EXPECT_NEAR(moved.u_min, of_moved.u_min, 1e-9);
+  EXPECT_NEAR(moved.u_max, of_moved.u_max, 1e-9);
+  EXPECT_NEAR(moved.v_min, of_moved.v_min, 1e-9);
+  EXPECT_NEAR(moved.v_max, of_moved.v_max, 1e-9);
+}
+
 TEST(ChestRoi, RoundTripOfRoiCoordinates) {
   const ChestRoi roi = ComputeChestRoi(LpsLandmarks());
   Points3 p(3, 3);

@@ -50,8 +50,7 @@ TEST(PipelineReport, ShowsEveryFigureEveryNumberAndTheFailure) {
   Eigen::MatrixXd shapes(3, 3 * g.num_vertices());
   for (int k = 0; k < 3; ++k) shapes.row(k) = r.subjects[k].grid.shape_vector.transpose();
   r.model = BuildShapeModel(shapes);
-  r.model.faces = plane.faces;
-  r.has_model = true;
+  r.model->faces = plane.faces;
   r.succeeded = 3;
   r.reference = "s0";
   r.message = "3 of 4 subjects made it to the model";

@@ -23,7 +23,7 @@ ScalarField SphereField(const Eigen::Vector3d& c, double r, double cut_x = INFIN
 TEST(MarchingCubes, SphereIsAClosedOutwardManifoldOnTheSphere) {
   const Eigen::Vector3d c(3.3, -1.7, 0.4);
   MarchingCubesOptions o;
-  o.spacing = 0.5;
+  o.spacing_mm = 0.5;
   Points3 seed(1, 3);
   seed << c.x() + 10.0, c.y(), c.z();  // one seed on the surface suffices: the surface is followed
   const MarchingCubesResult r = ExtractIsosurface(SphereField(c, 10.0), seed, o);
@@ -48,7 +48,7 @@ TEST(MarchingCubes, SphereIsAClosedOutwardManifoldOnTheSphere) {
 
 TEST(MarchingCubes, SurfaceStopsWhereTheFieldIsUndefined) {
   MarchingCubesOptions o;
-  o.spacing = 0.5;
+  o.spacing_mm = 0.5;
   Points3 seed(1, 3);
   seed << -10.0, 0.0, 0.0;
   const MarchingCubesResult r = ExtractIsosurface(SphereField(Eigen::Vector3d::Zero(), 10.0, 2.0), seed, o);
@@ -61,7 +61,7 @@ TEST(MarchingCubes, SurfaceStopsWhereTheFieldIsUndefined) {
 
 TEST(MarchingCubes, LimitIsReportedNotExceeded) {
   MarchingCubesOptions o;
-  o.spacing = 0.5;
+  o.spacing_mm = 0.5;
   o.max_cubes = 100;
   Points3 seed(1, 3);
   seed << 9.9, 0.2, 0.3;

@@ -33,9 +33,9 @@ TEST(RbfImplicit, IsTheSignedDistanceNearTheSurface) {
   Points3 p, n;
   Sphere(c, 30.0, 12000, 0.0, &p, &n);
   RbfImplicitOptions o;
-  o.cell_size = 4.0;
-  o.centre_spacing = 2.0;
-  o.off_surface_distance = 1.0;
+  o.cell_size_mm = 4.0;
+  o.centre_spacing_mm = 2.0;
+  o.off_surface_distance_mm = 1.0;
   RbfImplicit s(p, n, o);
   std::mt19937_64 rng(3);
   std::normal_distribution<double> g(0.0, 1.0);
@@ -64,9 +64,9 @@ TEST(RbfImplicit, FillsAHoleWithTheSphereAndEndsFarFromData) {
   Points3 p, n;
   Sphere(c, 40.0, 15000, 20.0, &p, &n);  // a hole about 27 mm across at the top
   RbfImplicitOptions o;
-  o.cell_size = 4.0;
-  o.centre_spacing = 2.0;
-  o.max_fill_distance = 20.0;
+  o.cell_size_mm = 4.0;
+  o.centre_spacing_mm = 2.0;
+  o.max_fill_distance_mm = 20.0;
   RbfImplicit s(p, n, o);
   Points3 q(3, 3);
   q << 0, 0, 40.0,      // the middle of the hole, on the sphere
@@ -84,7 +84,7 @@ TEST(RbfImplicit, RejectsBadOptionsAndSizes) {
   Points3 p, n;
   Sphere(Eigen::Vector3d::Zero(), 10.0, 200, 0.0, &p, &n);
   RbfImplicitOptions o;
-  o.cell_size = -1.0;
+  o.cell_size_mm = -1.0;
   std::string why;
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_FALSE(why.empty());

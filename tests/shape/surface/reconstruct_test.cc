@@ -50,8 +50,8 @@ PointCloud HillPatch(double step, double noise_mm, double hole_mm) {
 
 ReconstructOptions Options(double spacing, double fill) {
   ReconstructOptions o;
-  o.spacing = spacing;
-  o.fill_holes = fill;
+  o.spacing_mm = spacing;
+  o.fill_holes_mm = fill;
   return o;
 }
 

@@ -46,8 +46,8 @@ TrimResult TrimGrid(double hole, TriangleMesh* mesh) {
   const KdTree3 tree(data);
   *mesh = Grid();
   TrimOptions o;
-  o.margin = 2.0;
-  o.max_hole_size = 20.0;
+  o.margin_mm = 2.0;
+  o.max_hole_size_mm = 20.0;
   return TrimToData(tree, mesh, o);
 }
 

@@ -1,4 +1,4 @@
-#include "shape/surface/cloud_scales.h"
+#include "shape/surface/internal/cloud_scales.h"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "registration/kdtree.h"
-#include "shape/surface/sparse_grid.h"
+#include "shape/surface/internal/sparse_grid.h"
 
 namespace pectus {
 namespace {

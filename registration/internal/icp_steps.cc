@@ -1,6 +1,6 @@
-// pectus: the steps of one ICP iteration (registration/icp_steps.h). The method and its equations:
+// pectus: the steps of one ICP iteration (registration/internal/icp_steps.h). The method and its equations:
 // docs/registration.md.
-#include "registration/icp_steps.h"
+#include "registration/internal/icp_steps.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>

@@ -1,0 +1,28 @@
+// pectus: every file of a pipeline run, written in one place (as WriteNussPlan does for the planner): the
+// model, its tables, each subject's meshes and landmarks, and the HTML report with its figures.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "shape/pipeline/cohort_pipeline.h"
+#include "shape/pipeline/pipeline_report.h"
+
+namespace pectus {
+
+/// Writes the pipeline's files into `folder`. With a model: model.h5 (statismo; `model_info` goes into its
+/// /pectus info), mean.ply, scores.csv (one row per subject of the model: its name, then its score on
+/// each mode, mm), eigen.csv (mode, eigenvalue_mm2, explained, cumulative); with quality curves:
+/// quality.csv. Per subject under subjects/NAME/: surface.ply (the registered surface, if kept and made),
+/// and for a subject that made it grid.ply, landmarks.mrk.json and distance_to_mean.ply (coloured, scalar
+/// distance_mm). Then report.html and its figures (MakePipelineReport). Each file goes through
+/// `stage(target)`, which returns the path to write it to (a transaction's staging). Returns the target
+/// paths written. Throws Error(kFailure) naming a file that cannot be written.
+std::vector<std::filesystem::path> WritePipelineOutputs(
+    const PipelineResult& result, const PipelineReportOptions& report, const nlohmann::json& model_info,
+    const std::filesystem::path& folder,
+    const std::function<std::filesystem::path(const std::filesystem::path&)>& stage);
+
+}  // namespace pectus
