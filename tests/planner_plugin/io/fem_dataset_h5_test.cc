@@ -14,10 +14,12 @@
 
 #include "planner_plugin/plugin/fem_dataset_run.h"
 #include "shape/core/error.h"
+#include "tests/support/bad_input.h"
 
 namespace pectus::planner {
 namespace {
 namespace fs = std::filesystem;
+using testing_support::BadInputMessage;
 
 std::vector<hsize_t> Dims(hid_t file, const char* name) {
   const hid_t set = H5Dopen2(file, name, H5P_DEFAULT);
@@ -105,23 +107,6 @@ TEST(FemDataset, EveryPatientTimesTwentyFourLoadCasesReadsBack) {
   EXPECT_EQ(p57.displacements_mm[23](5, 1), static_cast<double>(u[23 * n * 3 + 5 * 3 + 1]));
   EXPECT_EQ(p57.sternum_lift_mm[23], lift[23]);
   fs::remove_all(dir);
-}
-
-// The message of the Error(kBadInput) `read` throws (fails the test for any other outcome).
-template <class F>
-std::string BadInputMessage(F&& read, const std::string& file) {
-  try {
-    read();
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::kBadInput) << e.what();
-    EXPECT_EQ(e.file(), file) << e.what();
-    return e.what();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "not pectus::Error: " << e.what();
-    return {};
-  }
-  ADD_FAILURE() << "no error";
-  return {};
 }
 
 TEST(FemDataset, MalformedFilesAreBadInputNamingTheDataset) {

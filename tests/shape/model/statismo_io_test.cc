@@ -13,10 +13,12 @@
 
 #include "shape/core/error.h"
 #include "shape/model/shape_grid.h"
+#include "tests/support/bad_input.h"
 
 namespace pectus {
 namespace {
 namespace fs = std::filesystem;
+using testing_support::BadInputMessage;
 
 // A model over a 4 x 3 grid mesh (12 vertices, 12 triangles) from 5 random shapes.
 ShapeModel SmallModel() {
@@ -169,23 +171,6 @@ void ReplaceDataset(const fs::path& file, const char* path, hsize_t size, bool w
   H5Dclose(set);
   H5Sclose(space);
   H5Fclose(f);
-}
-
-// The message of the Error(kBadInput) `read` throws (fails the test for any other outcome).
-template <class F>
-std::string BadInputMessage(F&& read, const std::string& file) {
-  try {
-    read();
-  } catch (const Error& e) {
-    EXPECT_EQ(e.kind(), ErrorKind::kBadInput) << e.what();
-    EXPECT_EQ(e.file(), file) << e.what();
-    return e.what();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "not pectus::Error: " << e.what();
-    return {};
-  }
-  ADD_FAILURE() << "no error";
-  return {};
 }
 
 TEST_F(StatismoIo, EmptyScalarsAndUnstoredDatasetsAreBadInput) {
