@@ -62,7 +62,7 @@ Similarity3 ParseTransformJson(const std::string& text, const std::string& name)
                   "no \"T_target_source\" in the file (expected a JSON object holding a 4 by 4 matrix)");
   }
   const Eigen::Matrix4d M = MatrixFromJson(root["T_target_source"], name);
-  const Similarity3 T = Similarity3::FromMatrix(M, name);
+  Similarity3 T = Similarity3::FromMatrix(M, name);
   if (root.contains("scale")) {
     // A stated scale must agree with the matrix (a scale stated but not applied is a common mistake).
     const double stated = Number(root["scale"], name, "\"scale\"");
@@ -70,6 +70,13 @@ Similarity3 ParseTransformJson(const std::string& text, const std::string& name)
       ThrowBadInput(name, "\"scale\" is " + std::to_string(stated) +
                               " but the matrix's 3 by 3 block has scale " + std::to_string(T.scale) +
                               " (cube root of its determinant)");
+    }
+    // Where the two differ only by the rounding of the cube root (a few ulps), the stated scale is the
+    // exact one: a rigid transform written with "scale": 1 reads back with scale 1, whichever compiler
+    // rounded its determinant. Otherwise the matrix wins.
+    if (std::abs(stated - T.scale) <= 1e-12 * std::abs(stated)) {
+      T.rotation = M.topLeftCorner<3, 3>() / stated;
+      T.scale = stated;
     }
   }
   return T;

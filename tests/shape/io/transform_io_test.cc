@@ -58,6 +58,19 @@ TEST(TransformIo, SixteenNumbersRowMajor) {
       R"({"T_target_source": [[2, 0, 0, 0], [0, 2, 0, 0], [0, 0, 2, 0], [0, 0, 0, 1]], "scale": 2.0000000001})",
       "scaled.json");
   EXPECT_DOUBLE_EQ(S.scale, 2.0);
+  // A rigid transform whose determinant rounds off 1 by an ulp reads back with the stated scale 1 exactly.
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  for (int k = 1; k < 1000 && std::cbrt(R.determinant()) == 1.0; ++k) {
+    R = Eigen::AngleAxisd(0.001 * k, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  }
+  ASSERT_NE(std::cbrt(R.determinant()), 1.0) << "no rotation found whose determinant rounds off 1";
+  nlohmann::json j;
+  j["T_target_source"] = {{R(0, 0), R(0, 1), R(0, 2), 5},
+                          {R(1, 0), R(1, 1), R(1, 2), 6},
+                          {R(2, 0), R(2, 1), R(2, 2), 7},
+                          {0, 0, 0, 1}};
+  j["scale"] = 1.0;
+  EXPECT_EQ(ParseTransformJson(j.dump(), "rigid.json").scale, 1.0);
 }
 
 TEST(TransformIo, MalformedInputIsAnErrorNamingTheFile) {
