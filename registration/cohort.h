@@ -43,7 +43,7 @@ struct CohortOptions {
     return o;
   }();
   int max_groupwise_iterations = 20;     ///< kGroupwise: rounds of mean update and realignment
-  double groupwise_tolerance_mm = 0.005;  ///< kGroupwise: stop when no scan moves more than this (mm, RMS)
+  double groupwise_tolerance_mm = 0.05;  ///< kGroupwise: stop when no scan moves more than this (mm, RMS)
   int mean_points = 20000;               ///< kGroupwise: points of the mean surface
   double mean_max_distance_mm = 5.0;     ///< kGroupwise: a scan contributes to a mean point within this (mm)
 
