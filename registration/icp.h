@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "registration/estimate_normals.h"
 #include "registration/kdtree.h"
-#include "registration/normals.h"
 #include "registration/robust_loss.h"
 #include "shape/core/geometry.h"
 #include "shape/core/timings.h"

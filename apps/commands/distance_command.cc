@@ -8,10 +8,10 @@
 #include "shape/core/log.h"
 #include "shape/io/landmark_io.h"
 #include "shape/io/mesh_io.h"
-#include "shape/model/chest_measures.h"
+#include "shape/model/compute_chest_roi.h"
 #include "shape/model/distance_map.h"
 #include "shape/model/growth_compensation.h"
-#include "shape/model/roi.h"
+#include "shape/model/measure_chest.h"
 #ifdef PECTUS_HAVE_RENDER
 #include "shape/model/model_figures.h"
 #endif

@@ -10,7 +10,7 @@
 #include "shape/core/log.h"
 #include "shape/io/mesh_io.h"
 #include "shape/io/stanford_conf.h"
-#include "shape/surface/sweep_merge.h"
+#include "shape/surface/merge_sweeps.h"
 
 namespace pectus::cli {
 namespace {

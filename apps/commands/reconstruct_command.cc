@@ -6,7 +6,7 @@
 #include "shape/core/error.h"
 #include "shape/core/log.h"
 #include "shape/io/mesh_io.h"
-#include "shape/surface/reconstruct.h"
+#include "shape/surface/reconstruct_surface.h"
 
 namespace pectus::cli {
 namespace {

@@ -6,8 +6,8 @@
 
 #include "apps/command.h"
 #include "apps/commands/register_io.h"
-#include "registration/cohort.h"
-#include "registration/pair_registration.h"
+#include "registration/align_cohort.h"
+#include "registration/register_pair.h"
 #include "shape/core/error.h"
 #include "shape/core/log.h"
 #include "shape/core/number_format.h"

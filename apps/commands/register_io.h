@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "registration/cohort.h"
-#include "registration/pair_registration.h"
+#include "registration/align_cohort.h"
+#include "registration/register_pair.h"
 #include "shape/io/landmark_io.h"
 #include "shape/io/mesh_io.h"
 

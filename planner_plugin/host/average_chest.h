@@ -24,7 +24,8 @@ struct AverageChest {
 bool DetectGrid(const TriangleMesh& mesh, int* columns, int* rows);
 
 /// Landmarks of a resampled grid with the default region of interest (no margins): the sternal notch
-/// at the middle of the first row, the xiphoid at the middle of the last (ChestRoi, shape/model/roi.h).
+/// at the middle of the first row, the xiphoid at the middle of the last (ChestRoi,
+/// shape/model/compute_chest_roi.h).
 LandmarkSet GridLandmarks(const TriangleMesh& mesh, int columns, int rows);
 
 /// Reads the average chest from a statismo model file. Landmarks, in order of preference: the file

@@ -23,7 +23,7 @@
 #include <string_view>
 #include <vector>
 
-#include "planner_plugin/ribcage/generic_ribcage.h"
+#include "planner_plugin/ribcage/build_generic_ribcage.h"
 #include "planner_plugin/ribcage/ribcage_fem.h"
 #include "shape/core/atomic_file.h"
 #include "shape/core/geometry.h"

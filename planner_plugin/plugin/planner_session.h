@@ -9,10 +9,10 @@
 #include <vector>
 
 #include "planner_plugin/api/planner_api.h"
-#include "planner_plugin/ribcage/generic_ribcage.h"
+#include "planner_plugin/ribcage/build_generic_ribcage.h"
+#include "planner_plugin/ribcage/build_skin_surface.h"
 #include "planner_plugin/ribcage/patient_ribcage.h"
 #include "planner_plugin/ribcage/ribcage_fem.h"
-#include "planner_plugin/ribcage/skin_surface.h"
 #include "shape/core/geometry.h"
 #include "shape/core/timings.h"
 

@@ -7,8 +7,8 @@
 #include <string>
 
 #include "planner_plugin/api/planner_api.h"
-#include "planner_plugin/plugin/fem_dataset_run.h"
 #include "planner_plugin/plugin/planner_session.h"
+#include "planner_plugin/plugin/run_fem_dataset.h"
 #include "shape/core/error.h"
 #include "shape/io/patient_table_io.h"
 

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "planner_plugin/fem/tet_mesh.h"
-#include "planner_plugin/ribcage/generic_ribcage.h"
+#include "planner_plugin/ribcage/build_generic_ribcage.h"
 #include "planner_plugin/ribcage/ribcage_measurements.h"
 #include "planner_plugin/ribcage/sternum_skinning.h"
 #include "shape/core/landmarks.h"

@@ -2,20 +2,21 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 
 namespace pectus {
 namespace {
 
 std::mutex g_mutex;
-std::vector<std::string> g_warnings;
+std::vector<WarningCollector*> g_collectors;  // guarded by g_mutex
 std::atomic<bool> g_quiet{false};
 
 }  // namespace
 
 void Warn(const std::string& message) {
   std::lock_guard<std::mutex> lock(g_mutex);
-  g_warnings.push_back(message);
+  for (WarningCollector* c : g_collectors) c->warnings_.push_back(message);
   if (!g_quiet) std::fprintf(stderr, "pectus: warning: %s\n", message.c_str());
 }
 
@@ -23,9 +24,19 @@ void Info(const std::string& message) {
   if (!g_quiet) std::fprintf(stderr, "pectus: %s\n", message.c_str());
 }
 
-std::vector<std::string> Warnings() {
+WarningCollector::WarningCollector() {
   std::lock_guard<std::mutex> lock(g_mutex);
-  return g_warnings;
+  g_collectors.push_back(this);
+}
+
+WarningCollector::~WarningCollector() {
+  std::lock_guard<std::mutex> lock(g_mutex);
+  g_collectors.erase(std::find(g_collectors.begin(), g_collectors.end(), this));
+}
+
+std::vector<std::string> WarningCollector::warnings() const {
+  std::lock_guard<std::mutex> lock(g_mutex);
+  return warnings_;
 }
 
 void SetQuiet(bool quiet) { g_quiet = quiet; }

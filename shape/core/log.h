@@ -10,13 +10,28 @@
 
 namespace pectus {
 
-/// Prints "pectus: warning: MESSAGE" to stderr (unless quiet) and keeps it for the report.
+/// Prints "pectus: warning: MESSAGE" to stderr (unless quiet) and hands it to every live WarningCollector.
 void Warn(const std::string& message);
 /// Prints "pectus: MESSAGE" to stderr unless quiet.
 void Info(const std::string& message);
-/// Every warning given so far in this process.
-std::vector<std::string> Warnings();
-/// Silences Info and Warn output (warnings are still kept for the report).
+/// Collects every warning given (on any thread) while it lives: one command's report, one request, one
+/// test. Nothing is kept once the last collector is gone, so a long-lived process (a server, a fuzzer)
+/// does not accumulate them.
+class WarningCollector {
+ public:
+  WarningCollector();
+  ~WarningCollector();
+  WarningCollector(const WarningCollector&) = delete;
+  WarningCollector& operator=(const WarningCollector&) = delete;
+  /// The warnings given since construction, in order.
+  std::vector<std::string> warnings() const;
+
+ private:
+  friend void Warn(const std::string& message);
+  std::vector<std::string> warnings_;  // guarded by the log's mutex
+};
+
+/// Silences Info and Warn output (warnings still reach the collectors).
 void SetQuiet(bool quiet);
 bool IsQuiet();
 

@@ -28,8 +28,9 @@ void Report::AddTimes(const Timings& timings) {
 }
 
 void Report::Write(const std::filesystem::path& path) {
-  json_["timings_s"]["total"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  json_["warnings"] = Warnings();
+  json_["timings_s"]["total"] =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  json_["warnings"] = warnings_.warnings();
   WriteFileAtomically(path, json_.dump(2) + "\n");
 }
 

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "shape/core/log.h"
 #include "shape/core/timings.h"
 
 namespace pectus {
@@ -40,12 +41,14 @@ class Report {
   nlohmann::json& json() { return json_; }
   const nlohmann::json& json() const { return json_; }
   nlohmann::json& operator[](const std::string& key) { return json_[key]; }
-  /// Writes the report atomically, pretty-printed, with total wall time and warnings.
+  /// Writes the report atomically, pretty-printed, with total wall time and the warnings given since it
+  /// was made.
   void Write(const std::filesystem::path& path);
 
  private:
   nlohmann::json json_;
   std::chrono::steady_clock::time_point start_;
+  WarningCollector warnings_;  // the warnings given while this report lives
 };
 
 }  // namespace pectus

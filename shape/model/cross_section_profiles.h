@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "shape/core/geometry.h"
+#include "shape/model/compute_chest_roi.h"
 #include "shape/model/profile_fit.h"
-#include "shape/model/roi.h"
 #include "shape/model/shape_grid.h"
 
 namespace pectus {

@@ -10,9 +10,9 @@
 #include "shape/core/geometry.h"
 #include "shape/core/landmarks.h"
 #include "shape/core/timings.h"
+#include "shape/model/compute_chest_roi.h"
 #include "shape/model/grid_inpainting.h"
 #include "shape/model/profile_fit.h"
-#include "shape/model/roi.h"
 #include "shape/model/shape_grid.h"
 
 namespace pectus {

@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "shape/core/geometry.h"
+#include "shape/model/compute_chest_roi.h"
 #include "shape/model/cross_section_resampler.h"
-#include "shape/model/roi.h"
 
 namespace pectus {
 

@@ -5,7 +5,7 @@
 #include <string>
 
 #include "shape/core/geometry.h"
-#include "shape/model/roi.h"
+#include "shape/model/compute_chest_roi.h"
 
 namespace pectus {
 

@@ -10,18 +10,18 @@
 #include <string>
 #include <vector>
 
-#include "registration/pair_registration.h"
+#include "registration/register_pair.h"
 #include "shape/core/geometry.h"
 #include "shape/core/landmarks.h"
 #include "shape/core/timings.h"
-#include "shape/model/chest_measures.h"
+#include "shape/model/compute_chest_roi.h"
 #include "shape/model/cross_section_resampler.h"
 #include "shape/model/distance_map.h"
+#include "shape/model/measure_chest.h"
 #include "shape/model/model_quality.h"
-#include "shape/model/roi.h"
 #include "shape/model/shape_model.h"
-#include "shape/surface/reconstruct.h"
-#include "shape/surface/sweep_merge.h"
+#include "shape/surface/merge_sweeps.h"
+#include "shape/surface/reconstruct_surface.h"
 
 namespace pectus {
 
@@ -59,7 +59,7 @@ struct PipelineOptions {
   ReconstructOptions reconstruct = [] {
     ReconstructOptions o;
     o.spacing_mm = 1.0;  // isosurface step (mm), as fine as the merged cloud
-    o.check = false;  // the CGAL manifold check costs as much as the rest; `pectus reconstruct` has it
+    o.check = false;     // the CGAL manifold check costs as much as the rest; `pectus reconstruct` has it
     return o;
   }();
   /// Landmarks then ICP, to the reference subject. Two chests differ by millimetres (a depression by

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "registration/normals.h"
+#include "registration/estimate_normals.h"
 #include "shape/core/error.h"
 
 namespace pectus {

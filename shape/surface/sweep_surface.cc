@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "registration/normals.h"
+#include "registration/estimate_normals.h"
 #include "registration/voxel_downsample.h"
 #include "shape/core/error.h"
 

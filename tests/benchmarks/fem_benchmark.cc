@@ -27,7 +27,7 @@
 
 #include "planner_plugin/fem/calculix_io.h"
 #include "planner_plugin/io/fem_dataset_h5.h"
-#include "planner_plugin/ribcage/generic_ribcage.h"
+#include "planner_plugin/ribcage/build_generic_ribcage.h"
 #include "planner_plugin/ribcage/patient_ribcage.h"
 #include "planner_plugin/ribcage/ribcage_fem.h"
 #include "shape/core/error.h"

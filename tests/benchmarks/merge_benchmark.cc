@@ -26,7 +26,7 @@
 
 #include "shape/io/mesh_io.h"
 #include "shape/io/stanford_conf.h"
-#include "shape/surface/sweep_merge.h"
+#include "shape/surface/merge_sweeps.h"
 #include "tests/support/bunny_data.h"
 
 using namespace pectus;

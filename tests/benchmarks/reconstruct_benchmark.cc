@@ -34,8 +34,8 @@
 
 #include "shape/core/error.h"
 #include "shape/io/mesh_io.h"
-#include "shape/surface/mesh_check_cgal.h"
-#include "shape/surface/reconstruct.h"
+#include "shape/surface/check_mesh.h"
+#include "shape/surface/reconstruct_surface.h"
 #include "tests/benchmarks/peers/surface_peers.h"
 #include "tests/benchmarks/reconstruct_benchmark_data.h"
 

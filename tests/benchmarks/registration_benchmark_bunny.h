@@ -10,9 +10,9 @@
 #include <Eigen/Eigenvalues>
 #include <map>
 
+#include "registration/estimate_normals.h"
 #include "registration/icp.h"
-#include "registration/normals.h"
-#include "registration/pair_registration.h"
+#include "registration/register_pair.h"
 #include "shape/core/error.h"
 #include "shape/io/mesh_io.h"
 #include "shape/io/stanford_conf.h"

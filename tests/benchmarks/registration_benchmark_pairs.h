@@ -6,7 +6,7 @@
 
 #include <iostream>
 
-#include "registration/pair_registration.h"
+#include "registration/register_pair.h"
 #include "tests/benchmarks/registration_benchmark_data.h"
 
 namespace pectus {

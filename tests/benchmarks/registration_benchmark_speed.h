@@ -9,8 +9,8 @@
 
 #include <utility>
 
+#include "registration/estimate_normals.h"
 #include "registration/icp.h"
-#include "registration/normals.h"
 #include "tests/benchmarks/registration_benchmark_peers.h"
 
 namespace pectus {

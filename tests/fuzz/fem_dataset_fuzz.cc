@@ -14,7 +14,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   using pectus::fuzz::Numbers;
   using pectus::fuzz::Slot;
   using pectus::fuzz::Text;
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   static const std::vector<Slot> kLayout = [] {
     std::vector<Slot> layout{
         Numbers("load_cases/position", {2}, {0.25, 0.5}),

@@ -23,7 +23,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   using pectus::fuzz::Numbers;
   using pectus::fuzz::Slot;
   using pectus::fuzz::Text;
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   static const std::vector<Slot> kLayout = [] {
     std::vector<double> basis(12 * 2, 0.0);  // orthonormal columns: unit vectors e0 and e1
     basis[0 * 2 + 0] = 1.0;

@@ -3,8 +3,8 @@
 #   cmake -DCHECK=cmake/PectusCheckLayers.cmake -DWORK=<scratch folder> -P planted_include_test.cmake
 file(REMOVE_RECURSE "${WORK}")
 file(WRITE "${WORK}/good/shape/core/geometry.h" "#pragma once\n#include <vector>\n")
-file(WRITE "${WORK}/good/shape/model/roi.h" "#pragma once\n#include \"shape/core/geometry.h\"\n")
-file(WRITE "${WORK}/good/planner_plugin/host/average_chest.h" "#include \"shape/model/roi.h\"\n")
+file(WRITE "${WORK}/good/shape/model/compute_chest_roi.h" "#pragma once\n#include \"shape/core/geometry.h\"\n")
+file(WRITE "${WORK}/good/planner_plugin/host/average_chest.h" "#include \"shape/model/compute_chest_roi.h\"\n")
 file(WRITE "${WORK}/good/registration/icp.cc" "#include \"registration/internal/icp_steps.h\"\n")
 execute_process(COMMAND ${CMAKE_COMMAND} -DROOT=${WORK}/good -P ${CHECK}
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
@@ -13,12 +13,12 @@ if(NOT rc EQUAL 0)
 endif()
 
 set(planted_cases
-    "shape/core/geometry.h|shape/model/roi.h|shape/core may not use shape/model"
-    "registration/icp.cc|shape/surface/sweep_merge.h|registration may not use shape/surface"
-    "shape/surface/reconstruct.cc|shape/model/roi.h|shape/surface may not use shape/model"
-    "planner_plugin/fem/assembly.cc|shape/model/roi.h|planner_plugin may not use shape/model"
+    "shape/core/geometry.h|shape/model/compute_chest_roi.h|shape/core may not use shape/model"
+    "registration/icp.cc|shape/surface/merge_sweeps.h|registration may not use shape/surface"
+    "shape/surface/reconstruct_surface.cc|shape/model/compute_chest_roi.h|shape/surface may not use shape/model"
+    "planner_plugin/fem/assembly.cc|shape/model/compute_chest_roi.h|planner_plugin may not use shape/model"
     "shape/pipeline/cohort_pipeline.cc|apps/command.h|shape/pipeline may not use apps"
-    "shape/surface/reconstruct.cc|registration/internal/icp_steps.h|an internal header of registration")
+    "shape/surface/reconstruct_surface.cc|registration/internal/icp_steps.h|an internal header of registration")
 foreach(case ${planted_cases})
   string(REPLACE "|" ";" parts "${case}")
   list(GET parts 0 file)

@@ -1,6 +1,6 @@
 // pectus planner: the anatomy of the generic (average) ribcage in figures: where each rib runs, the
 // sternum's width and thickness along its arc, and the shell the rib centre lines lie on. The builder
-// (generic_ribcage.cc) sweeps and meshes them.
+// (build_generic_ribcage.cc) sweeps and meshes them.
 #pragma once
 
 #include "planner_plugin/ribcage/chest_shell.h"

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "registration/kdtree.h"
-#include "shape/surface/reconstruct.h"
+#include "shape/surface/reconstruct_surface.h"
 #include "tests/shape/mesh_distance.h"
 #include "tests/support/synthetic_clouds.h"
 

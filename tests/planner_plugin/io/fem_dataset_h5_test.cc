@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "planner_plugin/plugin/fem_dataset_run.h"
+#include "planner_plugin/plugin/run_fem_dataset.h"
 #include "shape/core/error.h"
 #include "tests/support/bad_input.h"
 

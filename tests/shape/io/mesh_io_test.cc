@@ -107,9 +107,9 @@ TEST(MeshIo, InputUnitsScaleToMillimetresAndImplausibleSizesWarn) {
   const bool quiet = IsQuiet();
   SetQuiet(true);
 
-  const std::size_t warnings_before = Warnings().size();
+  const WarningCollector collector;
   const TriangleMesh mm = ReadMesh(path, ReadOptions{.input_units = LengthUnit::kMetre});
-  EXPECT_EQ(Warnings().size(), warnings_before);
+  EXPECT_TRUE(collector.warnings().empty());
   const Bounds3 b = ComputeBounds(mm.vertices.positions);
   EXPECT_NEAR(b.extent().x(), 200.0, 1e-3);
   EXPECT_NEAR(b.extent().z(), 200.0, 1e-3);
@@ -119,14 +119,14 @@ TEST(MeshIo, InputUnitsScaleToMillimetresAndImplausibleSizesWarn) {
 
   // Read as millimetres the object is 0.2 mm across: a warning names the file and the likely unit.
   const TriangleMesh as_mm = ReadMesh(path);
-  ASSERT_EQ(Warnings().size(), warnings_before + 1);
-  const std::string warning = Warnings().back();
+  ASSERT_EQ(collector.warnings().size(), 1u);
+  const std::string warning = collector.warnings()[0];
   EXPECT_NE(warning.find(path.string()), std::string::npos) << warning;
   EXPECT_NE(warning.find("--input-units m"), std::string::npos) << warning;
   EXPECT_LT((as_mm.vertices.positions - metres.vertices.positions).cwiseAbs().maxCoeff(), 1e-7);
 
   ReadMesh(path, ReadOptions{.input_units = LengthUnit::kMillimetre, .warn_units = false});
-  EXPECT_EQ(Warnings().size(), warnings_before + 1);
+  EXPECT_EQ(collector.warnings().size(), 1u);
   SetQuiet(quiet);
 }
 

@@ -7,7 +7,7 @@
 
 #include "shape/core/geometry.h"
 #include "shape/core/landmarks.h"
-#include "shape/model/roi.h"
+#include "shape/model/compute_chest_roi.h"
 
 namespace pectus::testing {
 

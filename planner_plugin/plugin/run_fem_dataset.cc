@@ -1,4 +1,4 @@
-#include "planner_plugin/plugin/fem_dataset_run.h"
+#include "planner_plugin/plugin/run_fem_dataset.h"
 
 #include <cstdio>
 #include <optional>

@@ -1,4 +1,4 @@
-#include "shape/surface/reconstruct.h"
+#include "shape/surface/reconstruct_surface.h"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -7,11 +7,11 @@
 #include <sstream>
 
 #include "registration/kdtree.h"
-#include "shape/core/number_format.h"
 #include "shape/core/error.h"
+#include "shape/core/number_format.h"
 #include "shape/core/per_vertex_normals.h"
+#include "shape/surface/extract_isosurface.h"
 #include "shape/surface/internal/cloud_scales.h"
-#include "shape/surface/marching_cubes.h"
 #include "shape/surface/rbf_levels.h"
 #include "shape/surface/surface_normals.h"
 
@@ -205,7 +205,8 @@ ReconstructResult ReconstructSurface(const PointCloud& cloud, const ReconstructO
   msg << result.mesh.num_vertices() << " vertices, " << result.mesh.num_faces() << " triangles from "
       << result.used_points << " points; " << result.trim.holes_filled << " holes filled"
       << (result.trim.boundary_edges == 0 ? ", watertight" : "") << "; on-surface residual RMS "
-      << FormatMm(result.accuracy.on_surface_rms_mm) << ", p95 " << FormatMm(result.accuracy.on_surface_p95_mm);
+      << FormatMm(result.accuracy.on_surface_rms_mm) << ", p95 "
+      << FormatMm(result.accuracy.on_surface_p95_mm);
   result.message = msg.str();
   return result;
 }

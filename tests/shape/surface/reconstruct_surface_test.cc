@@ -1,4 +1,4 @@
-#include "shape/surface/reconstruct.h"
+#include "shape/surface/reconstruct_surface.h"
 
 #include <gtest/gtest.h>
 

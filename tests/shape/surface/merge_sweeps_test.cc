@@ -1,4 +1,4 @@
-#include "shape/surface/sweep_merge.h"
+#include "shape/surface/merge_sweeps.h"
 
 #include <gtest/gtest.h>
 

@@ -1,5 +1,5 @@
 // ROI frame: axes from the landmarks, extents, margins, the anterior hint, errors.
-#include "shape/model/roi.h"
+#include "shape/model/compute_chest_roi.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "shape/surface/mesh_check_cgal.h"
+#include "shape/surface/check_mesh.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/connected_components.h>

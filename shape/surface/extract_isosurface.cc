@@ -1,4 +1,4 @@
-#include "shape/surface/marching_cubes.h"
+#include "shape/surface/extract_isosurface.h"
 
 #include <algorithm>
 #include <array>

@@ -1,4 +1,4 @@
-#include "shape/model/chest_measures.h"
+#include "shape/model/measure_chest.h"
 
 #include <algorithm>
 #include <cmath>

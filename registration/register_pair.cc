@@ -1,4 +1,4 @@
-#include "registration/pair_registration.h"
+#include "registration/register_pair.h"
 
 #include <cmath>
 #include <sstream>

@@ -1,4 +1,4 @@
-#include "registration/cohort.h"
+#include "registration/align_cohort.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-#include "registration/pair_registration.h"
+#include "registration/register_pair.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -56,8 +56,8 @@ TEST(RegisterPair, LandmarkRmsIncreaseDecidesAndFallsBackToTheLandmarkPose) {
   const PointCloud fixed = testing::SampleChest(30000, 51, 0.1, -1.3, 0.9);
   std::mt19937_64 rng(52);
   const Similarity3 truth = Similarity3::FromRigid(testing::RandomPose(&rng, 20.0, 100.0));
-  const PointCloud moving = testing::Transformed(testing::SampleChest(30000, 53, 0.1, -0.9, 1.3),
-                                                 truth.Inverse().RigidPart());
+  const PointCloud moving =
+      testing::Transformed(testing::SampleChest(30000, 53, 0.1, -0.9, 1.3), truth.Inverse().RigidPart());
   const LandmarkSet fixed_lm = testing::ChestLandmarks({}, 0.0, 0);
   Similarity3 offset;
   offset.translation = Eigen::Vector3d(0.0, 0.0, 6.0);  // along the chest's axis, 6 mm
@@ -70,8 +70,8 @@ TEST(RegisterPair, LandmarkRmsIncreaseDecidesAndFallsBackToTheLandmarkPose) {
   const PairRegistrationResult kept = RegisterPair(fixed, moving, &fixed_lm, &moving_lm, {}, o);
   ASSERT_TRUE(kept.success) << kept.message;
   EXPECT_TRUE(kept.refined);
-  EXPECT_NEAR(kept.landmarks->rms_mm, 0.0, 1e-6);       // the offset is a rigid motion: fitted exactly
-  EXPECT_NEAR(kept.landmark_rms_mm, 6.0, 0.1);          // ICP at the truth (to 0.1 mm, as above)
+  EXPECT_NEAR(kept.landmarks->rms_mm, 0.0, 1e-6);  // the offset is a rigid motion: fitted exactly
+  EXPECT_NEAR(kept.landmark_rms_mm, 6.0, 0.1);     // ICP at the truth (to 0.1 mm, as above)
   EXPECT_LT(ComparePoses(kept.T_target_source, truth, c).translation_mm, 0.1);
 
   o.max_landmark_rms_increase_mm = 3.0;
@@ -197,7 +197,11 @@ TEST_P(BunnyPairs, BackToPublishedPlacement) {
 
 INSTANTIATE_TEST_SUITE_P(Stanford, BunnyPairs,
                          ::testing::Values(std::pair{"bun000.ply", "bun045.ply"},
-                                           std::pair{"bun270.ply", "bun315.ply"}));
+                                           std::pair{"bun270.ply", "bun315.ply"}),
+                         [](const auto& info) {  // "bun000_bun045": a stable CTest name
+                           const auto stem = [](std::string f) { return f.substr(0, f.find('.')); };
+                           return stem(info.param.first) + "_" + stem(info.param.second);
+                         });
 
 }  // namespace
 }  // namespace pectus

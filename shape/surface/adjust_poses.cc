@@ -1,4 +1,4 @@
-#include "shape/surface/pose_adjustment.h"
+#include "shape/surface/adjust_poses.h"
 
 #include <ceres/ceres.h>
 #include <omp.h>

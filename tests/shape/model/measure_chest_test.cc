@@ -1,6 +1,6 @@
 // Chest measures on analytic chests: the straight-edge depth of a Gaussian dent on a frontal surface, and
 // the external Haller and correction indices of a closed elliptic torso with a dent.
-#include "shape/model/chest_measures.h"
+#include "shape/model/measure_chest.h"
 
 #include <gtest/gtest.h>
 

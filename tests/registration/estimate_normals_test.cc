@@ -1,4 +1,4 @@
-#include "registration/normals.h"
+#include "registration/estimate_normals.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

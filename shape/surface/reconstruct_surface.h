@@ -11,7 +11,7 @@
 
 #include "shape/core/geometry.h"
 #include "shape/core/timings.h"
-#include "shape/surface/mesh_check_cgal.h"
+#include "shape/surface/check_mesh.h"
 #include "shape/surface/rbf_implicit.h"
 #include "shape/surface/trim_to_data.h"
 

@@ -6,9 +6,9 @@
 #include <optional>
 #include <string>
 
+#include "registration/estimate_normals.h"
 #include "registration/icp.h"
 #include "registration/landmark_alignment.h"
-#include "registration/normals.h"
 #include "shape/core/geometry.h"
 #include "shape/core/landmarks.h"
 #include "shape/core/timings.h"

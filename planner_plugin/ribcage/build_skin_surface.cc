@@ -1,4 +1,4 @@
-#include "planner_plugin/ribcage/skin_surface.h"
+#include "planner_plugin/ribcage/build_skin_surface.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "shape/surface/sweep_merge.h"
+#include "shape/surface/merge_sweeps.h"
 
 #include <algorithm>
 #include <chrono>
@@ -9,8 +9,8 @@
 #include "registration/voxel_downsample.h"
 #include "shape/core/error.h"
 #include "shape/core/log.h"
+#include "shape/surface/adjust_poses.h"
 #include "shape/surface/cloud_filter.h"
-#include "shape/surface/pose_adjustment.h"
 #include "shape/surface/sweep_graph.h"
 
 namespace pectus {

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "registration/generalised_procrustes.h"
-#include "registration/pair_registration.h"
+#include "registration/register_pair.h"
 #include "shape/core/geometry.h"
 #include "shape/core/landmarks.h"
 
@@ -56,14 +56,14 @@ struct CohortResult {
   /// Per scan: its frame to the cohort frame (mm). The cohort frame is the reference scan's frame in both
   /// modes: the reference gets the identity.
   std::vector<Similarity3> T_frame_scan;
-  std::vector<bool> success;                   ///< per scan: the registration is good
-  std::vector<std::string> messages;           ///< per scan: what was found or why it failed
-  std::vector<double> rms_mm;                  ///< per scan: RMS surface distance (to reference or mean)
-  std::vector<double> inlier_fraction;         ///< per scan
-  Points3 mean_points;                         ///< kGroupwise: the mean surface samples (cohort frame)
+  std::vector<bool> success;            ///< per scan: the registration is good
+  std::vector<std::string> messages;    ///< per scan: what was found or why it failed
+  std::vector<double> rms_mm;           ///< per scan: RMS surface distance (to reference or mean)
+  std::vector<double> inlier_fraction;  ///< per scan
+  Points3 mean_points;                  ///< kGroupwise: the mean surface samples (cohort frame)
   std::optional<LandmarkProcrustesResult> procrustes;  ///< kGroupwise with landmarks: the landmark GPA
-  int iterations = 0;                          ///< kGroupwise: rounds run
-  bool converged = true;                       ///< kGroupwise: stopped on the tolerance
+  int iterations = 0;                                  ///< kGroupwise: rounds run
+  bool converged = true;                               ///< kGroupwise: stopped on the tolerance
   /// Wall time (s): "register" (to the reference), "procrustes" (landmarks), "groupwise".
   Timings timings_s;
   bool all_succeeded() const;

@@ -1,4 +1,4 @@
-#include "planner_plugin/ribcage/generic_ribcage.h"
+#include "planner_plugin/ribcage/build_generic_ribcage.h"
 
 #include <gtest/gtest.h>
 

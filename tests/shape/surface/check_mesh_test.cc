@@ -1,4 +1,4 @@
-#include "shape/surface/mesh_check_cgal.h"
+#include "shape/surface/check_mesh.h"
 
 #include <gtest/gtest.h>
 

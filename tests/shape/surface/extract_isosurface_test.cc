@@ -1,11 +1,11 @@
-#include "shape/surface/marching_cubes.h"
+#include "shape/surface/extract_isosurface.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <map>
 
-#include "shape/surface/mesh_check_cgal.h"
+#include "shape/surface/check_mesh.h"
 
 namespace pectus {
 namespace {

@@ -1,4 +1,4 @@
-#include "registration/cohort.h"
+#include "registration/align_cohort.h"
 
 #include <algorithm>
 #include <chrono>
@@ -144,7 +144,10 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
   Progress progress("groupwise registration", options.max_groupwise_iterations);
   result.converged = false;
   for (result.iterations = 1; result.iterations <= options.max_groupwise_iterations; ++result.iterations) {
-    // The mean surface: each mean point moves to the average of its nearest points on the scans.
+    // The mean surface: each mean point moves along the scans' normals by the average of its offsets to
+    // their tangent planes at its nearest points (to the nearest point itself where a scan has no normal
+    // there). Only normal motion: moving to the nearest samples would also slide the mean along the
+    // surface by the sampling's accidents, and the cohort frame would be defined only up to that drift.
     Points3 sum = Points3::Zero(mean.rows(), 3);
     Eigen::VectorXi count = Eigen::VectorXi::Zero(mean.rows());
     for (std::size_t i = 0; i < n; ++i) {
@@ -155,14 +158,17 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
         std::uint32_t j = 0;
         double d2 = 0.0;
         if (!t.tree().NearestWithin(q, options.mean_max_distance_mm, &j, &d2)) continue;
-        sum.row(k) +=
-            (rigid[i] * (Eigen::Vector3d(t.centred_positions().row(j).transpose()) + t.origin())).transpose();
+        const Eigen::Vector3d offset = Eigen::Vector3d(t.centred_positions().row(j).transpose()) - q;
+        const Eigen::Vector3d normal = t.normals().row(j).transpose();
+        const Eigen::Vector3d along =
+            normal.squaredNorm() > 0.0 ? Eigen::Vector3d(normal * normal.dot(offset)) : offset;
+        sum.row(k) += (rigid[i].linear() * along).transpose();
         ++count(k);
       }
     }
     Points3 next = mean;
     for (Eigen::Index k = 0; k < mean.rows(); ++k) {
-      if (2 * count(k) >= static_cast<int>(n)) next.row(k) = sum.row(k) / count(k);
+      if (2 * count(k) >= static_cast<int>(n)) next.row(k) += sum.row(k) / count(k);
     }
     // Gauge: the new mean placed on the old one, so that the cohort frame does not drift.
     next = UmeyamaAlignment(next, mean, no_weights, false, 0.0, "mean surface").Apply(next);

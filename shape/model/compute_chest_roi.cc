@@ -1,4 +1,4 @@
-#include "shape/model/roi.h"
+#include "shape/model/compute_chest_roi.h"
 
 #include <cmath>
 

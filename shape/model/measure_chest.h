@@ -8,7 +8,7 @@
 #include <string>
 
 #include "shape/core/geometry.h"
-#include "shape/model/roi.h"
+#include "shape/model/compute_chest_roi.h"
 
 namespace pectus {
 
