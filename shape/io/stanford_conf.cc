@@ -1,4 +1,5 @@
-// Stanford 3D Scanning Repository alignment files: "bmesh FILE tx ty tz qx qy qz qw" per scan.
+// Stanford 3D Scanning Repository alignment files: "bmesh FILE tx ty tz qx qy qz qw" (or "mesh ...")
+// per scan.
 #include "shape/io/stanford_conf.h"
 
 #include <cmath>
@@ -7,6 +8,7 @@
 
 #include "shape/core/atomic_file.h"
 #include "shape/core/error.h"
+#include "shape/core/log.h"
 #include "shape/io/mapped_file.h"
 #include "shape/io/text_scan.h"
 
@@ -24,8 +26,8 @@ std::vector<ScanPose> ParseStanfordConf(std::string_view bytes, const std::strin
     const std::string_view keyword = text::NextToken(&rest);
     if (keyword.empty() || keyword.front() == '#') continue;
     if (keyword == "camera") continue;  // the viewpoint of the scanning program, not a pose
-    if (keyword != "bmesh") {
-      fail("unexpected '" + std::string(keyword.substr(0, 40)) + "' (expected 'bmesh' or 'camera')");
+    if (keyword != "bmesh" && keyword != "mesh") {
+      fail("unexpected '" + std::string(keyword.substr(0, 40)) + "' (expected 'bmesh', 'mesh' or 'camera')");
     }
     std::string_view fields[8];
     int count = 0;
@@ -33,8 +35,14 @@ std::vector<ScanPose> ParseStanfordConf(std::string_view bytes, const std::strin
       if (count < 8) fields[count] = token;
       ++count;
     }
+    double unused;
+    if (keyword == "mesh" && count == 7 && text::ParseDouble(fields[0], &unused)) {
+      Info(name + ":" + std::to_string(lines.number()) + ": a 'mesh' line without a file, skipped");
+      continue;
+    }
     if (count != 8) {
-      fail("expected 8 fields after 'bmesh' (FILE tx ty tz qx qy qz qw), found " + std::to_string(count));
+      fail("expected 8 fields after '" + std::string(keyword) + "' (FILE tx ty tz qx qy qz qw), found " +
+           std::to_string(count));
     }
     double v[7];
     for (int k = 0; k < 7; ++k) {
@@ -53,18 +61,29 @@ std::vector<ScanPose> ParseStanfordConf(std::string_view bytes, const std::strin
     if (!(norm > 1e-12)) fail("quaternion (qx qy qz qw) is zero and names no rotation");
     q.coeffs() /= norm;
     // p_common = R(q)^T p_scan + t.
-    ScanPose pose{file, Rigid3::Identity()};
+    ScanPose pose{file, Rigid3::Identity(), std::string(keyword)};
     pose.T_common_scan.linear() = q.toRotationMatrix().transpose();
     pose.T_common_scan.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
     poses.push_back(std::move(pose));
   }
-  if (poses.empty()) ThrowBadInput(name, "no 'bmesh' lines: not a Stanford .conf file?");
+  if (poses.empty()) ThrowBadInput(name, "no 'bmesh' or 'mesh' lines: not a Stanford .conf file?");
   return poses;
 }
 
 std::vector<ScanPose> ReadStanfordConf(const std::filesystem::path& path) {
   MappedFile file(path.string());
-  return ParseStanfordConf(file.bytes(), path.string());
+  std::vector<ScanPose> poses = ParseStanfordConf(file.bytes(), path.string());
+  std::vector<ScanPose> kept;
+  for (ScanPose& pose : poses) {
+    std::error_code ec;
+    if (pose.keyword == "mesh" && !std::filesystem::exists(path.parent_path() / pose.file, ec)) {
+      Info(path.string() + ": 'mesh " + pose.file + "' skipped: no such file beside the .conf");
+      continue;
+    }
+    kept.push_back(std::move(pose));
+  }
+  if (kept.empty()) ThrowBadInput(path.string(), "none of the scans its 'mesh' lines name is beside it");
+  return kept;
 }
 
 void WriteStanfordConf(const std::filesystem::path& path, const std::vector<ScanPose>& poses) {
@@ -78,7 +97,7 @@ void WriteStanfordConf(const std::filesystem::path& path, const std::vector<Scan
     const Eigen::Quaterniond q(Eigen::Matrix3d(pose.T_common_scan.linear().transpose()));
     const Eigen::Vector3d t = pose.T_common_scan.translation();
     // Shortest text that reads back exactly (at most 17 significant digits), independent of the locale.
-    out += "bmesh " + pose.file;
+    out += (pose.keyword == "mesh" ? "mesh " : "bmesh ") + pose.file;
     for (double v : {t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w()}) {
       out += ' ';
       text::AppendNumber(v, &out);

@@ -99,7 +99,7 @@ TEST(StanfordConf, CommentsCamerasAndUnnormalisedQuaternions) {
 TEST(StanfordConf, MalformedInputIsAnErrorNamingFileAndLine) {
   EXPECT_TRUE(ThrowsBadInput([] { ParseStanfordConf("", "e.conf"); }, "file is empty", "e.conf"));
   EXPECT_TRUE(ThrowsBadInput([] { ParseStanfordConf("camera 0 0 0 0 0 0 1\n", "c.conf"); },
-                             "no 'bmesh' lines", "c.conf"));
+                             "no 'bmesh' or 'mesh' lines", "c.conf"));
   EXPECT_TRUE(ThrowsBadInput(
       [] { ParseStanfordConf("bmesh a.ply 0 0 0 0 0 0 1\nbmesh b.ply 0 0 0 0 0 1\n", "f.conf"); }, "found 7",
       "f.conf", 2));
@@ -115,7 +115,46 @@ TEST(StanfordConf, MalformedInputIsAnErrorNamingFileAndLine) {
       [] { ParseStanfordConf("bmesh a.ply 0 0 0 0 0 0 1\n\nbmesh a.ply 1 0 0 0 0 0 1\n", "d.conf"); },
       "'a.ply' is listed twice (lines 1 and 3)", "d.conf", 3));
   EXPECT_TRUE(ThrowsBadInput([] { ParseStanfordConf("bmesh a.ply 0 0 0 0 0 0 1\nmesh b.ply\n", "k.conf"); },
-                             "unexpected 'mesh'", "k.conf", 2));
+                             "expected 8 fields after 'mesh' (FILE tx ty tz qx qy qz qw), found 1", "k.conf",
+                             2));
+  EXPECT_TRUE(ThrowsBadInput([] { ParseStanfordConf("bmesh a.ply 0 0 0 0 0 0 1\nscan b.ply\n", "u.conf"); },
+                             "unexpected 'scan'", "u.conf", 2));
+}
+
+// A range scanner's .conf as several Stanford sets have it: a camera line, bmesh lines, mesh lines for
+// extra parts (one whose file is there, one whose file was not published) and a mesh line with no file.
+// Every pose whose scan is there is read, in order, with its keyword; the rest is skipped; writing keeps
+// the keywords.
+TEST(StanfordConf, CameraAndMeshLinesAreRead) {
+  const testing::TempDir dir;
+  dir.Write("front.ply", "");
+  dir.Write("stand.ply", "");
+  const std::filesystem::path conf = dir.Write("parts.conf",
+                                               "camera 0.1 -0.2 -0.7  -0.05 0.97 -0.24 0.01\n"
+                                               "bmesh front.ply 0 0 0 0 0 0 1\n"
+                                               "mesh stand.ply 0.5 0 -0.25 0 0 1 0\n"
+                                               "mesh base.ply 0 0 1 0 0 0 1\n"
+                                               "mesh 0 0 0 0 0 0 1\n");
+  const std::vector<ScanPose> poses = ReadStanfordConf(conf);
+  ASSERT_EQ(poses.size(), 2u);
+  EXPECT_EQ(poses[0].file, "front.ply");
+  EXPECT_EQ(poses[0].keyword, "bmesh");
+  EXPECT_EQ(poses[1].file, "stand.ply");
+  EXPECT_EQ(poses[1].keyword, "mesh");
+  EXPECT_EQ(poses[1].T_common_scan.translation(), Eigen::Vector3d(0.5, 0, -0.25));
+  EXPECT_TRUE(  // q = z axis, 180 degrees
+      poses[1].T_common_scan.linear().isApprox(Eigen::Vector3d(-1, -1, 1).asDiagonal().toDenseMatrix()));
+  // Parsed from bytes, the mesh line whose file is missing is still a pose (no folder to look in).
+  EXPECT_EQ(ParseStanfordConf("mesh base.ply 0 0 1 0 0 0 1\nmesh 0 0 0 0 0 0 1\n", "b.conf").size(), 1u);
+
+  WriteStanfordConf(dir / "out.conf", poses);
+  const std::vector<ScanPose> back = ReadStanfordConf(dir / "out.conf");
+  ASSERT_EQ(back.size(), 2u);
+  EXPECT_EQ(back[1].keyword, "mesh");
+  EXPECT_EQ(back[1].T_common_scan.translation(), poses[1].T_common_scan.translation());
+  // A .conf whose every scan is a missing mesh names itself.
+  const std::filesystem::path none = dir.Write("none.conf", "mesh gone.ply 0 0 0 0 0 0 1\n");
+  EXPECT_TRUE(ThrowsBadInput([&] { ReadStanfordConf(none); }, "mesh", "none.conf"));
 }
 
 }  // namespace
