@@ -1,5 +1,5 @@
-// pectus merge: align the overlapping sweeps of a scan (pairwise ICP, then one joint adjustment of all
-// poses) and merge them into one cloud.
+// pectus merge: align the overlapping sweeps of a scan (one joint adjustment of all poses, each held to
+// the tracker's pose with its accuracy) and merge them into one cloud.
 #include <omp.h>
 
 #include <algorithm>
@@ -57,9 +57,28 @@ class MergeCommand : public Command {
         ->default_val(3.0);
     app->add_option("--outlier-neighbours", options_.outlier_neighbours, "k of the outlier test; 0 = off")
         ->default_val(16);
+    app->add_option("--tracker-deg", options_.tracker_deg,
+                    "Tracker's rotation accuracy, 1 sd (deg): each starting pose is trusted this far; "
+                    "0 with --tracker-mm 0: no prior, pairwise ICP first")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0, 30.0));
+    app->add_option("--tracker-mm", options_.tracker_mm, "Tracker's translation accuracy, 1 sd (mm)")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0, 100.0));
+    app->add_option("--tracker-lever", options_.tracker_lever_mm,
+                    "Distance from the tracker's origin to the skin (mm): its rotation error moves the "
+                    "sweep by deg x lever there")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0, 1e4));
     app->add_option("--overlap-distance", options_.overlap_distance_mm,
-                    "Points this close (mm) at the start count as overlap")
-        ->default_val(5.0);
+                    "Starting search radius of overlaps (mm); 0 = 3 sd of two sweeps' relative tracker "
+                    "error at the skin")
+        ->capture_default_str()
+        ->check(CLI::NonNegativeNumber);
+    app->add_option("--min-overlap", options_.min_overlap_fraction,
+                    "Link two sweeps sharing at least this fraction of the smaller one's area")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0, 0.99));
     app->add_option("--max-rms", options_.pairwise.max_rms_mm,
                     "A pairwise fit worse than this RMS (mm) is not trusted")
         ->default_val(1.0);
@@ -138,7 +157,9 @@ class MergeCommand : public Command {
     SweepMergeResult result;
     {
       auto t = context->report.Stage("merge");
-      result = MergeSweeps(clouds, start, options_);
+      std::vector<std::string> names;
+      for (const auto& f : files) names.push_back(fs::path(f).filename().string());
+      result = MergeSweeps(clouds, start, options_, names);
     }
     context->report.AddTimes(result.timings_s);
     {
@@ -167,7 +188,8 @@ class MergeCommand : public Command {
                        {"rms_before_mm", p.rms_before_mm},
                        {"rms_after_mm", p.rms_after_mm},
                        {"median_distance_after_mm", p.median_after_mm},
-                       {"pairwise_icp_success", p.pairwise_success}});
+                       {"pairwise_icp_success", p.pairwise_success},
+                       {"pinned_directions", p.pinned_directions}});
     }
     auto& r = context->report.json();
     r["sweeps"] = sweeps;

@@ -5,11 +5,14 @@
 #include <cmath>
 #include <cstdio>
 #include <numeric>
+#include <optional>
 
 #include "registration/voxel_downsample.h"
 #include "shape/core/error.h"
 #include "shape/core/log.h"
+#include "shape/core/number_format.h"
 #include "shape/surface/adjust_poses.h"
+#include "shape/surface/adjust_poses_to_tracker.h"
 #include "shape/surface/cloud_filter.h"
 #include "shape/surface/sweep_graph.h"
 
@@ -30,7 +33,11 @@ bool SweepMergeOptions::IsValid(std::string* why) const {
     if (why) *why = m;
     return false;
   };
-  if (!(overlap_distance_mm > 0)) return fail("overlap distance must be > 0 mm");
+  if (!(tracker_deg >= 0 && tracker_deg <= 30) || !(tracker_mm >= 0 && tracker_mm <= 100))
+    return fail("tracker accuracy must be in [0, 30] degrees and [0, 100] mm");
+  if (!(tracker_lever_mm >= 0 && tracker_lever_mm <= 1e4)) return fail("tracker lever must be in [0, 10 m]");
+  if (!(overlap_distance_mm >= 0) || !std::isfinite(overlap_distance_mm))
+    return fail("overlap distance must be >= 0 mm");
   if (min_overlap_fraction < 0 || min_overlap_fraction >= 1) return fail("minimum overlap must be in [0, 1)");
   if (global_rounds < 0 || global_points_per_pair < 10)
     return fail("global rounds >= 0 and points per pair >= 10");
@@ -41,8 +48,17 @@ bool SweepMergeOptions::IsValid(std::string* why) const {
   return surface.IsValid(why) && pairwise.IsValid(why);
 }
 
+bool SweepMergeOptions::HasTrackerPrior() const { return tracker_deg > 0 || tracker_mm > 0; }
+
+double SweepMergeOptions::StartingRadiusMm() const {
+  if (overlap_distance_mm > 0) return overlap_distance_mm;
+  if (!HasTrackerPrior()) return 5.0;
+  const double at_skin = std::hypot(tracker_mm, tracker_deg * M_PI / 180.0 * tracker_lever_mm);
+  return 3.0 * std::sqrt(2.0) * at_skin;
+}
+
 SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::vector<Rigid3>& start,
-                             const SweepMergeOptions& options) {
+                             const SweepMergeOptions& options, const std::vector<std::string>& names) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage("merge options: " + why);
   if (clouds.empty()) ThrowBadInput("sweeps", "no sweeps to merge");
@@ -50,16 +66,18 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
     ThrowBadInput("poses",
                   std::to_string(start.size()) + " poses for " + std::to_string(clouds.size()) + " sweeps");
   }
+  if (!names.empty() && names.size() != clouds.size()) ThrowUsage("merge: one name per sweep, or none");
   if (options.anchor >= clouds.size())
     ThrowUsage("anchor sweep " + std::to_string(options.anchor) + " does not exist");
   const std::size_t n = clouds.size();
+  auto name = [&](std::size_t s) { return names.empty() ? "sweep " + std::to_string(s) : names[s]; };
   SweepMergeResult result;
 
   // 1. Normals, border points, targets and subsamples of every sweep, in its own frame.
   auto t0 = Clock::now();
   std::vector<SweepSurface> sweeps;
   for (std::size_t s = 0; s < n; ++s) {
-    sweeps.push_back(PrepareSweep(clouds[s], options.surface, "sweep " + std::to_string(s)));
+    sweeps.push_back(PrepareSweep(clouds[s], options.surface, name(s)));
     result.points_in += clouds[s].size();
   }
   double spacing = 0;
@@ -72,38 +90,51 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
   T_centred_world.translation() = -centre;
   std::vector<Rigid3> P_start(n), P(n);
   for (std::size_t s = 0; s < n; ++s) P[s] = P_start[s] = T_centred_world * start[s];
-  OrientSweeps(P, options.overlap_distance_mm, options.anchor, &sweeps);
+  const double radius = options.StartingRadiusMm();
+  OrientSweeps(P, radius, options.anchor, &sweeps);
   result.timings_s.Add("normals", Since(t0));
 
-  // 2. Which sweeps overlap, at the starting poses.
+  // 2. Which sweeps overlap, on their surfaces within the starting radius (the tracker's error).
   t0 = Clock::now();
-  const std::vector<SweepLink> links =
-      FindSweepLinks(sweeps, P, options.overlap_distance_mm, options.min_overlap_fraction);
+  std::vector<SweepLink> links = FindSweepLinks(sweeps, P, radius, options.min_overlap_fraction);
   result.timings_s.Add("overlap", Since(t0));
   if (n > 1) {
     for (std::size_t s = 0; s < n; ++s) {
-      if (std::none_of(links.begin(), links.end(),
-                       [&](const SweepLink& l) { return l.i == s || l.j == s; })) {
-        ThrowFailure("sweep " + std::to_string(s) + " overlaps no other sweep (within " +
-                     std::to_string(options.overlap_distance_mm) +
-                     " mm at the starting poses); give better "
-                     "starting poses or a larger --overlap-distance");
-      }
+      if (std::any_of(links.begin(), links.end(), [&](const SweepLink& l) { return l.i == s || l.j == s; }))
+        continue;
+      std::size_t nearest = s;
+      const double d = DistanceToNearestSweep(sweeps, P, s, &nearest);
+      ThrowFailure(name(s) + " overlaps no other sweep: it shares less than " +
+                   FormatSignificant(100.0 * options.min_overlap_fraction) +
+                   " % of its area with any within " + FormatMm(radius) +
+                   " at the starting poses, and the nearest, " + name(nearest) + ", is " + FormatMm(d) +
+                   " away; give better starting poses or a larger --tracker-mm/--tracker-deg");
     }
   }
   const double gate = options.global_max_distance_mm > 0 ? options.global_max_distance_mm : 3.0 * spacing;
   std::vector<std::vector<SweepCorrespondence>> before(links.size());
   for (std::size_t k = 0; k < links.size(); ++k) {
     before[k] = FindSweepCorrespondences(sweeps, P, links[k].i, links[k].j, options.global_points_per_pair,
-                                         options.overlap_distance_mm);
+                                         std::max(radius, gate));
   }
 
   std::vector<bool> pairwise_ok(links.size(), false);
+  std::vector<PairConstraintReport> pinned;  // with a prior: what each pair pinned in the last round
   if (options.refine_poses && n > 1) {
-    // 3. Pairwise ICP on every linked pair (sweep j onto sweep i), then poses from a spanning tree.
-    t0 = Clock::now();
-    std::vector<Rigid3> relative(links.size());
-    {
+    std::optional<PosePrior> prior;
+    if (options.HasTrackerPrior()) {
+      // The tracker's error at a sweep's centroid: its translation and its rotation about the far origin.
+      prior.emplace();
+      prior->T_world_sweep = P_start;
+      for (const auto& w : sweeps) prior->centre.push_back(w.centroid);
+      prior->rotation_sd_deg = std::max(options.tracker_deg, 1e-3);
+      prior->translation_sd_mm = std::max(
+          std::hypot(options.tracker_mm, options.tracker_deg * M_PI / 180.0 * options.tracker_lever_mm),
+          1e-3);
+    } else {
+      // 3. Without a prior: pairwise ICP on every linked pair (sweep j onto sweep i), poses from a tree.
+      t0 = Clock::now();
+      std::vector<Rigid3> relative(links.size());
       Progress progress("pairwise alignment", std::int64_t(links.size()));
       for (std::size_t k = 0; k < links.size(); ++k) {
         const auto [i, j, overlap] = links[k];
@@ -113,31 +144,42 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
         pairwise_ok[k] = r.success;
         progress.Advance();
       }
+      PosesFromTree(links, relative, pairwise_ok, options.anchor, &P);
+      result.timings_s.Add("pairwise_icp", Since(t0));
     }
-    PosesFromTree(links, relative, pairwise_ok, options.anchor, &P);
-    result.timings_s.Add("pairwise_icp", Since(t0));
 
-    // 4. Joint point-to-plane adjustment of all poses, with fresh correspondences every round.
+    // 4. Joint point-to-plane adjustment of all poses, with fresh correspondences every round, the gate
+    // halving from the starting radius (with a prior) down to the finest gate.
     t0 = Clock::now();
     Progress progress("global adjustment", options.global_rounds);
     PoseAdjustmentOptions ao;
     ao.anchor = options.anchor;
+    double round_gate = prior ? std::max(radius, gate) : gate;
     for (int round = 0; round < options.global_rounds; ++round) {
-      const auto pairs = AllCorrespondences(sweeps, P, links, options.global_points_per_pair, gate);
+      const auto pairs = AllCorrespondences(sweeps, P, links, options.global_points_per_pair, round_gate);
       const std::vector<Rigid3> previous = P;
-      const PoseAdjustmentResult a = AdjustPoses(pairs, &P, ao);
-      result.global_rms_before_mm = a.rms_before_mm;
-      result.global_rms_after_mm = a.rms_after_mm;
+      if (prior) {
+        TrackerAdjustmentOptions to;
+        const TrackerAdjustmentResult a = AdjustPosesToTracker(pairs, sweeps, *prior, &P, to);
+        result.global_rms_before_mm = a.rms_before_mm;
+        result.global_rms_after_mm = PointToPlaneRms(pairs, P);
+        pinned = a.pairs;
+      } else {
+        const PoseAdjustmentResult a = AdjustPoses(pairs, &P, ao);
+        result.global_rms_before_mm = a.rms_before_mm;
+        result.global_rms_after_mm = a.rms_after_mm;
+      }
       ++result.global_rounds;
       progress.Advance();
       double change_mm = 0;  // largest movement of a sweep's sample, roughly
       for (std::size_t s = 0; s < n; ++s) {
         const Rigid3 d = P[s] * previous[s].inverse();
         const Eigen::Vector3d c = P[s] * sweeps[s].centroid;
-        const double radius = (ComputeBounds(clouds[s].positions).extent().norm()) / 2.0;
-        change_mm = std::max(change_mm, (d * c - c).norm() + AngleDeg(d.linear()) * M_PI / 180.0 * radius);
+        const double extent = (ComputeBounds(clouds[s].positions).extent().norm()) / 2.0;
+        change_mm = std::max(change_mm, (d * c - c).norm() + AngleDeg(d.linear()) * M_PI / 180.0 * extent);
       }
-      if (change_mm < 0.01 * spacing) break;
+      if (round_gate <= gate && change_mm < 0.01 * spacing) break;
+      round_gate = std::max(gate, round_gate / 2.0);
     }
     result.timings_s.Add("global_adjustment", Since(t0));
   }
@@ -151,12 +193,20 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
     const Eigen::Vector3d c = start[s] * sweeps[s].centroid;
     result.correction_mm.push_back((correction * c - c).norm());
   }
+  // The overlap of every link at the final poses, within the finest gate.
+  const std::vector<SweepLink> final_links = FindSweepLinks(sweeps, P, gate, 0.0);
+  for (std::size_t k = 0; k < links.size(); ++k) {
+    for (const auto& l : final_links)
+      if (l.i == links[k].i && l.j == links[k].j) links[k].overlap = l.overlap;
+  }
   for (std::size_t k = 0; k < links.size(); ++k) {
     SweepPairReport pr;
     pr.i = links[k].i;
     pr.j = links[k].j;
     pr.overlap_fraction = links[k].overlap;
     pr.pairwise_success = pairwise_ok[k];
+    for (const auto& pc : pinned)
+      if (pc.i == pr.i && pc.j == pr.j) pr.pinned_directions = pc.pinned_directions;
     pr.rms_before_mm = PointToPlaneRms(before[k], P_start);
     const auto after = FindSweepCorrespondences(sweeps, P, pr.i, pr.j, options.global_points_per_pair, gate);
     pr.rms_after_mm = PointToPlaneRms(after, P);

@@ -16,23 +16,38 @@ namespace pectus {
 struct SweepMergeOptions {
   // --- Alignment ---
   bool refine_poses = true;     ///< false: keep the given poses, only merge
-  std::size_t anchor = 0;       ///< the sweep whose pose is kept (fixes the common frame)
+  std::size_t anchor = 0;       ///< without a tracker prior, the sweep whose pose is kept
   SweepSurfaceOptions surface;  ///< normals, border points and subsample of each sweep
-  /// Two sweeps overlap where a sample of one has a point of the other this close at the starting
-  /// poses, on the same side (normals within 45 degrees) and away from the other's border.
-  double overlap_distance_mm = 5.0;
-  double min_overlap_fraction = 0.1;  ///< pairs overlapping less (of the smaller sweep) are not linked
-  /// Pairwise point-to-plane ICP (robust, gated, coarse to fine); its target is the other sweep without
-  /// its border points.
+  /// The tracker's stated accuracy, one standard deviation per axis: the rotation of each sweep's pose
+  /// (degrees), which turns it about the tracker's origin `tracker_lever_mm` away, and its translation
+  /// (mm). Every sweep's starting pose is carried into the joint adjustment as a prior with this spread
+  /// (PosePrior): what the overlaps pin follows the data, what they leave free (a smooth strip sliding
+  /// along the chest) stays where the tracker put it, and given exact poses nothing moves by more than
+  /// the noise allows. The defaults are an electromagnetic tracker's (Polhemus FastScan class; 2.3 mm at
+  /// the skin). Both 0: no prior; pairwise ICP from the starting poses, then the joint adjustment with the
+  /// anchor held (for starting poses of unknown accuracy, e.g. a .conf of a rough manual alignment).
+  double tracker_deg = 0.5;
+  double tracker_mm = 1.5;
+  double tracker_lever_mm = 200.0;  ///< distance from the tracker's origin to the skin (mm)
+  /// Two sweeps overlap where a sample of one lies this close to the surface of the other (same side,
+  /// normals within 45 degrees, not beyond its edge). 0: three standard deviations of two sweeps'
+  /// relative tracker error at the skin (3 sqrt(2) hypot(tracker_mm, tracker_deg lever), 9.8 mm by
+  /// default; 5 mm without a prior). The joint adjustment's gate starts there and halves every round down
+  /// to global_max_distance_mm, so the capture is wide and the end is at the noise.
+  double overlap_distance_mm = 0.0;
+  /// Pairs sharing less than this fraction of the smaller sweep's area are not linked.
+  double min_overlap_fraction = 0.05;
+  /// Pairwise point-to-plane ICP (robust, gated, coarse to fine), without a tracker prior only; its
+  /// target is the other sweep without its border points.
   IcpOptions pairwise = [] {
     IcpOptions o;
     o.auto_level_points = {1000, 4000};
     o.max_normal_angle_deg = 45.0;
     return o;
   }();
-  int global_rounds = 8;              ///< at most this many rounds of correspondence search + joint solve
+  int global_rounds = 10;             ///< at most this many rounds of correspondence search + joint solve
   int global_points_per_pair = 3000;  ///< source samples per linked pair, direction and round
-  /// Gate of the joint solve (mm); 0 = 3 times the median point spacing of the sweeps.
+  /// Finest gate of the joint solve (mm); 0 = 3 times the median point spacing of the sweeps.
   double global_max_distance_mm = 0.0;
 
   // --- Merging ---
@@ -46,16 +61,22 @@ struct SweepMergeOptions {
 
   /// False, with the reason in `why`, if a value is out of range.
   bool IsValid(std::string* why) const;
+  /// True when tracker_deg or tracker_mm is > 0.
+  bool HasTrackerPrior() const;
+  /// overlap_distance_mm, or the radius it stands for when 0 (mm).
+  double StartingRadiusMm() const;
 };
 
 /// Overlap between two linked sweeps, before and after alignment.
 struct SweepPairReport {
   std::size_t i = 0, j = 0;       ///< sweep indices, i < j
-  double overlap_fraction = 0.0;  ///< of the smaller sweep's samples
+  double overlap_fraction = 0.0;  ///< of the smaller sweep's samples, at the final poses
   double rms_before_mm = 0.0;     ///< RMS point-to-plane distance of correspondences at the start
   double rms_after_mm = 0.0;      ///< the same at the final poses
   double median_after_mm = 0.0;   ///< median nearest-point distance at the final poses
-  bool pairwise_success = false;  ///< the pairwise ICP passed its acceptance tests
+  bool pairwise_success = false;  ///< the pairwise ICP passed its acceptance tests (false if not run)
+  int pinned_directions = -1;     ///< with a tracker prior: of the six of the pair's relative pose, how
+                                  ///< many its overlap pinned in the last round (-1: no prior)
 };
 
 /// What MergeSweeps did.
@@ -79,17 +100,23 @@ struct SweepMergeResult {
   std::string BriefReport() const;
 };
 
-/// Aligns and merges sweeps: orients every sweep's normals to one side, finds the overlapping pairs,
-/// aligns each pair by point-to-plane ICP (Chen and Medioni 1992), starts every pose from a maximum
-/// spanning tree of the pairs, then adjusts all poses jointly (AdjustPoses) so that errors do not pile up
-/// around a loop; blends overlaps, removes outliers, decimates. Deterministic for any number of threads.
+/// Aligns and merges sweeps: orients every sweep's normals to one side, finds the overlapping pairs on
+/// their geometry, and adjusts all poses jointly (AdjustPoses: point-to-plane residuals of every linked
+/// pair, Chen and Medioni 1992) from a wide gate down to the noise, each sweep held to its tracker pose
+/// with the tracker's accuracy, so that errors neither pile up around a loop nor slide a sweep along a
+/// direction its overlaps do not pin. Without a tracker prior, every linked pair is first aligned by ICP
+/// and the poses start from a maximum spanning tree of the pairs. Then blends overlaps, removes
+/// outliers, decimates. Deterministic for any number of threads.
 /// @param[in] sweeps               each sweep in its own (scanner) frame, mm; normals are estimated here
 /// @param[in] T_world_sweep_start  starting pose of each sweep (from the scanner, a .conf, or identity)
 /// @param[in] options              see SweepMergeOptions
+/// @param[in] names                each sweep's name for messages (e.g. its file); empty: "sweep N"
 /// Throws Error(kUsage) for invalid options, Error(kBadInput) for fewer than one sweep, a sweep with
-/// fewer than 10 points or a size mismatch, and Error(kFailure) if a sweep overlaps no other sweep.
+/// fewer than 10 points or a size mismatch, and Error(kFailure) naming a sweep that overlaps no other
+/// sweep, with its distance to the nearest one.
 SweepMergeResult MergeSweeps(const std::vector<PointCloud>& sweeps,
                              const std::vector<Rigid3>& T_world_sweep_start,
-                             const SweepMergeOptions& options = {});
+                             const SweepMergeOptions& options = {},
+                             const std::vector<std::string>& names = {});
 
 }  // namespace pectus

@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <queue>
 
 namespace pectus {
@@ -94,6 +95,27 @@ std::vector<SweepLink> FindSweepLinks(const std::vector<SweepSurface>& S, const 
   for (const auto& l : all)
     if (l.overlap >= min_fraction) links.push_back(l);
   return links;
+}
+
+double DistanceToNearestSweep(const std::vector<SweepSurface>& S, const std::vector<Rigid3>& P, std::size_t s,
+                              std::size_t* nearest) {
+  double best = std::numeric_limits<double>::infinity();
+  *nearest = s;
+  for (std::size_t o = 0; o < S.size(); ++o) {
+    if (o == s) continue;
+    const Rigid3 T_o_s = P[o].inverse() * P[s];
+    for (const std::uint32_t r : S[s].samples) {
+      std::uint32_t k = 0;
+      double d2 = std::numeric_limits<double>::infinity();
+      const Eigen::Vector3d x = T_o_s * S[s].cloud->positions.row(r).transpose() - S[o].target->origin();
+      S[o].target->tree().Knn(x, 1, &k, &d2);
+      if (d2 < best * best) {
+        best = std::sqrt(d2);
+        *nearest = o;
+      }
+    }
+  }
+  return best;
 }
 
 std::vector<SweepCorrespondence> AllCorrespondences(const std::vector<SweepSurface>& S,

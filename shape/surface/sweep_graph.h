@@ -30,6 +30,11 @@ void OrientSweeps(const std::vector<Rigid3>& P, double distance_mm, std::size_t 
 std::vector<SweepLink> FindSweepLinks(const std::vector<SweepSurface>& S, const std::vector<Rigid3>& P,
                                       double distance_mm, double min_fraction);
 
+/// The smallest distance (mm) from a sample of sweep s to any point of another sweep at the poses P, and
+/// which sweep that is (*nearest; s itself when there is no other sweep).
+double DistanceToNearestSweep(const std::vector<SweepSurface>& S, const std::vector<Rigid3>& P, std::size_t s,
+                              std::size_t* nearest);
+
 /// Correspondences of every link in both directions, at most per_pair each way, gated at gate_mm.
 std::vector<SweepCorrespondence> AllCorrespondences(const std::vector<SweepSurface>& S,
                                                     const std::vector<Rigid3>& P,

@@ -15,11 +15,12 @@ namespace pectus {
 /// Options of PrepareSweep.
 struct SweepSurfaceOptions {
   int normal_neighbours = 16;  ///< k of the PCA normals (>= 3)
-  int border_neighbours = 12;  ///< k of the border test (>= 4)
-  /// A point is on the border of the sweep (its edge or the rim of a hole in it) when the mean of its
-  /// border_neighbours nearest neighbours, projected on its tangent plane, lies more than this fraction
-  /// of their mean distance away from it (0.64 on a straight edge of an even grid, about 0 inside).
-  double border_shift = 0.3;
+  int border_neighbours = 24;  ///< k of the border test (>= 4)
+  /// A point is on the border of the sweep (its edge or the rim of a hole in it) when its
+  /// border_neighbours nearest neighbours, seen from it in its tangent plane, leave an angular gap wider
+  /// than this (degrees): about 180 on an edge; inside, at most 90 on a range grid and wider than 135
+  /// with probability 0.05 % for 24 uniformly random neighbours (unstructured sampling).
+  double border_gap_deg = 135.0;
   /// Points whose normal is farther than this (degrees) from the sweep's mean normal, the scanner's
   /// line of sight, are seen at a grazing angle, where triangulation scanners are least accurate (Turk
   /// and Levoy 1994 weight them down); they are left out of every correspondence. 90 = off. On the
@@ -49,6 +50,9 @@ struct SweepSurface {
   std::vector<std::uint32_t> samples;  ///< rows of an even subsample (voxels of sample_spacings)
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  ///< mm, sweep frame
   double spacing_mm = 0.0;                             ///< median distance between neighbouring points
+  /// Expected squared angular error of a normal (rad^2 per tangent axis): 2 c / k for PCA over k
+  /// neighbours whose surface variation (lambda_min / sum of lambdas) has the median c over the sweep.
+  double normal_variance = 0.0;
 
   /// Reverses every normal (the sweep's side; the target's normals are sign-free).
   void FlipNormals();

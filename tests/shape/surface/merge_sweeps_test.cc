@@ -75,6 +75,19 @@ std::vector<PointCloud> DomeStrips(int strips, std::vector<Rigid3>* T_world_swee
   return out;
 }
 
+Rigid3 BestCommonMotion(const std::vector<PointCloud>& sweeps, const std::vector<Rigid3>& estimate,
+                        const std::vector<Rigid3>& truth);
+
+// Starting poses disturbed by up to 3 degrees and 5 mm about each sweep's centroid: a tracker whose stated
+// accuracy is that bound.
+SweepMergeOptions DisturbedTracker() {
+  SweepMergeOptions o;
+  o.tracker_deg = 3.0;
+  o.tracker_mm = 5.0;
+  o.tracker_lever_mm = 0.0;  // the disturbance turns about the centroid
+  return o;
+}
+
 // The strips carry 0.05 mm noise and overlap in 30 mm bands of 80 mm strips, so the roll of a strip about
 // its long axis is known to about 0.02 degrees per link (the data's own limit: more samples of the same
 // points do not help); over a chain of three links that is up to ~0.1 mm at a strip's far edge.
@@ -86,10 +99,13 @@ TEST(SweepMerge, RecoversKnownPosesOfSyntheticStrips) {
   std::mt19937_64 rng(11);
   std::vector<Rigid3> start = truth;
   for (std::size_t s = 1; s < start.size(); ++s) start[s] = DisturbAbout(&rng, 3.0, 5.0, strips[s], truth[s]);
-  const SweepMergeResult r = MergeSweeps(strips, start);
+  const SweepMergeResult r = MergeSweeps(strips, start, DisturbedTracker());
   ASSERT_EQ(r.T_world_sweep.size(), 4u);
+  // No sweep is held: the common frame is the tracker's average, so the strips are compared with the
+  // truth up to one common rigid motion.
+  const Rigid3 G = BestCommonMotion(strips, r.T_world_sweep, truth);
   for (std::size_t s = 0; s < strips.size(); ++s) {
-    EXPECT_LT(RmsDisplacement(strips[s].positions, r.T_world_sweep[s], truth[s]), kStripTolerance)
+    EXPECT_LT(RmsDisplacement(strips[s].positions, G * r.T_world_sweep[s], truth[s]), kStripTolerance)
         << "strip " << s;
     EXPECT_GT(r.correction_mm[s] + r.correction_deg[s], s == 0 ? -1.0 : 0.1) << "the start was disturbed";
   }
@@ -111,7 +127,7 @@ TEST(SweepMerge, FarFromOriginGivesTheSameAnswer) {
   std::mt19937_64 rng(5);
   std::vector<Rigid3> start = truth;
   for (std::size_t s = 1; s < start.size(); ++s) start[s] = DisturbAbout(&rng, 2.0, 3.0, strips[s], truth[s]);
-  const SweepMergeResult near = MergeSweeps(strips, start);
+  const SweepMergeResult near = MergeSweeps(strips, start, DisturbedTracker());
   // The same scan with the world frame 10 km away: the same poses up to the shift, to 1 micrometre.
   Rigid3 shift = Rigid3::Identity();
   shift.translation() = Eigen::Vector3d(1e7, -2e6, 5e5);
@@ -120,24 +136,118 @@ TEST(SweepMerge, FarFromOriginGivesTheSameAnswer) {
     far_truth.push_back(shift * truth[s]);
     far_start.push_back(shift * start[s]);
   }
-  const SweepMergeResult far = MergeSweeps(strips, far_start);
+  const SweepMergeResult far = MergeSweeps(strips, far_start, DisturbedTracker());
+  const Rigid3 G = BestCommonMotion(strips, far.T_world_sweep, far_truth);
   for (std::size_t s = 0; s < strips.size(); ++s) {
     EXPECT_LT(RmsDisplacement(strips[s].positions, far.T_world_sweep[s], shift * near.T_world_sweep[s]), 1e-3)
         << s;
-    EXPECT_LT(RmsDisplacement(strips[s].positions, far.T_world_sweep[s], far_truth[s]), kStripTolerance) << s;
+    EXPECT_LT(RmsDisplacement(strips[s].positions, G * far.T_world_sweep[s], far_truth[s]), kStripTolerance)
+        << s;
   }
 }
 
-TEST(SweepMerge, SweepWithoutOverlapIsAClearFailure) {
+TEST(SweepMerge, SweepWithoutOverlapIsReportedByNameWithItsDistance) {
   std::vector<Rigid3> truth;
-  auto strips = DomeStrips(2, &truth);
-  truth[1].translation() += Eigen::Vector3d(0, 0, 500);  // far away from the other
+  auto strips = DomeStrips(3, &truth);
+  truth[2].translation() += Eigen::Vector3d(0, 0, 500);  // far away from the others
   try {
-    MergeSweeps(strips, truth);
+    MergeSweeps(strips, truth, {}, {"left.ply", "middle.ply", "right.ply"});
     FAIL() << "a sweep that overlaps nothing was merged";
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), ErrorKind::kFailure);
-    EXPECT_NE(std::string(e.what()).find("overlaps no other sweep"), std::string::npos);
+    const std::string m = e.what();
+    EXPECT_NE(m.find("right.ply overlaps no other sweep"), std::string::npos) << m;
+    EXPECT_NE(m.find("the nearest, middle.ply, is 4"), std::string::npos) << m;  // ~ 480 mm away
+  }
+}
+
+// Points of the surface x(u, v) = f(u, v) over [u0, u1] x [v0, v1]: on a 1 mm grid, or as many at
+// uniformly random places (unstructured sampling), each with 0.05 mm Gaussian noise per axis.
+template <typename Surface>
+PointCloud Patch(const Surface& f, double u0, double u1, double v0, double v1, bool random,
+                 std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  std::uniform_real_distribution<double> uu(u0, u1), vv(v0, v1);
+  const int nu = int(u1 - u0) + 1, nv = int(v1 - v0) + 1;
+  PointCloud c;
+  c.positions.resize(nu * nv, 3);
+  for (int k = 0; k < nu * nv; ++k) {
+    const double u = random ? uu(rng) : u0 + k / nv, v = random ? vv(rng) : v0 + k % nv;
+    c.positions.row(k) = (f(u, v) + Eigen::Vector3d(noise(rng), noise(rng), noise(rng))).transpose();
+  }
+  return c;
+}
+
+// Displacement of x by the pose error of sweep 1 relative to sweep 0 (both truths are the identity).
+Eigen::Vector3d RelativeMove(const std::vector<Rigid3>& P, const Eigen::Vector3d& x) {
+  return (P[0].inverse() * P[1]) * x - x;
+}
+
+// Two strips of a plane (z = 0) overlapping in a 30 mm band, each sampled at random: the overlap pins
+// the height and the tilts of one strip on the other, not the slide within the plane or the turn about
+// its normal. A start off in all six directions: the pinned part is removed, the free part stays where
+// the tracker put it.
+TEST(SweepMerge, PlaneStripKeepsTheTrackerAlongFreeDirectionsAndRemovesThePinnedError) {
+  auto plane = [](double u, double v) { return Eigen::Vector3d(u, v, 0.0); };
+  const std::vector<PointCloud> strips = {Patch(plane, 0, 100, 0, 100, true, 1),
+                                          Patch(plane, 70, 170, 0, 100, true, 2)};
+  Rigid3 D = Rigid3::Identity();  // about the overlap's centre (85, 50, 0)
+  D.linear() = (Eigen::AngleAxisd(0.4 * M_PI / 180, Eigen::Vector3d::UnitZ()) *
+                Eigen::AngleAxisd(0.3 * M_PI / 180, Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  const Eigen::Vector3d c(85, 50, 0);
+  D.translation() = c - D.linear() * c + Eigen::Vector3d(1.2, -0.8, 0.9);
+  const SweepMergeResult r = MergeSweeps(strips, {Rigid3::Identity(), D});
+  for (const double x : {72.0, 85.0, 98.0}) {
+    for (const double y : {5.0, 50.0, 95.0}) {
+      const Eigen::Vector3d p(x, y, 0), before = RelativeMove({Rigid3::Identity(), D}, p);
+      const Eigen::Vector3d after = RelativeMove(r.T_world_sweep, p);
+      EXPECT_LT(std::abs(after.z()), 0.02) << "pinned: height at " << x << ", " << y;
+      EXPECT_LT((after - before).head<2>().norm(), 0.02) << "free: the slide at " << x << ", " << y;
+    }
+  }
+}
+
+// The same on a cylinder (radius 150 mm, axis y): the slide along the axis and the turn about it are
+// free; the radial offset and the tilts are pinned.
+TEST(SweepMerge, CylinderStripKeepsTheTrackerAlongTheAxisAndAboutIt) {
+  auto cylinder = [](double u, double v) {
+    return Eigen::Vector3d(150.0 * std::sin(u / 150.0), v, 150.0 * std::cos(u / 150.0));
+  };
+  const std::vector<PointCloud> strips = {Patch(cylinder, -80, 20, 0, 100, false, 3),
+                                          Patch(cylinder, -10, 90, 0, 100, true, 4)};
+  Rigid3 D = Rigid3::Identity();
+  D.linear() = (Eigen::AngleAxisd(0.5 * M_PI / 180, Eigen::Vector3d::UnitY()) *  // free: about the axis
+                Eigen::AngleAxisd(0.3 * M_PI / 180, Eigen::Vector3d::UnitX()))   // pinned: a tilt
+                   .toRotationMatrix();
+  D.translation() = Eigen::Vector3d(0.0, 1.0, 0.0) + 0.8 * cylinder(5, 0).normalized();  // free + pinned
+  const SweepMergeResult r = MergeSweeps(strips, {Rigid3::Identity(), D});
+  for (const double u : {-8.0, 5.0, 18.0}) {
+    for (const double v : {5.0, 50.0, 95.0}) {
+      const Eigen::Vector3d p = cylinder(u, v), radial(p.x() / 150.0, 0.0, p.z() / 150.0);
+      const Eigen::Vector3d before = RelativeMove({Rigid3::Identity(), D}, p);
+      const Eigen::Vector3d after = RelativeMove(r.T_world_sweep, p);
+      EXPECT_LT(std::abs(after.dot(radial)), 0.02) << "pinned: radial offset at " << u << ", " << v;
+      const Eigen::Vector3d slide_before = before - before.dot(radial) * radial;
+      const Eigen::Vector3d slide_after = after - after.dot(radial) * radial;
+      // The priors split the pinned correction (about 1 mm here) between the two sweeps in their own
+      // metric, which is not aligned with the pair's free directions: the free part moves by a tenth of
+      // the pinned correction (0.05-0.14 mm measured), against 1.6 mm had it followed the data's noise.
+      EXPECT_LT((slide_after - slide_before).norm(), 0.2) << "free: slide at " << u << ", " << v;
+    }
+  }
+}
+
+// Exact starting poses: nothing moves by more than the noise allows. The data's own limit for the roll of
+// a 240 mm strip on a 30 mm band of 0.05 mm noise is about 0.02 degrees (see kStripTolerance), 0.04 mm at
+// its ends; measured 0.019-0.052 mm RMS per strip.
+TEST(SweepMerge, ExactPosesStayPut) {
+  std::vector<Rigid3> truth;
+  const auto strips = DomeStrips(4, &truth);
+  const SweepMergeResult r = MergeSweeps(strips, truth);
+  for (std::size_t s = 0; s < strips.size(); ++s) {
+    EXPECT_LT(RmsDisplacement(strips[s].positions, r.T_world_sweep[s], truth[s]), 0.07) << "strip " << s;
   }
 }
 
@@ -197,9 +307,9 @@ TEST(SweepMerge, RealBunnyFromDisturbedPosesReturnsToPublishedPlacement) {
   // Every sweep disturbed about its centroid: up to 3 degrees and 5 mm.
   for (std::size_t s = 0; s < sweeps.size(); ++s)
     start.push_back(DisturbAbout(&rng, 3.0, 5.0, sweeps[s], truth[s]));
-  const SweepMergeResult r = MergeSweeps(sweeps, start);
-  // The anchor (bun000) stays where it started, so the merged set is compared with bun.conf up to one
-  // common rigid motion.
+  const SweepMergeResult r = MergeSweeps(sweeps, start, DisturbedTracker());
+  // Every sweep started disturbed, so the merged set is compared with bun.conf up to one common rigid
+  // motion.
   const Rigid3 G = BestCommonMotion(sweeps, r.T_world_sweep, truth);
   for (std::size_t s = 0; s < sweeps.size(); ++s) {
     EXPECT_LE(RmsDisplacement(sweeps[s].positions, G * r.T_world_sweep[s], truth[s]), 0.3) << poses[s].file;
