@@ -12,17 +12,55 @@
 
 namespace pectus::datasets {
 
-/// How the scanner is used. Every sweep is a vertical strip of the chest, swept top to bottom with the
-/// laser line across it; strips run from the right mid-axillary line to the left one.
+/// How the points of a laser line are placed.
+enum class ScanSampling {
+  kGrid,    ///< a range grid: evenly spaced rays along each laser line (a range image, "line" x "column")
+  kRandom,  ///< unstructured: points uniformly at random over the swept area, same mean density as kGrid
+};
+/// How the chest is covered by the sweeps.
+enum class SweepPattern {
+  kVertical,    ///< vertical strips side by side, each swept top to bottom (the laser line across)
+  kHorizontal,  ///< horizontal strips one above the other, each swept across the chest (line vertical)
+  kPatches,     ///< a grid of rectangular patches (1 row up to 3 sweeps, 2 rows up to 8, then 3 rows)
+  kSpiral,      ///< one path spiralling out from the sternum, each sweep one turn of it
+};
+/// About which point the tracker's rotation error turns a sweep.
+enum class TrackerPivot {
+  kWand,   ///< the wand's mean position over the sweep (standoff_mm off the skin, with tremor)
+  kLever,  ///< the tracker's sensor: tracker_lever_mm off the sweep's mean skin point along its mean line
+           ///< of sight (docs/datasets.md, "The tracker's error")
+};
+/// How large each sweep's tracker error is.
+enum class TrackerDraw {
+  kExact,    ///< exactly tracker_deg and tracker_mm (or exactly tracker_skin_mm at the skin)
+  kUniform,  ///< each magnitude drawn uniformly in [0, the given value]
+};
+
+/// The name of a value as `pectus synth` takes it ("grid", "random"; "vertical", "horizontal", "patches",
+/// "spiral"; "wand", "lever"; "exact", "uniform").
+std::string ToString(ScanSampling sampling);
+std::string ToString(SweepPattern pattern);
+std::string ToString(TrackerPivot pivot);
+std::string ToString(TrackerDraw draw);
+/// The value of a name ToString gives; throws Error(kUsage) listing the names otherwise.
+ScanSampling ParseScanSampling(const std::string& text);
+SweepPattern ParseSweepPattern(const std::string& text);
+TrackerPivot ParseTrackerPivot(const std::string& text);
+TrackerDraw ParseTrackerDraw(const std::string& text);
+
+/// How the scanner is used. By default every sweep is a vertical strip of the chest, swept top to bottom
+/// with the laser line across it; strips run from the right mid-axillary line to the left one. The
+/// defaults of the fields after `tremor_deg` (sampling, pattern, the tracker's pivot, draw and skin
+/// displacement) give the scanner as it was before they existed, byte for byte.
 struct ScanOptions {
-  int sweeps = 5;              ///< number of strips, [1, 12] (3 to 8 is usual)
-  double overlap = 0.3;        ///< fraction of a strip's width shared with each neighbour, [0, 0.8]
+  int sweeps = 5;              ///< number of sweeps, [1, 12] (3 to 8 is usual)
+  double overlap = 0.3;        ///< fraction of a sweep's width shared with each neighbour, [0, 0.8]
   double spacing_mm = 1.0;     ///< distance between laser lines and between points on a line, at the
                                ///< strip's centre, (0.2, 20]
   double standoff_mm = 180.0;  ///< distance of the wand from the skin, [50, 500]
   double noise_mm = 0.2;       ///< standard deviation of the range noise along each ray, [0, 5]
   double tracker_deg = 0.5;    ///< rotation error of each sweep's tracker pose (exactly this angle, about
-                               ///< a random axis through the wand's mean position), [0, 10]
+                               ///< a random axis through the pivot, see tracker_pivot), [0, 10]
   double tracker_mm = 1.5;     ///< translation error of each sweep (exactly this length, random
                                ///< direction), [0, 50]
   double breathing_mm = 0.0;   ///< each sweep sees the chest displaced by a breathing field scaled by a
@@ -38,6 +76,18 @@ struct ScanOptions {
   double tremor_mm = 3.0;           ///< hand tremor: smooth wander of the wand's position, [0, 30]
   double tremor_deg = 1.0;          ///< hand tremor: smooth wander of the wand's direction, [0, 10]
 
+  ScanSampling sampling = ScanSampling::kGrid;       ///< range grid or unstructured points
+  SweepPattern pattern = SweepPattern::kVertical;    ///< how the sweeps cover the chest
+  TrackerPivot tracker_pivot = TrackerPivot::kWand;  ///< centre of the tracker's rotation error
+  double tracker_lever_mm = 200.0;  ///< kLever: the sensor's distance from the skin, mm, [20, 1000]
+  TrackerDraw tracker_draw = TrackerDraw::kExact;  ///< exact or uniformly drawn error magnitudes
+  /// If > 0: each sweep's error (rotation and translation, in the ratio tracker_deg : tracker_mm) is scaled
+  /// so that the RMS displacement of the sweep's true points is exactly this (kExact) or a value drawn
+  /// uniformly in [0, this] (kUniform), mm, [0, 50]; 0: tracker_deg and tracker_mm are the magnitudes.
+  double tracker_skin_mm = 0.0;
+
+  /// True if every field after tremor_deg has its default (the scanner as it was before they existed).
+  bool IsOriginalScanner() const;
   bool IsValid(std::string* why) const;
 };
 
@@ -56,11 +106,13 @@ struct SweepTruth {
   Rigid3 T_scan_sweep = Rigid3::Identity();  ///< maps the sweep's (tracker) coordinates to the scan frame
   double rotation_error_deg = 0.0;           ///< angle of T_scan_sweep's rotation
   double translation_error_mm = 0.0;         ///< the tracker's translation error
-  Eigen::Vector3d pivot = Eigen::Vector3d::Zero();  ///< the wand's mean position (scan frame), the centre of
-                                                    ///< the tracker's rotation error
+  Eigen::Vector3d pivot = Eigen::Vector3d::Zero();  ///< the centre of the tracker's rotation error (scan
+                                                    ///< frame): the wand's mean position or the sensor's
+  double skin_rms_mm = 0.0;   ///< RMS displacement of the sweep's true points by the tracker's error, mm
   double breathing_mm = 0.0;  ///< breathing displacement during this sweep (ChestSurface::WithBreathing)
-  double strip_u0 = 0.0, strip_u1 = 0.0;  ///< the strip's nominal extent in u
-  int lines = 0;                          ///< laser lines swept
+  double strip_u0 = 0.0, strip_u1 = 0.0;  ///< the sweep's nominal extent in u
+  double strip_v0 = 0.0, strip_v1 = 1.0;  ///< ... and in v (a spiral turn: its bounding box)
+  int lines = 0;                          ///< laser lines swept (positions of the wand)
   Points3 true_points;   ///< per point, the noise-free surface hit (scan frame, mm); for an outlier,
                          ///< the hit its ray was meant for
   Eigen::VectorXd u, v;  ///< per point, surface parameters of the hit
@@ -69,8 +121,8 @@ struct SweepTruth {
 
 /// One sweep: its points as the tracker placed them, and the truth.
 struct Sweep {
-  PointCloud cloud;  ///< positions in the sweep's (tracker) frame, mm; scalars "line" and "column" (laser
-                     ///< line and position along it, as a range image)
+  PointCloud cloud;  ///< positions in the sweep's (tracker) frame, mm; ScanSampling::kGrid: scalars "line"
+                     ///< and "column" (laser line and position along it, as a range image); kRandom: none
   SweepTruth truth;
 };
 

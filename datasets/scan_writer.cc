@@ -42,24 +42,34 @@ class Writer {
 nlohmann::json Vector(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
 nlohmann::json ScanOptionsJson(const ScanOptions& o) {
-  return {{"sweeps", o.sweeps},
-          {"overlap", o.overlap},
-          {"spacing_mm", o.spacing_mm},
-          {"standoff_mm", o.standoff_mm},
-          {"noise_mm", o.noise_mm},
-          {"tracker_deg", o.tracker_deg},
-          {"tracker_mm", o.tracker_mm},
-          {"breathing_mm", o.breathing_mm},
-          {"subject_holes", o.subject_holes},
-          {"sweep_holes", o.sweep_holes},
-          {"hole_min_mm", o.hole_min_mm},
-          {"hole_max_mm", o.hole_max_mm},
-          {"ragged_mm", o.ragged_mm},
-          {"outlier_fraction", o.outlier_fraction},
-          {"max_incidence_deg", o.max_incidence_deg},
-          {"incidence_falloff", o.incidence_falloff},
-          {"tremor_mm", o.tremor_mm},
-          {"tremor_deg", o.tremor_deg}};
+  nlohmann::json j = {{"sweeps", o.sweeps},
+                      {"overlap", o.overlap},
+                      {"spacing_mm", o.spacing_mm},
+                      {"standoff_mm", o.standoff_mm},
+                      {"noise_mm", o.noise_mm},
+                      {"tracker_deg", o.tracker_deg},
+                      {"tracker_mm", o.tracker_mm},
+                      {"breathing_mm", o.breathing_mm},
+                      {"subject_holes", o.subject_holes},
+                      {"sweep_holes", o.sweep_holes},
+                      {"hole_min_mm", o.hole_min_mm},
+                      {"hole_max_mm", o.hole_max_mm},
+                      {"ragged_mm", o.ragged_mm},
+                      {"outlier_fraction", o.outlier_fraction},
+                      {"max_incidence_deg", o.max_incidence_deg},
+                      {"incidence_falloff", o.incidence_falloff},
+                      {"tremor_mm", o.tremor_mm},
+                      {"tremor_deg", o.tremor_deg}};
+  // The widened scanner's options only where one is used, so that the original's files stay as they were.
+  if (!o.IsOriginalScanner()) {
+    j["sampling"] = ToString(o.sampling);
+    j["pattern"] = ToString(o.pattern);
+    j["tracker_pivot"] = ToString(o.tracker_pivot);
+    j["tracker_lever_mm"] = o.tracker_lever_mm;
+    j["tracker_draw"] = ToString(o.tracker_draw);
+    j["tracker_skin_mm"] = o.tracker_skin_mm;
+  }
+  return j;
 }
 
 void WriteJson(const fs::path& path, const nlohmann::json& j) { WriteFileAtomically(path, j.dump(2) + "\n"); }
@@ -130,6 +140,10 @@ std::uintmax_t WriteSubjectFolder(const ScannedSubject& s, const fs::path& folde
     j["tracker_pivot_mm"] = Vector(t.pivot);
     j["breathing_mm"] = t.breathing_mm;
     j["strip_u"] = {t.strip_u0, t.strip_u1};
+    if (!s.options.IsOriginalScanner()) {
+      j["strip_v"] = {t.strip_v0, t.strip_v1};
+      j["tracker_skin_rms_mm"] = t.skin_rms_mm;
+    }
     sweeps.push_back(j);
     conf.push_back({"../" + SweepFileName(index), t.T_scan_sweep});
   }

@@ -85,6 +85,10 @@ class SynthCommand : public Command {
     std::string why;
     cohort_options_.seed = seed_;
     cohort_options_.subject = subject_;
+    scan_.sampling = ds::ParseScanSampling(sampling_);
+    scan_.pattern = ds::ParseSweepPattern(pattern_);
+    scan_.tracker_pivot = ds::ParseTrackerPivot(tracker_pivot_);
+    scan_.tracker_draw = ds::ParseTrackerDraw(tracker_draw_);
     cohort_options_.scan = scan_;
     if (!cohort_options_.IsValid(&why)) ThrowUsage(why);
     if (!write_.IsValid(&why)) ThrowUsage(why);
@@ -174,7 +178,7 @@ class SynthCommand : public Command {
     sub->add_option("-o,--out", out_, "Output folder")->required();
     sub->add_option("--seed", seed_, "Random seed (same seed, same data)")->capture_default_str();
     sub->add_option("--sweeps", scan_.sweeps, "Sweeps per subject (3-8 usual)")->capture_default_str();
-    sub->add_option("--overlap", scan_.overlap, "Fraction of a strip shared with each neighbour")
+    sub->add_option("--overlap", scan_.overlap, "Fraction of a sweep's width shared with each neighbour")
         ->capture_default_str();
     sub->add_option("--spacing", scan_.spacing_mm, "Point spacing at a strip's centre (mm)")
         ->capture_default_str();
@@ -183,6 +187,34 @@ class SynthCommand : public Command {
         ->capture_default_str();
     sub->add_option("--tracker-mm", scan_.tracker_mm, "Translation error of each sweep's pose (mm)")
         ->capture_default_str();
+    sub->add_option("--tracker-pivot", tracker_pivot_,
+                    "Centre of the rotation error: wand (the wand's mean position) or lever (the tracker's "
+                    "sensor, --tracker-lever off the skin along the line of sight)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"wand", "lever"}));
+    sub->add_option("--tracker-lever", scan_.tracker_lever_mm,
+                    "Sensor-to-skin distance of --tracker-pivot lever (mm)")
+        ->capture_default_str();
+    sub->add_option("--tracker-draw", tracker_draw_,
+                    "exact: every sweep's error is the given size; uniform: drawn in [0, the given size]")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"exact", "uniform"}));
+    sub->add_option(
+           "--tracker-skin", scan_.tracker_skin_mm,
+           "If > 0: scale each sweep's error (rotation and translation in the ratio of --tracker-deg to "
+           "--tracker-mm) to this RMS displacement of its points (mm)")
+        ->capture_default_str();
+    sub->add_option(
+           "--sampling", sampling_,
+           "grid (a range image: lines and columns) or random (points uniformly at random, same density)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"grid", "random"}));
+    sub->add_option(
+           "--pattern", pattern_,
+           "Sweeps as vertical strips, horizontal strips, patches (a grid) or spiral (turns out from the "
+           "sternum)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"vertical", "horizontal", "patches", "spiral"}));
     sub->add_option("--breathing", scan_.breathing_mm, "Breathing displacement between sweeps, up to (mm)")
         ->capture_default_str();
     sub->add_option("--holes", scan_.subject_holes, "Holes in every sweep (hair, dark skin)")
@@ -294,6 +326,7 @@ class SynthCommand : public Command {
   ds::GrowthOptions growth_;
   ds::PectusParameters pectus_;
   std::string pectus_type_ = "saucer";
+  std::string sampling_ = "grid", pattern_ = "vertical", tracker_pivot_ = "wand", tracker_draw_ = "exact";
 };
 
 PECTUS_REGISTER_COMMAND(SynthCommand, 90);

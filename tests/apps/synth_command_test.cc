@@ -77,6 +77,30 @@ TEST_F(SynthCommand, SubjectPairAndPatientWriteTheirFolders) {
   EXPECT_TRUE(fs::exists(dir_ / "t/patient_3/sweep_00.ply"));
 }
 
+// The widened scanner from the command line: a spiral of random points whose tracker error moves each
+// sweep's points by exactly 3 mm RMS about the sensor; poses.json records the options and, per sweep, the
+// displacement at the skin; the sweep files carry no range-image scalars. A bad pattern is a usage error.
+TEST_F(SynthCommand, WidenedScannerOptionsReachTheFiles) {
+  ASSERT_EQ(Pectus("synth subject --seed 3 --pattern spiral --sampling random --tracker-pivot lever "
+                   "--tracker-lever 250 --tracker-skin 3 --out " +
+                   P("w") + kSmall)
+                .code,
+            0);
+  const nlohmann::json poses = nlohmann::json::parse(Slurp(dir_ / "w/truth/poses.json"));
+  EXPECT_EQ(poses["scan_options"]["pattern"], "spiral");
+  EXPECT_EQ(poses["scan_options"]["sampling"], "random");
+  EXPECT_EQ(poses["scan_options"]["tracker_pivot"], "lever");
+  EXPECT_EQ(poses["scan_options"]["tracker_lever_mm"], 250.0);
+  ASSERT_EQ(poses["sweeps"].size(), 3u);
+  for (const nlohmann::json& sweep : poses["sweeps"])
+    EXPECT_NEAR(sweep["tracker_skin_rms_mm"].get<double>(), 3.0, 1e-6);
+  EXPECT_EQ(Slurp(dir_ / "w/sweep_00.ply").find("property float line"), std::string::npos);
+  // The original scanner's files name none of the new options.
+  ASSERT_EQ(Pectus("synth subject --seed 3 --out " + P("o") + kSmall).code, 0);
+  EXPECT_FALSE(nlohmann::json::parse(Slurp(dir_ / "o/truth/poses.json"))["scan_options"].contains("pattern"));
+  EXPECT_EQ(Pectus("synth subject --pattern zigzag --out " + P("x") + kSmall).code, 2);
+}
+
 TEST_F(SynthCommand, HelpShowsAWorkedExample) {
   const CliRun run = Pectus("synth cohort --help");
   EXPECT_EQ(run.code, 0);

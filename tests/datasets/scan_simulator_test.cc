@@ -3,6 +3,7 @@
 #include "datasets/scan_simulator.h"
 
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -171,6 +172,87 @@ TEST(ScanSimulator, DeterministicPerSeed) {
   EXPECT_NE(a.sweeps[0].cloud.size(), c.sweeps[0].cloud.size());
 }
 
+// Distances from each true point of `t` inside the strip's middle (away from its borders and ends) to its
+// nearest other true point of the same sweep, mm.
+std::vector<double> NearestNeighbourDistances(const SweepTruth& t) {
+  const double uc = 0.5 * (t.strip_u0 + t.strip_u1), half = 0.5 * (t.strip_u1 - t.strip_u0);
+  std::vector<double> d;
+  for (Eigen::Index i = 0; i < t.true_points.rows(); ++i) {
+    if (std::abs(t.u(i) - uc) > 0.5 * half || t.v(i) < 0.3 || t.v(i) > 0.7) continue;
+    double best = 1e9;
+    for (Eigen::Index j = 0; j < t.true_points.rows(); ++j) {
+      if (j != i) best = std::min(best, (t.true_points.row(i) - t.true_points.row(j)).squaredNorm());
+    }
+    d.push_back(std::sqrt(best));
+  }
+  return d;
+}
+
+// Random sampling is a Poisson process of the grid's density: the same number of points (within 3 %),
+// and nearest-neighbour distances as a Poisson process of intensity 1 / spacing^2 has them (Rayleigh:
+// mean 0.5 spacing, coefficient of variation 0.523), not a lattice's (all about one spacing: CV < 0.25).
+// Tolerances: mean within 12 % (the surface is curved and the fan's rays spread with incidence), CV within
+// [0.42, 0.62].
+TEST(ScanSimulator, RandomSamplingIsAPoissonProcessOfTheGridsDensity) {
+  const ChestSurface surface = Subject();
+  ScanOptions o = Options();
+  o.sweeps = 3;
+  o.noise_mm = 0.0;
+  o.outlier_fraction = 0.0;
+  o.incidence_falloff = 0.0;
+  o.subject_holes = o.sweep_holes = 0;
+  auto stats = [](const std::vector<double>& d) {
+    double mean = 0.0, var = 0.0;
+    for (double x : d) mean += x;
+    mean /= static_cast<double>(d.size());
+    for (double x : d) var += (x - mean) * (x - mean);
+    return std::make_pair(mean, std::sqrt(var / static_cast<double>(d.size())) / mean);
+  };
+  const Scan grid = SimulateScan(surface, o, 12);
+  o.sampling = ScanSampling::kRandom;
+  const Scan random = SimulateScan(surface, o, 12);
+  for (std::size_t k = 0; k < grid.sweeps.size(); ++k) {
+    SCOPED_TRACE("sweep " + std::to_string(k));
+    EXPECT_NEAR(static_cast<double>(random.sweeps[k].cloud.size()) / grid.sweeps[k].cloud.size(), 1.0, 0.03);
+    EXPECT_EQ(random.sweeps[k].cloud.scalars.count("line"), 0u);
+    const auto [grid_mean, grid_cv] = stats(NearestNeighbourDistances(grid.sweeps[k].truth));
+    const auto [random_mean, random_cv] = stats(NearestNeighbourDistances(random.sweeps[k].truth));
+    EXPECT_LT(grid_cv, 0.25);
+    EXPECT_NEAR(grid_mean, o.spacing_mm, 0.25 * o.spacing_mm);
+    EXPECT_NEAR(random_mean, 0.5 * o.spacing_mm, 0.12 * 0.5 * o.spacing_mm);
+    EXPECT_GT(random_cv, 0.42);
+    EXPECT_LT(random_cv, 0.62);
+  }
+}
+
+// Every pattern, sampling and tracker option: the same seed gives the same sweeps with 1 and 2 threads.
+TEST(ScanSimulator, DeterministicPerSeedWhateverTheThreads) {
+  const ChestSurface surface = Subject();
+  ScanOptions o = Options();
+  o.sweeps = 3;
+  o.spacing_mm = 3.0;
+  o.sampling = ScanSampling::kRandom;
+  o.tracker_pivot = TrackerPivot::kLever;
+  o.tracker_draw = TrackerDraw::kUniform;
+  o.tracker_skin_mm = 3.0;
+  const int threads = omp_get_max_threads();
+  for (SweepPattern pattern :
+       {SweepPattern::kVertical, SweepPattern::kHorizontal, SweepPattern::kPatches, SweepPattern::kSpiral}) {
+    o.pattern = pattern;
+    omp_set_num_threads(1);
+    const Scan a = SimulateScan(surface, o, 31);
+    omp_set_num_threads(2);
+    const Scan b = SimulateScan(surface, o, 31);
+    ASSERT_EQ(a.sweeps.size(), b.sweeps.size());
+    for (std::size_t k = 0; k < a.sweeps.size(); ++k) {
+      ASSERT_GT(a.sweeps[k].cloud.size(), 100) << ToString(pattern);
+      ASSERT_EQ(a.sweeps[k].cloud.positions, b.sweeps[k].cloud.positions) << ToString(pattern);
+      EXPECT_TRUE(a.sweeps[k].truth.T_scan_sweep.isApprox(b.sweeps[k].truth.T_scan_sweep, 0.0));
+    }
+  }
+  omp_set_num_threads(threads);
+}
+
 TEST(ScanSimulator, RejectsInvalidOptions) {
   ScanOptions o;
   o.sweeps = 0;
@@ -178,6 +260,11 @@ TEST(ScanSimulator, RejectsInvalidOptions) {
   o = ScanOptions();
   o.noise_mm = -1.0;
   EXPECT_THROW(SimulateScan(Subject(), o, 1), Error);
+  o = ScanOptions();
+  o.tracker_lever_mm = 5.0;
+  EXPECT_THROW(SimulateScan(Subject(), o, 1), Error);
+  EXPECT_THROW(ParseSweepPattern("zigzag"), Error);
+  EXPECT_EQ(ParseSweepPattern(ToString(SweepPattern::kSpiral)), SweepPattern::kSpiral);
 }
 
 }  // namespace

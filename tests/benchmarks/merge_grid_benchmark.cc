@@ -1,0 +1,351 @@
+// Benchmark of MergeSweeps over the space of what a handheld scanner delivers (issue 13): tracker error at
+// the skin x overlap x sampling x sweep count, on synthetic chests with exact truth (datasets/), and
+// Open3D's multiway registration (scripts/peers/open3d_multiway.py, run with /usr/bin/python3) on the same
+// sweeps. Per cell (and seed): the merge from the poses the tracker reports (each sweep's points as the
+// scanner delivered them, start pose identity; truth T_scan_sweep), then
+//   - success: the merge did not throw and every sweep lies within --success-mm (1 mm) RMS of its true
+//     position after the one rigid motion that best maps all merged points onto their true positions;
+//   - shape error after that rigid fit: RMS and max over all inlier points (mm);
+//   - pose error per sweep (rotation deg, translation at its centroid mm), and along the eigen-directions
+//     of its overlap information matrix (merge_grid_benchmark_metrics.h): "weak" along the least pinned
+//     direction, "pinned" the norm along the other five, with the smallest eigenvalue / largest;
+//   - wall time of the merge;
+//   - from the exact poses: how far the merge moves each sweep (RMS displacement, mm, after the fit).
+// JSON on stdout; a PNG of success and RMS over the grid (--png). The default grid runs in a few minutes;
+// --full runs skin {0, 2, 4, 6} mm x overlap {0.10, 0.15, 0.20, 0.30, 0.40} x sampling {grid, random} x
+// sweeps {3, 5, 8}.
+//
+//   build/tests/benchmarks/merge_grid_benchmark [--full] [--skin 0,4] [--overlap 0.1,0.2,0.4]
+//       [--sampling grid,random] [--sweeps 5] [--seeds 1] [--seed 1] [--pattern horizontal]
+//       [--spacing 1.5] [--no-open3d] [--png merge_grid.png] [--workdir /tmp/pectus_merge_grid]
+//       [--prior-deg D --prior-mm M --prior-lever L] [--min-overlap-fraction F] [--border-shift S]
+// (the last two override MergeSweeps's defaults, SweepMergeOptions::min_overlap_fraction and
+// SweepSurfaceOptions::border_shift, to see what limits it)
+#include <omp.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "datasets/synth.h"
+#include "shape/io/mesh_io.h"
+#include "shape/surface/merge_sweeps.h"
+#include "tests/benchmarks/merge_grid_benchmark_figure.h"
+#include "tests/benchmarks/merge_grid_benchmark_metrics.h"
+
+using namespace pectus;
+namespace ds = pectus::datasets;
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+struct Flags {
+  std::vector<double> skin = {0, 4}, overlap = {0.1, 0.2, 0.4};
+  std::vector<std::string> sampling = {"grid", "random"};
+  std::vector<double> sweeps = {5};
+  int seeds = 1, seed = 1;
+  std::string pattern = "horizontal", png = "merge_grid.png", workdir = "/tmp/pectus_merge_grid";
+  double spacing_mm = 1.5, success_mm = 1.0, lever_mm = 200.0;
+  double prior_deg = 0.0, prior_mm = 0.0, prior_lever_mm = 200.0;  // the tracker prior, see MergeOptions
+  double min_overlap_fraction = -1.0, border_shift = -1.0;         // < 0: MergeSweeps's defaults
+  bool open3d = true;
+};
+
+std::vector<double> Numbers(const std::string& text) {
+  std::vector<double> v;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) v.push_back(std::stod(item));
+  return v;
+}
+
+std::vector<std::string> Words(const std::string& text) {
+  std::vector<std::string> v;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) v.push_back(item);
+  return v;
+}
+
+Flags Parse(int argc, char** argv) {
+  Flags f;
+  for (int a = 1; a < argc; ++a) {
+    const std::string key = argv[a];
+    auto value = [&]() -> std::string {
+      if (a + 1 >= argc) {
+        std::fprintf(stderr, "%s needs a value\n", key.c_str());
+        std::exit(2);
+      }
+      return argv[++a];
+    };
+    if (key == "--full") {
+      f.skin = {0, 2, 4, 6};
+      f.overlap = {0.10, 0.15, 0.20, 0.30, 0.40};
+      f.sampling = {"grid", "random"};
+      f.sweeps = {3, 5, 8};
+    } else if (key == "--skin")
+      f.skin = Numbers(value());
+    else if (key == "--overlap")
+      f.overlap = Numbers(value());
+    else if (key == "--sampling")
+      f.sampling = Words(value());
+    else if (key == "--sweeps")
+      f.sweeps = Numbers(value());
+    else if (key == "--seeds")
+      f.seeds = std::stoi(value());
+    else if (key == "--seed")
+      f.seed = std::stoi(value());
+    else if (key == "--pattern")
+      f.pattern = value();
+    else if (key == "--spacing")
+      f.spacing_mm = std::stod(value());
+    else if (key == "--success-mm")
+      f.success_mm = std::stod(value());
+    else if (key == "--lever")
+      f.lever_mm = std::stod(value());
+    else if (key == "--prior-deg")
+      f.prior_deg = std::stod(value());
+    else if (key == "--prior-mm")
+      f.prior_mm = std::stod(value());
+    else if (key == "--prior-lever")
+      f.prior_lever_mm = std::stod(value());
+    else if (key == "--min-overlap-fraction")
+      f.min_overlap_fraction = std::stod(value());
+    else if (key == "--border-shift")
+      f.border_shift = std::stod(value());
+    else if (key == "--png")
+      f.png = value();
+    else if (key == "--workdir")
+      f.workdir = value();
+    else if (key == "--no-open3d")
+      f.open3d = false;
+    else {
+      std::fprintf(stderr, "unknown flag %s (see the comment at the top of merge_grid_benchmark.cc)\n",
+                   key.c_str());
+      std::exit(2);
+    }
+  }
+  return f;
+}
+
+// The merge's options, set here only. TODO(issue 13): when SweepMergeOptions gains the tracker prior
+// (tracker_deg and tracker_mm, 1 sd of the tracker's stated accuracy, and tracker_lever_mm), set them
+// from the flags: options.tracker_deg = f.prior_deg; options.tracker_mm = f.prior_mm;
+// options.tracker_lever_mm = f.prior_lever_mm.
+SweepMergeOptions MergeOptions(const Flags& f) {
+  SweepMergeOptions options;
+  if (f.min_overlap_fraction >= 0.0) options.min_overlap_fraction = f.min_overlap_fraction;
+  if (f.border_shift >= 0.0) options.surface.border_shift = f.border_shift;
+  return options;
+}
+
+// One run of a method on one scan.
+struct Run {
+  bool threw = false, success = false;
+  std::string error;
+  double seconds = 0.0;
+  merge_grid::Figures figures;
+  json Json(const std::vector<merge_grid::Constraint>& constraints) const {
+    if (threw) return {{"threw", error}, {"success", false}, {"seconds", seconds}};
+    json sweeps = json::array();
+    for (std::size_t s = 0; s < figures.sweep_rms_mm.size(); ++s) {
+      const Eigen::Matrix<double, 6, 1> along = constraints[s].directions.transpose() * figures.twist[s];
+      sweeps.push_back({{"rms_mm", figures.sweep_rms_mm[s]},
+                        {"rotation_deg", figures.rotation_deg[s]},
+                        {"translation_mm", figures.translation_mm[s]},
+                        {"weak_mm", std::abs(along(0))},
+                        {"pinned_mm", along.tail<5>().norm()},
+                        {"weakest_eigenvalue_ratio", constraints[s].eigenvalue_ratio(0)}});
+    }
+    return {{"success", success},
+            {"rms_mm", figures.rms_mm},
+            {"max_mm", figures.max_mm},
+            {"seconds", seconds},
+            {"sweeps", sweeps}};
+  }
+};
+
+Run Score(Run run, const std::vector<Points3>& inliers, const std::vector<Rigid3>& estimate,
+          const std::vector<Rigid3>& truth, double success_mm) {
+  run.figures = merge_grid::Evaluate(inliers, estimate, truth);
+  run.success = true;
+  for (double r : run.figures.sweep_rms_mm) run.success = run.success && r <= success_mm;
+  return run;
+}
+
+Run RunPectus(const std::vector<PointCloud>& clouds, const std::vector<Rigid3>& start,
+              const std::vector<Points3>& inliers, const std::vector<Rigid3>& truth, const Flags& f) {
+  Run run;
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    const SweepMergeResult r = MergeSweeps(clouds, start, MergeOptions(f));
+    run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return Score(run, inliers, r.T_world_sweep, truth, f.success_mm);
+  } catch (const std::exception& e) {
+    run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    run.threw = true;
+    run.error = e.what();
+    return run;
+  }
+}
+
+Run RunOpen3d(const std::vector<PointCloud>& clouds, const fs::path& dir, const std::vector<Points3>& inliers,
+              const std::vector<Rigid3>& truth, const Flags& f) {
+  fs::create_directories(dir);
+  std::string files;
+  for (std::size_t s = 0; s < clouds.size(); ++s) {
+    PointCloud c;
+    c.positions = clouds[s].positions;
+    const fs::path p = dir / ("sweep_" + std::to_string(s) + ".ply");
+    WritePointCloud(p, c);
+    files += " " + p.string();
+  }
+  const fs::path out = dir / "open3d.json";
+  const std::string cmd = "/usr/bin/python3 " + std::string(PECTUS_SOURCE_DIR) +
+                          "/scripts/peers/open3d_multiway.py" + files + " > " + out.string() + " 2> " +
+                          (dir / "open3d.err").string();
+  Run run;
+  if (std::system(cmd.c_str()) != 0) {
+    run.threw = true;
+    run.error = "command failed: " + cmd;
+    return run;
+  }
+  std::ifstream in(out);
+  const json o = json::parse(in);
+  std::vector<Rigid3> T(clouds.size(), Rigid3::Identity());
+  for (std::size_t s = 0; s < clouds.size(); ++s)
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) T[s].matrix()(i, j) = o["T_world_sweep"][s][i][j].get<double>();
+  run.seconds = o["seconds"].get<double>();
+  return Score(run, inliers, T, truth, f.success_mm);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Flags f = Parse(argc, argv);
+  std::string command;
+  for (int a = 0; a < argc; ++a) command += (a ? " " : "") + std::string(argv[a]);
+  std::ifstream load_file("/proc/loadavg");
+  std::string load;
+  std::getline(load_file, load);
+  json cells = json::array();
+  std::vector<merge_grid::CellFigure> picture;
+  for (double skin : f.skin) {
+    for (double overlap : f.overlap) {
+      for (const std::string& sampling : f.sampling) {
+        for (double count : f.sweeps) {
+          ds::ScanOptions o;
+          o.pattern = ds::ParseSweepPattern(f.pattern);
+          o.sampling = ds::ParseScanSampling(sampling);
+          o.sweeps = static_cast<int>(count);
+          o.overlap = overlap;
+          o.spacing_mm = f.spacing_mm;
+          o.tracker_pivot = ds::TrackerPivot::kLever;
+          o.tracker_lever_mm = f.lever_mm;
+          if (skin > 0.0) {
+            o.tracker_skin_mm =
+                skin;  // rotation : translation as tracker_deg : tracker_mm (0.5 deg : 1.5 mm)
+          } else {
+            o.tracker_deg = o.tracker_mm = 0.0;
+          }
+          json runs = json::array();
+          std::map<std::string, std::vector<double>> success, rms;
+          for (int k = 0; k < f.seeds; ++k) {
+            const std::uint64_t seed = static_cast<std::uint64_t>(f.seed + k);
+            const ds::SyntheticSubject subject = ds::MakeSubject(ds::SubjectOptions{}, seed, 0);
+            const ds::ScannedSubject scanned = ds::ScanSubject(subject, o, 0.0, ds::CohortScanSeed(seed, 0));
+            std::vector<PointCloud> clouds;
+            std::vector<Points3> inliers;
+            std::vector<Rigid3> truth, identity;
+            for (const ds::Sweep& s : scanned.scan.sweeps) {
+              clouds.push_back(s.cloud);
+              inliers.push_back(merge_grid::Inliers(s));
+              truth.push_back(s.truth.T_scan_sweep);
+              identity.push_back(Rigid3::Identity());
+            }
+            const std::vector<merge_grid::Constraint> constraints =
+                merge_grid::OverlapConstraints(subject.Skin(), scanned.scan.sweeps);
+            json one = {{"seed", seed}};
+            json skin_rms = json::array();
+            for (const ds::Sweep& s : scanned.scan.sweeps) skin_rms.push_back(s.truth.skin_rms_mm);
+            one["tracker_skin_rms_mm"] = skin_rms;
+            const Run pectus = RunPectus(clouds, identity, inliers, truth, f);
+            one["pectus"] = pectus.Json(constraints);
+            success["pectus"].push_back(pectus.success);
+            if (!pectus.threw) rms["pectus"].push_back(pectus.figures.rms_mm);
+            const Run exact = RunPectus(clouds, truth, inliers, truth, f);
+            one["pectus_from_exact_poses"] = exact.Json(constraints);
+            if (f.open3d) {
+              char name[96];
+              std::snprintf(name, sizeof name, "skin%g_overlap%g_%s_%d_seed%llu", skin, overlap,
+                            sampling.c_str(), o.sweeps, static_cast<unsigned long long>(seed));
+              const Run peer = RunOpen3d(clouds, fs::path(f.workdir) / name, inliers, truth, f);
+              one["open3d"] = peer.Json(constraints);
+              success["open3d"].push_back(peer.success);
+              if (!peer.threw) rms["open3d"].push_back(peer.figures.rms_mm);
+            }
+            runs.push_back(one);
+          }
+          json cell = {{"skin_mm", skin},
+                       {"overlap", overlap},
+                       {"sampling", sampling},
+                       {"sweeps", o.sweeps},
+                       {"runs", runs}};
+          for (const auto& [method, s] : success) {
+            merge_grid::CellFigure c{skin, overlap, sampling, o.sweeps, method};
+            double ok = 0.0, sum = 0.0;
+            for (double x : s) ok += x;
+            for (double x : rms[method]) sum += x;
+            c.success = ok / static_cast<double>(s.size());
+            c.rms_mm = rms[method].empty() ? NAN : sum / static_cast<double>(rms[method].size());
+            cell[method + "_success_rate"] = c.success;
+            cell[method + "_rms_mm_mean"] = rms[method].empty() ? json(nullptr) : json(c.rms_mm);
+            picture.push_back(c);
+          }
+          std::string summary;
+          for (const merge_grid::CellFigure& c : picture) {
+            if (c.skin_mm == skin && c.overlap == overlap && c.sampling == sampling && c.sweeps == o.sweeps) {
+              char text[96];
+              std::snprintf(text, sizeof text, "  %s success %.2f rms %.3f mm", c.method.c_str(), c.success,
+                            c.rms_mm);
+              summary += text;
+            }
+          }
+          std::fprintf(stderr, "skin %g mm, overlap %.2f, %s, %d sweeps:%s\n", skin, overlap,
+                       sampling.c_str(), o.sweeps, summary.c_str());
+          cells.push_back(cell);
+        }
+      }
+    }
+  }
+  const json report = {
+      {"benchmark", "merge_grid"},
+      {"command", command},
+      {"pattern", f.pattern},
+      {"spacing_mm", f.spacing_mm},
+      {"tracker", "pivot lever " + std::to_string(f.lever_mm) +
+                      " mm; rotation : translation as 0.5 deg : 1.5 mm, scaled to the skin RMS"},
+      {"success_mm", f.success_mm},
+      {"tracker_prior",
+       {{"deg", f.prior_deg}, {"mm", f.prior_mm}, {"lever_mm", f.prior_lever_mm}, {"wired", false}}},
+      {"merge_options",
+       {{"min_overlap_fraction", MergeOptions(f).min_overlap_fraction},
+        {"border_shift", MergeOptions(f).surface.border_shift},
+        {"overlap_distance_mm", MergeOptions(f).overlap_distance_mm}}},
+      {"threads", omp_get_max_threads()},
+      {"load_average", load},
+      {"cells", cells}};
+  std::printf("%s\n", report.dump(1).c_str());
+  if (!f.png.empty())
+    merge_grid::WriteGridFigure(picture, f.png,
+                                "MergeSweeps vs Open3D multiway: " + f.pattern +
+                                    " sweeps; rows tracker error at the skin (mm RMS), columns overlap; "
+                                    "panel: method, sampling, sweep count");
+  return 0;
+}
