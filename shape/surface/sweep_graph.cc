@@ -84,10 +84,27 @@ std::vector<SweepLink> FindSweepLinks(const std::vector<SweepSurface>& S, const 
 #pragma omp parallel for schedule(dynamic)
   for (std::size_t k = 0; k < all.size(); ++k) {
     const auto [i, j, unused] = all[k];
-    auto fraction = [&](std::size_t a, std::size_t b) {  // of b's samples on a
-      const auto c = FindSweepCorrespondences(S, P, a, b, 2000, distance_mm);
-      const double tried = double(std::min<std::size_t>(S[b].samples.size(), 2000));
-      return double(c.size()) / std::max(1.0, tried);
+    // Of b's samples (at most 2000, evenly strided), those with a point of a within distance_mm that is
+    // not on a's border, neither seen at a grazing angle, facing the same way (normals within 45 degrees):
+    // the surfaces overlap there where both sweeps see them well,
+    // whatever the sampling (no tangential test, which unstructured sampling fails by its own gaps).
+    auto fraction = [&](std::size_t a, std::size_t b) {
+      const Rigid3 T_a_b = P[a].inverse() * P[b];
+      const std::size_t count = S[b].samples.size();
+      const std::size_t stride = std::max<std::size_t>(1, count / 2000);
+      double on = 0, tried = 0;
+      for (std::size_t q = 0; q < count; q += stride) {
+        const std::uint32_t r = S[b].samples[q];
+        tried += 1;
+        std::uint32_t nearest = 0;
+        double d2 = 0;
+        const Eigen::Vector3d x = T_a_b * S[b].cloud->positions.row(r).transpose() - S[a].target->origin();
+        if (!S[a].target->tree().NearestWithin(x, distance_mm, &nearest, &d2) || S[a].border[nearest])
+          continue;
+        const Eigen::Vector3d nb = T_a_b.linear() * S[b].normals.row(r).transpose();
+        if (nb.dot(S[a].normals.row(nearest).transpose()) > std::cos(M_PI / 4)) on += 1;
+      }
+      return on / std::max(1.0, tried);
     };
     all[k].overlap = std::max(fraction(i, j), fraction(j, i));
   }

@@ -26,7 +26,9 @@ struct SweepLink {
 void OrientSweeps(const std::vector<Rigid3>& P, double distance_mm, std::size_t anchor,
                   std::vector<SweepSurface>* sweeps);
 
-/// Every pair overlapping by at least min_fraction of the smaller sweep's samples (within distance_mm).
+/// Every pair overlapping by at least min_fraction of the smaller sweep's samples: samples with a point of
+/// the other sweep within distance_mm that is not on its border, neither grazing, facing the same way
+/// (normals within 45 degrees).
 std::vector<SweepLink> FindSweepLinks(const std::vector<SweepSurface>& S, const std::vector<Rigid3>& P,
                                       double distance_mm, double min_fraction);
 

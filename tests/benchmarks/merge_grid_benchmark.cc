@@ -18,9 +18,9 @@
 //   build/tests/benchmarks/merge_grid_benchmark [--full] [--skin 0,4] [--overlap 0.1,0.2,0.4]
 //       [--sampling grid,random] [--sweeps 5] [--seeds 1] [--seed 1] [--pattern horizontal]
 //       [--spacing 1.5] [--no-open3d] [--png merge_grid.png] [--workdir /tmp/pectus_merge_grid]
-//       [--prior-deg D --prior-mm M --prior-lever L] [--min-overlap-fraction F] [--border-shift S]
-// (the last two override MergeSweeps's defaults, SweepMergeOptions::min_overlap_fraction and
-// SweepSurfaceOptions::border_shift, to see what limits it)
+//       [--prior-deg D --prior-mm M --prior-lever L] [--min-overlap-fraction F] [--border-gap DEG]
+// (the tracker prior, SweepMergeOptions::tracker_deg/tracker_mm/tracker_lever_mm, defaults MergeSweeps's;
+// the last two override SweepMergeOptions::min_overlap_fraction and SweepSurfaceOptions::border_gap_deg)
 #include <omp.h>
 
 #include <chrono>
@@ -53,8 +53,8 @@ struct Flags {
   int seeds = 1, seed = 1;
   std::string pattern = "horizontal", png = "merge_grid.png", workdir = "/tmp/pectus_merge_grid";
   double spacing_mm = 1.5, success_mm = 1.0, lever_mm = 200.0;
-  double prior_deg = 0.0, prior_mm = 0.0, prior_lever_mm = 200.0;  // the tracker prior, see MergeOptions
-  double min_overlap_fraction = -1.0, border_shift = -1.0;         // < 0: MergeSweeps's defaults
+  double prior_deg = -1.0, prior_mm = -1.0, prior_lever_mm = -1.0;  // < 0: MergeSweeps's defaults
+  double min_overlap_fraction = -1.0, border_gap_deg = -1.0;        // < 0: MergeSweeps's defaults
   bool open3d = true;
 };
 
@@ -116,8 +116,8 @@ Flags Parse(int argc, char** argv) {
       f.prior_lever_mm = std::stod(value());
     else if (key == "--min-overlap-fraction")
       f.min_overlap_fraction = std::stod(value());
-    else if (key == "--border-shift")
-      f.border_shift = std::stod(value());
+    else if (key == "--border-gap")
+      f.border_gap_deg = std::stod(value());
     else if (key == "--png")
       f.png = value();
     else if (key == "--workdir")
@@ -133,14 +133,15 @@ Flags Parse(int argc, char** argv) {
   return f;
 }
 
-// The merge's options, set here only. TODO(issue 13): when SweepMergeOptions gains the tracker prior
-// (tracker_deg and tracker_mm, 1 sd of the tracker's stated accuracy, and tracker_lever_mm), set them
-// from the flags: options.tracker_deg = f.prior_deg; options.tracker_mm = f.prior_mm;
-// options.tracker_lever_mm = f.prior_lever_mm.
+// The merge's options, set here only: the tracker prior (1 sd of the tracker's stated accuracy) and the
+// overrides.
 SweepMergeOptions MergeOptions(const Flags& f) {
   SweepMergeOptions options;
+  if (f.prior_deg >= 0.0) options.tracker_deg = f.prior_deg;
+  if (f.prior_mm >= 0.0) options.tracker_mm = f.prior_mm;
+  if (f.prior_lever_mm >= 0.0) options.tracker_lever_mm = f.prior_lever_mm;
   if (f.min_overlap_fraction >= 0.0) options.min_overlap_fraction = f.min_overlap_fraction;
-  if (f.border_shift >= 0.0) options.surface.border_shift = f.border_shift;
+  if (f.border_gap_deg >= 0.0) options.surface.border_gap_deg = f.border_gap_deg;
   return options;
 }
 
@@ -165,14 +166,28 @@ struct Run {
     return {{"success", success},
             {"rms_mm", figures.rms_mm},
             {"max_mm", figures.max_mm},
+            {"shape_rms_mm", figures.shape_rms_mm},
+            {"shape_max_mm", figures.shape_max_mm},
             {"seconds", seconds},
             {"sweeps", sweeps}};
   }
 };
 
+// The true skin and the noise-free inliers of the scan being scored (set per scan in main).
+struct ShapeTruth {
+  const ds::ChestSurface* surface = nullptr;
+  std::vector<Points3> true_inliers;
+};
+ShapeTruth g_shape;
+
 Run Score(Run run, const std::vector<Points3>& inliers, const std::vector<Rigid3>& estimate,
           const std::vector<Rigid3>& truth, double success_mm) {
   run.figures = merge_grid::Evaluate(inliers, estimate, truth);
+  if (g_shape.surface) {
+    std::vector<Rigid3> placed;
+    for (const Rigid3& T : estimate) placed.push_back(run.figures.G * T);
+    merge_grid::EvaluateShape(*g_shape.surface, g_shape.true_inliers, placed, &run.figures);
+  }
   run.success = true;
   for (double r : run.figures.sweep_rms_mm) run.success = run.success && r <= success_mm;
   return run;
@@ -269,6 +284,11 @@ int main(int argc, char** argv) {
               truth.push_back(s.truth.T_scan_sweep);
               identity.push_back(Rigid3::Identity());
             }
+            const ds::ChestSurface skin_surface = subject.Skin();
+            g_shape.surface = &skin_surface;
+            g_shape.true_inliers.clear();
+            for (const ds::Sweep& s : scanned.scan.sweeps)
+              g_shape.true_inliers.push_back(merge_grid::TrueInliers(s));
             const std::vector<merge_grid::Constraint> constraints =
                 merge_grid::OverlapConstraints(subject.Skin(), scanned.scan.sweeps);
             json one = {{"seed", seed}};
@@ -279,6 +299,7 @@ int main(int argc, char** argv) {
             one["pectus"] = pectus.Json(constraints);
             success["pectus"].push_back(pectus.success);
             if (!pectus.threw) rms["pectus"].push_back(pectus.figures.rms_mm);
+            if (!pectus.threw) rms["pectus_shape"].push_back(pectus.figures.shape_rms_mm);
             const Run exact = RunPectus(clouds, truth, inliers, truth, f);
             one["pectus_from_exact_poses"] = exact.Json(constraints);
             if (f.open3d) {
@@ -289,6 +310,7 @@ int main(int argc, char** argv) {
               one["open3d"] = peer.Json(constraints);
               success["open3d"].push_back(peer.success);
               if (!peer.threw) rms["open3d"].push_back(peer.figures.rms_mm);
+              if (!peer.threw) rms["open3d_shape"].push_back(peer.figures.shape_rms_mm);
             }
             runs.push_back(one);
           }
@@ -306,14 +328,19 @@ int main(int argc, char** argv) {
             c.rms_mm = rms[method].empty() ? NAN : sum / static_cast<double>(rms[method].size());
             cell[method + "_success_rate"] = c.success;
             cell[method + "_rms_mm_mean"] = rms[method].empty() ? json(nullptr) : json(c.rms_mm);
+            double shape = 0.0;
+            for (double x : rms[method + "_shape"]) shape += x;
+            const auto shapes = rms[method + "_shape"].size();
+            c.shape_rms_mm = shapes ? shape / double(shapes) : NAN;
+            cell[method + "_shape_rms_mm_mean"] = shapes ? json(c.shape_rms_mm) : json(nullptr);
             picture.push_back(c);
           }
           std::string summary;
           for (const merge_grid::CellFigure& c : picture) {
             if (c.skin_mm == skin && c.overlap == overlap && c.sampling == sampling && c.sweeps == o.sweeps) {
-              char text[96];
-              std::snprintf(text, sizeof text, "  %s success %.2f rms %.3f mm", c.method.c_str(), c.success,
-                            c.rms_mm);
+              char text[128];
+              std::snprintf(text, sizeof text, "  %s success %.2f pose rms %.3f mm, shape rms %.3f mm",
+                            c.method.c_str(), c.success, c.rms_mm, c.shape_rms_mm);
               summary += text;
             }
           }
@@ -333,10 +360,12 @@ int main(int argc, char** argv) {
                       " mm; rotation : translation as 0.5 deg : 1.5 mm, scaled to the skin RMS"},
       {"success_mm", f.success_mm},
       {"tracker_prior",
-       {{"deg", f.prior_deg}, {"mm", f.prior_mm}, {"lever_mm", f.prior_lever_mm}, {"wired", false}}},
+       {{"deg", MergeOptions(f).tracker_deg},
+        {"mm", MergeOptions(f).tracker_mm},
+        {"lever_mm", MergeOptions(f).tracker_lever_mm}}},
       {"merge_options",
        {{"min_overlap_fraction", MergeOptions(f).min_overlap_fraction},
-        {"border_shift", MergeOptions(f).surface.border_shift},
+        {"border_gap_deg", MergeOptions(f).surface.border_gap_deg},
         {"overlap_distance_mm", MergeOptions(f).overlap_distance_mm}}},
       {"threads", omp_get_max_threads()},
       {"load_average", load},

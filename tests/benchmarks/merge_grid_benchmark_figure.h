@@ -20,7 +20,7 @@ struct CellFigure {
   std::string sampling;
   int sweeps = 0;
   std::string method;
-  double success = NAN, rms_mm = NAN;
+  double success = NAN, rms_mm = NAN, shape_rms_mm = NAN;
 };
 
 namespace figure_detail {

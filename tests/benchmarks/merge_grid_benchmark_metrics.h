@@ -10,6 +10,7 @@
 
 #include "datasets/chest_surface.h"
 #include "datasets/scan_simulator.h"
+#include "datasets/surface_query.h"
 #include "registration/kdtree.h"
 
 namespace pectus::merge_grid {
@@ -24,7 +25,42 @@ struct Figures {
   std::vector<double> rotation_deg;                ///< per sweep, the angle of (G T_k) T_true_k^-1
   std::vector<double> translation_mm;              ///< per sweep, its translation at the sweep's centroid
   std::vector<Eigen::Matrix<double, 6, 1>> twist;  ///< per sweep (rotation x radius mm; translation mm)
+  /// The shape: distance from the true surface of every 7th inlier's noise-free point as the merge placed
+  /// it (after G), RMS and max (mm). A sweep that slid along a surface it fits moves its points (rms_mm)
+  /// but not the shape; this is the issue-13 "shape error after a rigid fit".
+  double shape_rms_mm = 0.0, shape_max_mm = 0.0;
+  Rigid3 G = Rigid3::Identity();  ///< the common rigid motion removed
 };
+
+/// The noise-free hit of every inlier of a sweep, in the sweep's (reported) frame, #points by 3.
+inline Points3 TrueInliers(const datasets::Sweep& s) {
+  const Rigid3 T_sweep_scan = s.truth.T_scan_sweep.inverse();
+  std::vector<Eigen::Index> keep;
+  for (Eigen::Index i = 0; i < s.cloud.size(); ++i)
+    if (!s.truth.outlier[static_cast<std::size_t>(i)]) keep.push_back(i);
+  Points3 p(static_cast<Eigen::Index>(keep.size()), 3);
+  for (std::size_t k = 0; k < keep.size(); ++k)
+    p.row(static_cast<Eigen::Index>(k)) =
+        (T_sweep_scan * Eigen::Vector3d(s.truth.true_points.row(keep[k]).transpose())).transpose();
+  return p;
+}
+
+/// Adds the shape figures to `f` (see Figures::shape_rms_mm).
+inline void EvaluateShape(const datasets::ChestSurface& surface, const std::vector<Points3>& true_inliers,
+                          const std::vector<Rigid3>& placed, Figures* f) {
+  double sum = 0.0, count = 0.0;
+  f->shape_max_mm = 0.0;
+  for (std::size_t s = 0; s < true_inliers.size(); ++s) {
+    for (Eigen::Index i = 0; i < true_inliers[s].rows(); i += 7) {
+      const double d = std::abs(
+          datasets::SignedDistance(surface, placed[s] * Eigen::Vector3d(true_inliers[s].row(i).transpose())));
+      sum += d * d;
+      count += 1.0;
+      f->shape_max_mm = std::max(f->shape_max_mm, d);
+    }
+  }
+  f->shape_rms_mm = std::sqrt(sum / std::max(1.0, count));
+}
 
 /// Inlier points (reported frame) of a sweep, #points by 3.
 inline Points3 Inliers(const datasets::Sweep& s) {
@@ -58,6 +94,7 @@ inline Figures Evaluate(const std::vector<Points3>& inliers, const std::vector<R
   Rigid3 G;
   G.matrix() = Eigen::umeyama(A, B, false);
   Figures f;
+  f.G = G;
   double total = 0.0;
   for (std::size_t s = 0; s < inliers.size(); ++s) {
     const Rigid3 placed = G * estimate[s];

@@ -316,7 +316,12 @@ TEST(SweepMerge, RealBunnyFromDisturbedPosesReturnsToPublishedPlacement) {
     EXPECT_GE(RmsDisplacement(sweeps[s].positions, G * start[s], truth[s]), s == 0 ? 0.0 : 0.3)
         << "disturbed";
   }
-  for (const auto& p : r.pairs) EXPECT_LT(p.rms_after_mm, 0.3) << p.i << "-" << p.j;
+  // Every linked pair's residual near the scanner's noise. Since issue 13 pairs are linked on their
+  // geometry from 5 % of shared area, so fringe pairs (ear_back, top2/top3, bun180) that meet where the
+  // bunny's sweeps disagree most are in too: 0.31-0.36 mm measured for them, the others under 0.3.
+  for (const auto& p : r.pairs) {
+    EXPECT_LT(p.rms_after_mm, 0.4) << p.i << "-" << p.j << ", overlap " << p.overlap_fraction;
+  }
 }
 
 }  // namespace
