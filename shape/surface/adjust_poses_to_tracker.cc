@@ -135,7 +135,8 @@ TrackerAdjustmentResult AdjustPosesToTracker(const std::vector<SweepCorresponden
       if (!(lambda >= options.min_pinned_ratio)) continue;
       const Vector6 u = ges.eigenvectors().col(d);  // u' B u = 1, u' H u = lambda
       const Vector6 Bu = B * u;
-      Hp += lambda * Bu * Bu.transpose();
+      // The normals' noise alone puts lambda = 1 along any direction: keep what the overlap adds to it.
+      Hp += (lambda - 1.0) * Bu * Bu.transpose();
       step -= u * (u.dot(ps.g) / lambda);
       ++report.pinned_directions;
     }
