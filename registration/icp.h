@@ -129,6 +129,7 @@ struct IcpResult {
   /// point): the quantity the last level's growth drives below target_pose_sd_fraction times the noise.
   double sampling_sd_mm = 0.0;
   Timings timings_s;  ///< "icp": wall time of AlignIcp (target preparation not included), s
+  /// One report per level, coarse to fine; a growing last level reports each size of its sample.
   std::vector<IcpLevelReport> levels;
   std::string message;  ///< one line: what was found, or why it failed
 
