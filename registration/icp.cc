@@ -51,18 +51,23 @@ std::vector<std::uint32_t> PatchRows(const Points3& source, const IcpOptions& o)
 }
 
 // The source sample of every level, finest last. Random levels are prefixes of one shuffle (nested);
-// voxel levels subsample the next finer level's sample.
+// voxel levels subsample the next finer level's sample. With `rest`, the rows of the shuffle beyond the
+// largest random sample, in random order: the last level grows from them.
 std::vector<std::vector<std::uint32_t>> LevelSamples(const Points3& source,
                                                      const std::vector<std::uint32_t>& rows,
-                                                     const std::vector<IcpLevel>& levels) {
+                                                     const std::vector<IcpLevel>& levels,
+                                                     std::vector<std::uint32_t>* rest) {
   std::size_t most = 0;
   for (const IcpLevel& l : levels) most = std::max(most, static_cast<std::size_t>(l.points));
-  std::vector<std::uint32_t> shuffled = most > 0 ? RandomSample(rows, most) : std::vector<std::uint32_t>();
+  // RandomSample's first k rows do not depend on how many it draws: the coarse levels are the same
+  // with or without the rest.
+  std::vector<std::uint32_t> shuffled =
+      most > 0 ? RandomSample(rows, rest != nullptr ? rows.size() : most) : std::vector<std::uint32_t>();
+  const std::size_t used = std::min(shuffled.size(), most);
   // Each level's new points in row order: scans store neighbours near each other, so successive queries
   // walk the same branches of the tree (fewer cache misses); the samples stay nested.
-  std::vector<std::size_t> ends = {0, shuffled.size()};
-  for (const IcpLevel& l : levels)
-    ends.push_back(std::min(shuffled.size(), static_cast<std::size_t>(l.points)));
+  std::vector<std::size_t> ends = {0, used};
+  for (const IcpLevel& l : levels) ends.push_back(std::min(used, static_cast<std::size_t>(l.points)));
   std::sort(ends.begin(), ends.end());
   for (std::size_t k = 1; k < ends.size(); ++k) {
     std::sort(shuffled.begin() + static_cast<std::ptrdiff_t>(ends[k - 1]),
@@ -72,7 +77,7 @@ std::vector<std::vector<std::uint32_t>> LevelSamples(const Points3& source,
   for (std::size_t l = levels.size(); l-- > 0;) {
     const std::vector<std::uint32_t>& finer = l + 1 < levels.size() ? samples[l + 1] : rows;
     if (levels[l].points > 0) {
-      const std::size_t count = std::min(shuffled.size(), static_cast<std::size_t>(levels[l].points));
+      const std::size_t count = std::min(used, static_cast<std::size_t>(levels[l].points));
       samples[l].assign(shuffled.begin(), shuffled.begin() + static_cast<std::ptrdiff_t>(count));
     } else if (levels[l].voxel_size_mm > 0.0) {
       samples[l] = VoxelDownsample(source, levels[l].voxel_size_mm, &finer);
@@ -80,7 +85,20 @@ std::vector<std::vector<std::uint32_t>> LevelSamples(const Points3& source,
       samples[l] = finer;
     }
   }
+  if (rest != nullptr) rest->assign(shuffled.begin() + static_cast<std::ptrdiff_t>(used), shuffled.end());
   return samples;
+}
+
+// How many of the N source points the last level's sample should grow to from n, where the pose's sd is
+// `sd` (mm) and sampling may add at most `allowed` (mm): sd scales as 1/sqrt(n), and what sampling adds
+// to the error of every point's estimate is sd_m sqrt(1 - m/N), so m >= 1 / (allowed^2 / (sd^2 n) + 1/N)
+// (docs/registration.md). A quarter more than that, at least half as many again as now; every point
+// once three quarters are due (they cost little more).
+std::size_t GrownSampleSize(double sd, double allowed, std::size_t n, std::size_t N) {
+  const double nd = static_cast<double>(n), Nd = static_cast<double>(N);
+  const double need = 1.0 / (allowed * allowed / (sd * sd * nd) + 1.0 / Nd);
+  const double next = std::max(1.25 * need, 1.5 * nd);
+  return next >= 0.75 * Nd ? N : static_cast<std::size_t>(std::ceil(next));
 }
 
 // Inliers (a target point within `reach`) among the sample at pose T, and their RMS point-to-plane
@@ -170,7 +188,14 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
   // Coarse to fine: nested random samples (or voxels), gates shrinking level by level.
   const std::vector<IcpLevel> levels =
       IcpLevelsFor(options, static_cast<Eigen::Index>(considered.size()), target.spacing_mm());
-  const std::vector<std::vector<std::uint32_t>> samples = LevelSamples(source_positions, considered, levels);
+  std::size_t largest = 0;
+  for (const IcpLevel& l : levels) largest = std::max(largest, static_cast<std::size_t>(l.points));
+  // The last level grows when it is the largest random sample and not yet every point.
+  const bool grow = options.target_pose_sd_fraction > 0.0 && levels.back().points > 0 &&
+                    static_cast<std::size_t>(levels.back().points) == largest && largest < considered.size();
+  std::vector<std::uint32_t> rest;
+  const std::vector<std::vector<std::uint32_t>> samples =
+      LevelSamples(source_positions, considered, levels, grow ? &rest : nullptr);
 
   const Problem pb{
       &target,
@@ -185,51 +210,51 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
   Pairs pairs;
   NearestCache cache;
   BlockSum last_sum;
-  double length = 1.0;
-  for (std::size_t l = 0; l < levels.size(); ++l) {
+  double length = 1.0, noise = 0.0;
+  std::string failure;
+  // What sampling adds to the pose's standard error (mm), sd sqrt(1 - n/N): the larger of the source
+  // centroid's sd and the rotation's times the RMS lever, corrected for the finite source.
+  const double N = static_cast<double>(considered.size());
+  auto sampling_sd = [&](std::size_t n) {
+    double rotation_sd_deg = 0.0, translation_sd_mm = 0.0;
+    PoseSpread(last_sum, T.translation(), &rotation_sd_deg, &translation_sd_mm);
+    const double sd = std::max(translation_sd_mm, rotation_sd_deg / kDegPerRad * length);
+    return sd * std::sqrt(std::max(0.0, 1.0 - static_cast<double>(n) / N));
+  };
+  // Iterates one level (or one size of the last level's growing sample) on `sample` from the current
+  // pose until the update falls below the tolerances; false with `failure` set when the fit breaks down.
+  // With `may_grow`, it stops early, setting `grow_to`, as soon as the sample costs more accuracy than
+  // target_pose_sd_fraction allows: converging on a sample about to grow would be wasted work.
+  std::size_t grow_to = 0;
+  auto iterate = [&](std::size_t l, const std::vector<std::uint32_t>& sample, double rot_tol,
+                     double trans_tol, bool may_grow, IcpLevelReport* report) {
+    grow_to = 0;
     const IcpLevel& level = levels[l];
-    const std::vector<std::uint32_t>& sample = samples[l];
-    // Coarser levels need only bring the pose into the next level's reach: tolerances ten times looser
-    // per level above the last.
-    const double looser = std::pow(10.0, static_cast<double>(levels.size() - 1 - l));
-    const double rot_tol = options.rotation_tolerance_deg * looser;
-    const double trans_tol = options.translation_tolerance_mm * looser;
-    IcpLevelReport report;
-    report.voxel_size_mm = level.voxel_size_mm;
-    report.max_distance_mm = level.max_distance_mm;
-    report.source_points = static_cast<std::int64_t>(sample.size());
-    // Random levels are nested (each sample a prefix of the next): their certificates carry over.
-    const std::vector<std::uint32_t>* coarser = l > 0 ? &samples[l - 1] : nullptr;
-    const bool nested = coarser != nullptr && coarser->size() <= sample.size() &&
-                        std::equal(coarser->begin(), coarser->end(), sample.begin());
-    cache.Reset(sample.size(), kSearchRadiusOverGate * level.max_distance_mm, nested ? coarser->size() : 0);
     Rigid3 previous = T;
     Vector6 x_previous = Vector6::Zero();
     for (int it = 0; it < level.max_iterations; ++it) {
-      report.searches += FindPairs(pb, sample, T, level.max_distance_mm, &cache, &pairs);  // step 1
+      report->searches += FindPairs(pb, sample, T, level.max_distance_mm, &cache, &pairs);  // step 1
       double scale = 0.0, trim = 0.0;
       const std::int64_t count = RobustScale(options, &pairs, &scale, &trim);  // step 2
       if (count < options.min_correspondences) {
-        result.levels.push_back(report);
-        result.T_target_source = pose();
-        return finish("only " + std::to_string(count) + " source points have a target point within " +
-                      Format(level.max_distance_mm) + " mm at level " + std::to_string(l + 1) +
-                      "; the surfaces do not overlap at this pose");
+        failure = "only " + std::to_string(count) + " source points have a target point within " +
+                  Format(level.max_distance_mm) + " mm at level " + std::to_string(l + 1) +
+                  "; the surfaces do not overlap at this pose";
+        return false;
       }
       const BlockSum sum = Accumulate(pb, pairs, scale, trim);  // step 3
       if (sum.count < options.min_correspondences) {
-        result.levels.push_back(report);
-        result.T_target_source = pose();
-        return finish("the robust loss rejected all but " + std::to_string(sum.count) + " correspondences");
+        failure = "the robust loss rejected all but " + std::to_string(sum.count) + " correspondences";
+        return false;
       }
+      noise = scale;
       length = std::max(std::sqrt(sum.arm2 / static_cast<double>(sum.count)), 1e-9);
       last_sum = sum;
       const Vector6 x = sum.H.ldlt().solve(-sum.g);
       if (!x.allFinite()) {
-        result.levels.push_back(report);
-        result.T_target_source = pose();
-        return finish("the normal equations are singular at level " + std::to_string(l + 1) +
-                      " (the overlap does not fix all six degrees of freedom)");
+        failure = "the normal equations are singular at level " + std::to_string(l + 1) +
+                  " (the overlap does not fix all six degrees of freedom)";
+        return false;
       }
       const Vector6 step = options.extrapolate && it > 0 ? Extrapolated(x, x_previous, length) : x;  // 4a
       x_previous = x;
@@ -237,30 +262,82 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
       const Rigid3 before_previous = previous;
       previous = T;
       T = dT * T;
-      ++report.iterations;
+      ++report->iterations;
       ++result.iterations;
-      report.rms_mm = std::sqrt(sum.weighted_r2 / sum.weight);
+      report->rms_mm = std::sqrt(sum.weighted_r2 / sum.weight);
       // Stop on a small update, or on a two-step cycle between correspondence sets (the pose back where
       // it was two iterations ago): nearest-neighbour pairing is discrete, so ICP may alternate forever.
+      if (may_grow) {
+        const double allowed = options.target_pose_sd_fraction * noise;
+        const double added = sampling_sd(sample.size());
+        if (added > allowed) {
+          const double sd = added / std::sqrt(1.0 - static_cast<double>(sample.size()) / N);
+          grow_to = GrownSampleSize(sd, allowed, sample.size(), considered.size());
+          break;
+        }
+      }
       const Rigid3 cycle = T * before_previous.inverse();
       if ((RotationAngleDeg(dT.linear()) < rot_tol && dT.translation().norm() < trans_tol) ||
           (it >= 2 && RotationAngleDeg(cycle.linear()) < rot_tol && cycle.translation().norm() < trans_tol)) {
-        report.converged = true;
+        report->converged = true;
         break;
       }
     }
-    result.levels.push_back(report);
+    return true;
+  };
+  std::vector<std::uint32_t> grown;  // the last level's sample once it grows
+  const std::vector<std::uint32_t>* sample = &samples.front();
+  for (std::size_t l = 0; l < levels.size(); ++l) {
+    const IcpLevel& level = levels[l];
+    sample = &samples[l];
+    // Coarser levels need only bring the pose into the next level's reach: tolerances ten times looser
+    // per level above the last.
+    const double looser = std::pow(10.0, static_cast<double>(levels.size() - 1 - l));
+    const double rot_tol = options.rotation_tolerance_deg * looser;
+    const double trans_tol = options.translation_tolerance_mm * looser;
+    // Random levels are nested (each sample a prefix of the next): their certificates carry over.
+    const std::vector<std::uint32_t>* coarser = l > 0 ? &samples[l - 1] : nullptr;
+    const bool nested = coarser != nullptr && coarser->size() <= sample->size() &&
+                        std::equal(coarser->begin(), coarser->end(), sample->begin());
+    std::size_t kept = nested ? coarser->size() : 0;
+    std::size_t rest_used = 0;
+    for (;;) {  // once, except for a growing last level
+      IcpLevelReport report;
+      report.voxel_size_mm = level.voxel_size_mm;
+      report.max_distance_mm = level.max_distance_mm;
+      report.source_points = static_cast<std::int64_t>(sample->size());
+      cache.Reset(sample->size(), kSearchRadiusOverGate * level.max_distance_mm, kept);
+      const bool may_grow = grow && l + 1 == levels.size() && rest_used < rest.size();
+      const bool ok = iterate(l, *sample, rot_tol, trans_tol, may_grow, &report);
+      result.levels.push_back(report);
+      if (!ok) {
+        result.T_target_source = pose();
+        return finish(failure);
+      }
+      if (grow_to == 0) break;
+      // Grow the sample while it costs accuracy (docs/registration.md, "Growing the last sample").
+      const std::size_t next = std::min(grow_to, sample->size() + rest.size() - rest_used);
+      if (grown.empty()) grown = *sample;
+      kept = grown.size();
+      const auto from = rest.begin() + static_cast<std::ptrdiff_t>(rest_used);
+      rest_used += next - grown.size();
+      grown.insert(grown.end(), from, rest.begin() + static_cast<std::ptrdiff_t>(rest_used));
+      std::sort(grown.begin() + static_cast<std::ptrdiff_t>(kept), grown.end());  // row order, as above
+      sample = &grown;
+    }
   }
   result.T_target_source = pose();
   result.converged = result.levels.back().converged;
   result.conditioning = Conditioning(last_sum.H, length);
   PoseSpread(last_sum, T.translation(), &result.rotation_sd_deg, &result.translation_sd_mm);
+  result.residual_scale_mm = noise;
+  result.sampling_sd_mm = sampling_sd(sample->size());
 
   // Final figures on the finest sample at the final pose; a poor fit is a failure with its reason.
   const double reach =
       options.inlier_distance_mm > 0.0 ? options.inlier_distance_mm : levels.back().max_distance_mm;
   // The last level's certificates still hold for its sample; they serve any reach up to their radius.
-  Evaluate(pb, samples.back(), T, reach, reach <= cache.radius ? &cache : nullptr, &pairs, &result);
+  Evaluate(pb, *sample, T, reach, reach <= cache.radius ? &cache : nullptr, &pairs, &result);
   const std::vector<std::string> problems = Problems(result, options, levels.back().max_iterations, reach);
   result.success = problems.empty();
   std::string message;

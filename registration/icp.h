@@ -53,10 +53,8 @@ struct IcpOptions {
   /// Coarse to fine. Empty = automatic: one level per entry of `auto_level_points`, a random sample of
   /// that many source points (nested: every level's sample contains the coarser ones; 0 or more than the
   /// source has = every point), the gate starting at `initial_max_distance_mm` and shrinking fourfold per
-  /// level, down to `final_max_distance_mm`. The last level uses 30000 points by default: the pose's
-  /// error shrinks as 1/sqrt(points) (docs/registration.md), and on two 100k-point chest scans with
-  /// 0.2 mm noise 30000 leave a median 0.02 mm (every point: 0.011 mm) at 3.5 times less search. Use 0
-  /// for every point.
+  /// level, down to `final_max_distance_mm`. The last level starts with 30000 points by default and
+  /// grows while the sample costs accuracy (`target_pose_sd_fraction`); 0 = every point from the start.
   std::vector<IcpLevel> levels;
   std::vector<int> auto_level_points = {1000, 3000, 10000, 30000};  ///< source points per automatic level
   double initial_max_distance_mm = 20.0;  ///< gate of the first automatic level (mm)
@@ -64,6 +62,13 @@ struct IcpOptions {
   /// scans of one surface. Scans of different people differ by millimetres: use about 10 mm.
   double final_max_distance_mm = 0.0;
   int auto_max_iterations = 30;  ///< iterations per automatic level
+  /// The last level's random sample grows (nested: every point used so far stays in) until what sampling
+  /// adds to the pose's standard error, sd_n sqrt(1 - n/N) for n of the N source points, is at most this
+  /// fraction of the residuals' robust scale (docs/registration.md, "Growing the last sample"); at the
+  /// latest it takes every point. The pose's sd is the larger of the source centroid's and the rotation's
+  /// times the RMS lever (mm). Applies when the last level is a random sample (points > 0). 0 = off: the
+  /// sample keeps its size. In [0, 1).
+  double target_pose_sd_fraction = 0.01;
 
   /// A level stops when an update rotates by less than this (degrees) and moves by less than
   /// `translation_tolerance_mm`, or when the pose is back where it was two iterations before (a cycle
@@ -117,7 +122,14 @@ struct IcpResult {
   /// largest standard deviation of the rotation (degrees) and of the source centroid's position (mm).
   double rotation_sd_deg = 0.0;
   double translation_sd_mm = 0.0;
+  /// The robust scale of the residuals at the last iteration (1.4826 median |r|, floored at
+  /// min_robust_scale_mm; mm): the noise that target_pose_sd_fraction refers to.
+  double residual_scale_mm = 0.0;
+  /// What sampling adds to the pose's standard error at the end, sd sqrt(1 - n/N) (mm; 0 with every
+  /// point): the quantity the last level's growth drives below target_pose_sd_fraction times the noise.
+  double sampling_sd_mm = 0.0;
   Timings timings_s;  ///< "icp": wall time of AlignIcp (target preparation not included), s
+  /// One report per level, coarse to fine; a growing last level reports each size of its sample.
   std::vector<IcpLevelReport> levels;
   std::string message;  ///< one line: what was found, or why it failed
 

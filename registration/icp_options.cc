@@ -57,6 +57,9 @@ bool IcpOptions::IsValid(std::string* why) const {
     }
     if (auto_max_iterations < 1) return fail("auto_max_iterations must be >= 1");
   }
+  if (!(target_pose_sd_fraction >= 0.0 && target_pose_sd_fraction < 1.0)) {
+    return fail("target_pose_sd_fraction must be in [0, 1) (0: the last sample keeps its size)");
+  }
   if (!positive(rotation_tolerance_deg)) return fail("rotation_tolerance_deg must be > 0");
   if (!positive(translation_tolerance_mm)) return fail("translation_tolerance_mm must be > 0");
   if (!patch_centres.empty() && !positive(patch_radius_mm)) {

@@ -78,6 +78,9 @@ class RegisterCommand : public Command {
         "--min-inliers", min_inliers_,
         "A fit with a smaller fraction of the moving scan within the last gate of the fixed one is a "
         "failure (default 0.3)");
+    app->add_option("--pose-sd-fraction", pose_sd_fraction_,
+                    "ICP's last sample grows until sampling adds at most this fraction of the residuals' "
+                    "robust scale to the pose's standard error; 0 keeps 30000 points (default 0.01)");
     app->add_flag("--no-refine", no_refine_, "Landmarks (or --initial) only, no ICP");
   }
   std::vector<fs::path> Inputs() const override {
@@ -98,6 +101,7 @@ class RegisterCommand : public Command {
     if (patch_radius_) options_.patch_radius_mm = *patch_radius_;
     if (max_rms_) options_.icp.max_rms_mm = *max_rms_;
     if (min_inliers_) options_.icp.min_inlier_fraction = *min_inliers_;
+    if (pose_sd_fraction_) options_.icp.target_pose_sd_fraction = *pose_sd_fraction_;
     options_.landmarks.estimate_scale = scale_;
     options_.refine = !no_refine_;
     options_.icp.method = ParseIcpMethod(method_);
@@ -277,7 +281,8 @@ class RegisterCommand : public Command {
       reference_;
   std::string units_, method_, loss_;
   bool groupwise_ = false, write_moved_ = false, keep_going_ = false, scale_ = false, no_refine_ = false;
-  std::optional<double> trim_, max_distance_, final_distance_, patch_radius_, max_rms_, min_inliers_;
+  std::optional<double> trim_, max_distance_, final_distance_, patch_radius_, max_rms_, min_inliers_,
+      pose_sd_fraction_;
   PairRegistrationOptions options_;
   ReadOptions read_options_;
   LandmarkReadOptions landmark_options_;

@@ -43,6 +43,10 @@ nlohmann::json IcpJson(const IcpResult& r) {
           {"converged", r.converged},
           {"success", r.success},
           {"conditioning", r.conditioning},
+          {"rotation_sd_deg", r.rotation_sd_deg},
+          {"translation_sd_mm", r.translation_sd_mm},
+          {"residual_scale_mm", r.residual_scale_mm},
+          {"sampling_sd_mm", r.sampling_sd_mm},
           {"timings_s", r.timings_s.ToJson()},
           {"levels", levels},
           {"message", r.message}};

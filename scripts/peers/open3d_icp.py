@@ -16,6 +16,8 @@ once before timing, nested like pectus's levels). One stage with a single gate i
   /usr/bin/python3 scripts/peers/open3d_icp.py target.ply source.ply init.json \\
       --stages 15:0 --max-iterations 50 --repeat 3
   /usr/bin/python3 scripts/peers/open3d_icp.py target.ply source.ply init.json \\
+      --stages 15:0 --transform-out T.json > /dev/null   # as a whole process (registration_benchmark --process)
+  /usr/bin/python3 scripts/peers/open3d_icp.py target.ply source.ply init.json \\
       --stages 20:1000,5:3000,2.7:10000,2.7:0 --max-iterations 30
 """
 import argparse
@@ -47,6 +49,7 @@ def main() -> int:
     parser.add_argument("--relative-rmse", type=float, default=1e-6)
     parser.add_argument("--method", default="point-to-plane", choices=["point-to-plane", "generalized"])
     parser.add_argument("--repeat", type=int, default=1, help="runs; the median and best are reported")
+    parser.add_argument("--transform-out", help="also write {\"T_target_source\": 4x4} to this JSON file")
     args = parser.parse_args()
 
     target = o3d.io.read_point_cloud(args.target)
@@ -86,6 +89,9 @@ def main() -> int:
         times.append(time.perf_counter() - start)
         cpu.append(time.process_time() - cpu_start)
 
+    if args.transform_out:
+        with open(args.transform_out, "w") as f:
+            json.dump({"T_target_source": np.asarray(result.transformation).tolist()}, f)
     print(json.dumps({
         "method": ("registration_generalized_icp" if args.method == "generalized"
                    else "registration_icp point-to-plane"),

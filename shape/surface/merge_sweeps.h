@@ -43,6 +43,7 @@ struct SweepMergeOptions {
     IcpOptions o;
     o.auto_level_points = {1000, 4000};
     o.max_normal_angle_deg = 45.0;
+    o.target_pose_sd_fraction = 0.0;  // a start for the joint solve below, which uses every pair again
     return o;
   }();
   int global_rounds = 10;             ///< at most this many rounds of correspondence search + joint solve

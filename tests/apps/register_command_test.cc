@@ -31,8 +31,8 @@ class RegisterCommand : public testing_support::CommandTest {
   // One sampling of the chest (0.2 mm noise) in the frame `T_world_scan`^-1, written with its landmarks
   // (3 mm noise) as NAME.ply and NAME.mrk.json.
   void WriteScan(const std::string& name, const Rigid3& T_world_scan, std::uint64_t seed,
-                 const fs::path& folder) const {
-    PointCloud c = testing::SampleChest(20000, seed, 0.2);
+                 const fs::path& folder, int points = 20000) const {
+    PointCloud c = testing::SampleChest(points, seed, 0.2);
     c.normals.resize(0, 3);
     TransformInPlace(Similarity3::FromRigid(T_world_scan.inverse()), &c);
     WritePointCloud(folder / (name + ".ply"), c);
@@ -101,6 +101,38 @@ TEST_F(RegisterCommand, PoorFitAndUnusableLandmarksExitNonZeroAndWriteNothing) {
   EXPECT_NE(bad.output.find("two.mrk.json"), std::string::npos) << bad.output;
   EXPECT_NE(bad.output.find("at least 3"), std::string::npos) << bad.output;
   EXPECT_EQ(CountFiles(), before + 1);  // two.mrk.json only
+}
+
+// On two noisy 40000-point scans ICP's last sample grows to every point, and the report says what sampling
+// still adds to the pose's sd (nothing); --pose-sd-fraction 0 keeps it at 30000 points; a fraction outside
+// [0, 1) is a usage error.
+TEST_F(RegisterCommand, PoseSdFractionDecidesHowFarTheLastSampleGrows) {
+  std::mt19937_64 rng(5);
+  const Rigid3 T_true = testing::RandomPose(&rng, 10.0, 30.0, Eigen::Vector3d(0, 100, 160));
+  WriteScan("fixed", Rigid3::Identity(), 11, dir_, 40000);
+  WriteScan("moving", T_true, 12, dir_, 40000);
+  auto run = [&](const std::string& extra) {
+    return Pectus("register " + P("moving.ply") + " --to " + P("fixed.ply") + " --moving-landmarks " +
+                  P("moving.mrk.json") + " --fixed-landmarks " + P("fixed.mrk.json") + " --report " +
+                  P("r.json") + " --quiet" + extra);
+  };
+  auto last_points = [&] {
+    nlohmann::json report;
+    std::ifstream(P("r.json")) >> report;
+    return std::pair{report["icp"]["levels"].back()["source_points"].get<int>(),
+                     report["icp"]["sampling_sd_mm"].get<double>()};
+  };
+  CliRun r = run("");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(last_points().first, 40000);
+  EXPECT_EQ(last_points().second, 0.0);
+  r = run(" --pose-sd-fraction 0");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(last_points().first, 30000);
+  EXPECT_GT(last_points().second, 0.0);
+  r = run(" --pose-sd-fraction 1.5");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("target_pose_sd_fraction"), std::string::npos) << r.output;
 }
 
 // A cohort folder of three scans of one chest at known poses: to the reference (the second file) and

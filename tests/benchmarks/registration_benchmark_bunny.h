@@ -22,6 +22,13 @@
 namespace pectus {
 namespace {
 
+// The bunny pairs (fixed, moving): neighbouring sweeps 45 degrees apart, then 90 degrees apart (less
+// overlap).
+const std::vector<std::pair<std::string, std::string>> kBunnyPairs = {
+    {"bun000.ply", "bun045.ply"}, {"bun270.ply", "bun315.ply"}, {"bun000.ply", "bun315.ply"},
+    {"bun045.ply", "bun090.ply"}, {"bun000.ply", "bun090.ply"}, {"bun315.ply", "bun045.ply"},
+    {"bun090.ply", "bun180.ply"}, {"bun180.ply", "bun270.ply"}};
+
 // How well a placement fits the data: the median |point-to-plane distance| (mm) of the moving scan's points
 // (every 4th) that have a fixed point within `reach_mm`, and their fraction. The published placement of a
 // pair comes from a global alignment of all ten scans, so it need not be the pair's own best fit; this
@@ -133,12 +140,7 @@ json Bunny(int seeds, bool peers, json* loop) {
   json out = json::array();
   std::map<std::string, Rigid3> found_by_pair, published_by_pair;
   Points3 bun270;
-  // Neighbouring sweeps 45 degrees apart, then 90 degrees apart (less overlap).
-  const std::vector<std::pair<std::string, std::string>> pairs = {
-      {"bun000.ply", "bun045.ply"}, {"bun270.ply", "bun315.ply"}, {"bun000.ply", "bun315.ply"},
-      {"bun045.ply", "bun090.ply"}, {"bun000.ply", "bun090.ply"}, {"bun315.ply", "bun045.ply"},
-      {"bun090.ply", "bun180.ply"}, {"bun180.ply", "bun270.ply"}};
-  for (const auto& [fixed_name, moving_name] : pairs) {
+  for (const auto& [fixed_name, moving_name] : kBunnyPairs) {
     const PointCloud fixed = ReadPointCloud(dir / fixed_name, metres);
     const PointCloud moving = ReadPointCloud(dir / moving_name, metres);
     const Rigid3 published = pose(fixed_name).inverse() * pose(moving_name);

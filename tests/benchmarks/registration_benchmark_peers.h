@@ -15,6 +15,8 @@
 #include <pcl/registration/icp.h>
 #pragma GCC diagnostic pop
 
+#include <sys/resource.h>
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -41,6 +43,29 @@ std::string StagesText(const std::vector<Stage>& stages) {
   for (const Stage& st : stages)
     s += (s.empty() ? "" : ",") + std::to_string(st.gate_mm) + ":" + std::to_string(st.points);
   return s;
+}
+
+// The wall time of a command run through the shell and the CPU time of everything it ran (all threads,
+// the shell included: the children's rusage), with its exit status.
+struct ProcessTime {
+  double wall_s = 0.0, cpu_s = 0.0;
+  int status = -1;
+};
+
+ProcessTime RunProcess(const std::string& command) {
+  auto children_cpu = [] {
+    rusage u{};
+    getrusage(RUSAGE_CHILDREN, &u);
+    return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+           1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+  };
+  ProcessTime t;
+  const double c0 = children_cpu();
+  const auto t0 = Clock::now();
+  t.status = std::system(command.c_str());
+  t.wall_s = Since(t0);
+  t.cpu_s = children_cpu() - c0;
+  return t;
 }
 
 // One peer's run: its figures and the pose it found.
@@ -157,7 +182,8 @@ PeerRun RunOpen3d(const fs::path& dir, const std::vector<Stage>& stages, int max
                           " --repeat " + std::to_string(repeat) + " --method " + method + " > " +
                           out.string();
   PeerRun run;
-  if (std::system(cmd.c_str()) != 0) {
+  const ProcessTime process = RunProcess(cmd);
+  if (process.status != 0) {
     run.figures = {{"error", "command failed: " + cmd}};
     return run;
   }
@@ -169,6 +195,8 @@ PeerRun RunOpen3d(const fs::path& dir, const std::vector<Stage>& stages, int max
       {"seconds_median", o["seconds_median"]},
       {"seconds_best", o["seconds_best"]},
       {"cpu_seconds_median", o["cpu_seconds_median"]},
+      {"process_seconds", process.wall_s},
+      {"process_cpu_seconds", process.cpu_s},
       {"fitness", o["fitness"]},
       {"inlier_rmse_mm", o["inlier_rmse_mm"]},
       {"stages", StagesText(stages)},
