@@ -198,9 +198,9 @@ TEST_P(BunnyPairs, BackToPublishedPlacement) {
 INSTANTIATE_TEST_SUITE_P(Stanford, BunnyPairs,
                          ::testing::Values(std::pair{"bun000.ply", "bun045.ply"},
                                            std::pair{"bun270.ply", "bun315.ply"}),
-                         [](const auto& info) {  // "bun000_bun045": a stable CTest name
+                         [](const auto& test_info) {  // "bun000_bun045": a stable CTest name
                            const auto stem = [](std::string f) { return f.substr(0, f.find('.')); };
-                           return stem(info.param.first) + "_" + stem(info.param.second);
+                           return stem(test_info.param.first) + "_" + stem(test_info.param.second);
                          });
 
 }  // namespace
