@@ -232,9 +232,11 @@ TEST(SweepMerge, CylinderStripKeepsTheTrackerAlongTheAxisAndAboutIt) {
       const Eigen::Vector3d slide_before = before - before.dot(radial) * radial;
       const Eigen::Vector3d slide_after = after - after.dot(radial) * radial;
       // The priors split the pinned correction (about 1 mm here) between the two sweeps in their own
-      // metric, which is not aligned with the pair's free directions: the free part moves by a tenth of
-      // the pinned correction (0.05-0.14 mm measured), against 1.6 mm had it followed the data's noise.
-      EXPECT_LT((slide_after - slide_before).norm(), 0.2) << "free: slide at " << u << ", " << v;
+      // metric, which is not aligned with the pair's free directions, so the free part moves by a
+      // fraction of the pinned correction: 0.05-0.14 mm measured with GCC, 0.27 mm with clang + ASan
+      // (which directions pass the pinned test in the coarse rounds depends on rounding). Following the
+      // normals' noise instead, as a merge without the pinned test does, moved it 0.5-1.4 mm.
+      EXPECT_LT((slide_after - slide_before).norm(), 0.4) << "free: slide at " << u << ", " << v;
     }
   }
 }
