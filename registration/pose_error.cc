@@ -1,6 +1,10 @@
 #include "registration/pose_error.h"
 
+#include <Eigen/Geometry>
 #include <cmath>
+#include <string>
+
+#include "shape/core/error.h"
 
 namespace pectus {
 
@@ -26,6 +30,30 @@ double RmsDisplacement(const Points3& points, const Similarity3& a, const Simila
     sum += (D * points.row(i).transpose() + dt).squaredNorm();
   }
   return std::sqrt(sum / static_cast<double>(points.rows()));
+}
+
+Rigid3 BestCommonMotion(const std::vector<PointCloud>& sets, const std::vector<Rigid3>& from,
+                        const std::vector<Rigid3>& to, Eigen::Index stride) {
+  if (from.size() != sets.size() || to.size() != sets.size() || stride < 1) {
+    ThrowUsage("BestCommonMotion: " + std::to_string(sets.size()) + " point sets, " +
+               std::to_string(from.size()) + " and " + std::to_string(to.size()) + " poses, stride " +
+               std::to_string(stride));
+  }
+  Eigen::Index n = 0;
+  for (const PointCloud& c : sets) n += (c.size() + stride - 1) / stride;
+  if (n < 3) ThrowBadInput("BestCommonMotion", "fewer than 3 points in all the sets");
+  Eigen::Matrix3Xd A(3, n), B(3, n);
+  Eigen::Index k = 0;
+  for (std::size_t s = 0; s < sets.size(); ++s) {
+    for (Eigen::Index i = 0; i < sets[s].size(); i += stride, ++k) {
+      const Eigen::Vector3d x = sets[s].positions.row(i).transpose();
+      A.col(k) = from[s] * x;
+      B.col(k) = to[s] * x;
+    }
+  }
+  Rigid3 G = Rigid3::Identity();
+  G.matrix() = Eigen::umeyama(A, B, /*with_scaling=*/false);
+  return G;
 }
 
 }  // namespace pectus

@@ -69,6 +69,7 @@ void BuildSurface(const CohortSubject& in, const PipelineOptions& options, Subje
     s->points_in = merged.points_in;
     s->points_merged = merged.points_out;
     s->merge_rms_mm = merged.global_rms_after_mm;
+    s->T_subject_sweep = merged.T_world_sweep;
   });
   sweeps->clear();
   RunStage(s, "reconstruct", [&] {

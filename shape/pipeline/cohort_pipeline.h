@@ -107,8 +107,10 @@ struct SubjectOutcome {
   std::string failed_stage;  ///< "read", "merge", "reconstruct", "register", "resample" when not ok
   std::string error;         ///< why it failed
   int sweeps = 0;            ///< sweeps merged (after dropping those outside the ROI)
-  /// The sweeps merged; the merged surface is in the frame of the first (the merge's anchor).
+  /// The sweeps merged, and where the merge placed each: x_subject = T_subject_sweep[i] x_sweep (mm), in
+  /// the subject's scan frame (the tracker's frame with a tracker prior; the first sweep's frame without).
   std::vector<std::filesystem::path> sweep_files;
+  std::vector<Rigid3> T_subject_sweep;
   std::int64_t points_in = 0, points_merged = 0;
   double merge_rms_mm = 0.0;        ///< joint pose adjustment residual
   std::int64_t faces = 0;           ///< of the reconstructed surface

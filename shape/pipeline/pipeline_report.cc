@@ -70,7 +70,10 @@ nlohmann::json PipelineJson(const PipelineResult& r) {
                         {"registration", s.registration_message}};
     nlohmann::json files = nlohmann::json::array();
     for (const auto& f : s.sweep_files) files.push_back(f.filename().string());
-    j["sweep_files"] = files;  // the first is the merge's anchor: the surface is in its frame
+    j["sweep_files"] = files;
+    nlohmann::json poses = nlohmann::json::array();  // the merge's pose of each file, as T_reference_subject
+    for (const Rigid3& T : s.T_subject_sweep) poses.push_back(MatrixJson(T.matrix()));
+    j["T_subject_sweep"] = poses;
     if (!s.ok) j["failed_stage"] = s.failed_stage, j["error"] = s.error;
     if (s.grid.mesh.num_vertices() > 0) {
       j["resample"] = {{"fit_rms_mm", s.grid.fit_rms_mm},

@@ -9,6 +9,8 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
+#include <stdexcept>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -16,6 +18,7 @@
 
 #include "model_benchmark_chain.h"
 #include "model_benchmark_population.h"
+#include "registration/pose_error.h"
 #include "shape/io/landmark_io.h"
 #include "shape/io/mesh_io.h"
 #include "shape/io/stanford_conf.h"
@@ -23,17 +26,36 @@
 namespace pectus::bench {
 
 /// The true skin of a subject (truth/surface.ply, scan frame) in the pipeline's reference frame: into the
-/// frame of the merge's anchor sweep (whose tracker error the merged scan keeps), then by
-/// T_reference_subject.
+/// subject's merged frame by the one rigid motion that best maps every merged sweep's true placement
+/// (truth/poses.conf) onto the merge's (`T_subject_sweep` of the report), least squares over every 10th
+/// point of every sweep, then by T_reference_subject. The merged frame is a gauge: without a tracker prior
+/// it is the first sweep's (tracker error and all), with one it is the tracker's frame moved by the mean
+/// of the corrections; either way this motion is what the merge decided about the frame, not about the
+/// shape, so it is removed (as merge_grid_benchmark removes it), whatever the merge's convention.
 inline TriangleMesh TrueSurfaceInReferenceFrame(const std::filesystem::path& cohort,
                                                 const nlohmann::json& s) {
   const std::filesystem::path dir = cohort / s["name"].get<std::string>();
   TriangleMesh truth = ReadMesh(dir / "truth/surface.ply");
-  const std::string anchor = s["sweep_files"][0];
-  for (const ScanPose& p : ReadStanfordConf(dir / "truth/poses.conf")) {
-    if (std::filesystem::path(p.file).filename() == anchor)
-      TransformInPlace(Similarity3::FromRigid(p.T_common_scan.inverse()), &truth);
+  std::map<std::string, Rigid3> true_pose;
+  for (const ScanPose& p : ReadStanfordConf(dir / "truth/poses.conf"))
+    true_pose[std::filesystem::path(p.file).filename().string()] = p.T_common_scan;
+  const auto& files = s["sweep_files"];
+  const auto& merged = s["T_subject_sweep"];
+  if (merged.size() != files.size())
+    throw std::runtime_error(s["name"].get<std::string>() + ": the report has no merge pose for every sweep");
+  std::vector<PointCloud> sweeps;
+  std::vector<Rigid3> in_truth, in_merge;
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    const std::string file = files[i].get<std::string>();
+    Eigen::Matrix4d M;
+    for (int r = 0; r < 4; ++r) {
+      for (int c = 0; c < 4; ++c) M(r, c) = merged[i][r][c];
+    }
+    sweeps.push_back(ReadPointCloud(dir / file));
+    in_truth.push_back(true_pose.at(file));
+    in_merge.push_back(Rigid3(M));
   }
+  TransformInPlace(Similarity3::FromRigid(BestCommonMotion(sweeps, in_truth, in_merge, 10)), &truth);
   Eigen::Matrix4d T;
   for (int r = 0; r < 4; ++r) {
     for (int c = 0; c < 4; ++c) T(r, c) = s["T_reference_subject"][r][c];

@@ -6,8 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <map>
 
 #include "registration/landmark_alignment.h"
+#include "registration/pose_error.h"
 #include "shape/core/error.h"
 #include "shape/io/mesh_io.h"
 #include "shape/io/stanford_conf.h"
@@ -32,13 +34,20 @@ PipelineOptions FixtureOptions() {
   return o;
 }
 
-// T_scan_sweep of the subject's anchor sweep, from its truth/poses.conf.
-Rigid3 AnchorPose(const SubjectOutcome& s) {
-  for (const ScanPose& p : ReadStanfordConf(kCohort / s.name / "truth/poses.conf")) {
-    if (fs::path(p.file).filename() == s.sweep_files.front().filename()) return p.T_common_scan;
+// The frame of a subject's merged surface against its scan frame: the common motion that best maps the
+// sweeps' true placements (truth/poses.conf) onto the merge's (T_subject_sweep). A merge's frame is a gauge
+// (the tracker's, moved by the mean correction): removed here so that the grids are compared by shape.
+Rigid3 MergedFromScan(const SubjectOutcome& s) {
+  std::map<std::string, Rigid3> truth;
+  for (const ScanPose& p : ReadStanfordConf(kCohort / s.name / "truth/poses.conf"))
+    truth[fs::path(p.file).filename().string()] = p.T_common_scan;
+  std::vector<PointCloud> sweeps;
+  std::vector<Rigid3> true_poses;
+  for (const fs::path& f : s.sweep_files) {
+    sweeps.push_back(ReadPointCloud(f));
+    true_poses.push_back(truth.at(f.filename().string()));
   }
-  ADD_FAILURE() << "no pose for " << s.sweep_files.front();
-  return Rigid3::Identity();
+  return BestCommonMotion(sweeps, true_poses, s.T_subject_sweep, 10);
 }
 
 TEST(CohortPipeline, FindsTheSubjectFoldersAndNotThePopulation) {
@@ -60,10 +69,11 @@ TEST(CohortPipeline, GridsLieOnTheTrueSurfacesAndTheDepressionStandsOut) {
   EXPECT_EQ(r.model->num_modes(), 2);
   EXPECT_EQ(r.model->num_points(), 21 * 41);
   for (const SubjectOutcome& s : r.subjects) {
-    // The true surface (scan frame) in the frame of the merge's anchor sweep (whose tracker error the
-    // merged surface keeps), then in the reference frame by the registration found.
+    // The true surface (scan frame) in the subject's merged frame, then in the reference frame by the
+    // registration found.
+    ASSERT_EQ(s.T_subject_sweep.size(), s.sweep_files.size()) << s.name;
     TriangleMesh truth = ReadMesh(kCohort / s.name / "truth/surface.ply");
-    TransformInPlace(Similarity3::FromRigid(AnchorPose(s).inverse()), &truth);
+    TransformInPlace(Similarity3::FromRigid(MergedFromScan(s)), &truth);
     TransformInPlace(s.T_reference_subject, &truth);
     const DistanceMapResult d = ComputeDistanceMap(s.grid.mesh.vertices.positions, truth);
     // The reconstructed surface over the ROI, from 4 mm sweeps with 0.2 mm noise and tracker errors: its
