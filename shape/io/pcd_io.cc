@@ -135,6 +135,11 @@ std::vector<std::uint8_t> ReadAscii(std::string_view bytes, const Header& header
 std::vector<Column> ReadColumns(std::string_view bytes, const Header& header, const std::string& name,
                                 std::vector<std::uint8_t>* storage) {
   std::vector<Column> columns;
+  if (header.points == 0) {
+    // Nothing to read (and no offsets to add to an empty buffer's null pointer: found by fuzzing).
+    for (const Field& f : header.fields) columns.push_back(Column{&f, nullptr, 0});
+    return columns;
+  }
   const auto* file = reinterpret_cast<const std::uint8_t*>(bytes.data());
   if (header.encoding == Encoding::kBinaryCompressed) {
     // Field after field, without the padding; the sizes were checked against the header and the file.

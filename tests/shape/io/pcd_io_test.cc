@@ -168,6 +168,23 @@ TEST(PcdIo, AsciiNaNsOfAnOrganizedCloudAreLeftOut) {
   EXPECT_NE(collector.warnings()[0].find("2 of 4 points"), std::string::npos) << collector.warnings()[0];
 }
 
+TEST(PcdIo, AnEmptyCloudIsNoError) {
+  // As PCL's reader returned it: no points, in any encoding (binary_compressed without its sizes).
+  const testing::TempDir dir;
+  for (const char* encoding : {"ascii", "binary", "binary_compressed"}) {
+    SCOPED_TRACE(encoding);
+    FileSummary summary;
+    const TriangleMesh mesh = ReadPcd(
+        dir.Write("empty_cloud.pcd",
+                  std::string("VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 0\n"
+                              "HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 0\nDATA ") +
+                      encoding + "\n"),
+        &summary);
+    EXPECT_EQ(mesh.num_vertices(), 0);
+    EXPECT_EQ(summary.elements.at(0).count, 0);
+  }
+}
+
 TEST(PcdIo, MalformedFilesAreErrorsNamingTheFile) {
   const testing::TempDir dir;
   EXPECT_TRUE(ThrowsBadInput([&] { ReadPcd(dir / "missing.pcd"); }, "no such file", "missing.pcd"));
