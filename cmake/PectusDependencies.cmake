@@ -9,6 +9,20 @@ if(PECTUS_BUILD_TESTS)
   include(GoogleTest)
 endif()
 
+# liblzf expands PCD's binary_compressed blocks (shape/io/pcd_io.cc). Debian's liblzf-dev puts lzf.h in
+# include/liblzf/; find it by hand and make an imported target, so that every build (core-only too) has it.
+find_path(LZF_INCLUDE_DIR lzf.h PATH_SUFFIXES liblzf)
+find_library(LZF_LIBRARY lzf)
+if(NOT LZF_INCLUDE_DIR OR NOT LZF_LIBRARY)
+  message(FATAL_ERROR "liblzf not found (lzf.h: ${LZF_INCLUDE_DIR}, library: ${LZF_LIBRARY}): the PCD reader "
+                      "needs it; install Debian's liblzf-dev (scripts/bootstrap does)")
+endif()
+if(NOT TARGET LZF::lzf)
+  add_library(LZF::lzf UNKNOWN IMPORTED)
+  set_target_properties(LZF::lzf PROPERTIES IMPORTED_LOCATION ${LZF_LIBRARY}
+                        INTERFACE_INCLUDE_DIRECTORIES ${LZF_INCLUDE_DIR})
+endif()
+
 if(PECTUS_CORE_ONLY)
   return()
 endif()

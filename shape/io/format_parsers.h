@@ -34,7 +34,10 @@ void WriteStl(std::ostream& out, const TriangleMesh& mesh, const WriteOptions& o
 TriangleMesh ParseXyz(std::string_view bytes, const std::string& name, FileSummary* summary = nullptr);
 void WriteXyz(std::ostream& out, const TriangleMesh& mesh, char separator, const WriteOptions& options);
 
-/// PCD (PCL's format, ascii / binary / binary_compressed), read through PCL.
-TriangleMesh ReadPcdFile(const std::string& path, FileSummary* summary = nullptr);
+/// PCD (PCL's Point Cloud Data, versions 0.5-0.7; ascii, binary, binary_compressed): fields x y z of any
+/// type, normal_x normal_y normal_z, a packed rgb or rgba (4 bytes), and every other one-element field
+/// kept as a named scalar (padding "_" and multi-element fields such as descriptors are not). Points with
+/// a NaN position (the gaps of an organized cloud) are left out with a warning. pcd_format.h says how.
+TriangleMesh ParsePcd(std::string_view bytes, const std::string& name, FileSummary* summary = nullptr);
 
 }  // namespace pectus

@@ -41,15 +41,14 @@ TriangleMesh ReadMesh(const fs::path& path, const ReadOptions& options, FileSumm
   const std::string name = path.string();
   const FileFormat format = FormatFromPath(path);
   TriangleMesh mesh;
-  if (format == FileFormat::kPcd) {
-    mesh = ReadPcdFile(name, summary);
-  } else {
+  {
     MappedFile file(name);
     if (file.bytes().empty()) ThrowBadInput(name, "file is empty");
     switch (format) {
       case FileFormat::kPly: mesh = ParsePly(file.bytes(), name, summary); break;
       case FileFormat::kObj: mesh = ParseObj(file.bytes(), name, summary); break;
       case FileFormat::kStl: mesh = ParseStl(file.bytes(), name, summary); break;
+      case FileFormat::kPcd: mesh = ParsePcd(file.bytes(), name, summary); break;
       default: mesh = ParseXyz(file.bytes(), name, summary); break;
     }
   }

@@ -1,5 +1,5 @@
-// libFuzzer target: PCD files (ascii, binary, binary_compressed) read through ReadMesh and PCL, from a
-// file held in memory (fuzz_file.h).
+// libFuzzer target: PCD files (ascii, binary, binary_compressed) read through ReadMesh, from a file held
+// in memory (fuzz_file.h).
 #include <cstddef>
 #include <cstdint>
 
