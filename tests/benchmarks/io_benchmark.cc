@@ -140,7 +140,8 @@ class RatioReporter : public benchmark::ConsoleReporter {
                  "%-18s %12s %12s %14s %16s %18s\n",
                  "input", "pectus file", "PCL file", "pectus memory", "PCL / pectus file",
                  "pectus file / memory");
-    for (const auto& [input, by] : ms_) {
+    for (const auto& [input, routes] : ms_) {
+      const auto& by = routes;  // clang 14 captures no structured binding in a lambda
       auto get = [&](const char* route) {
         const auto it = by.find(route);
         return it == by.end() ? 0.0 : it->second;
