@@ -45,7 +45,7 @@ bool SweepMergeOptions::IsValid(std::string* why) const {
   if (smoothing_mm < 0) return fail("smoothing must be >= 0 mm");
   if (outlier_neighbours < 0 || outlier_std_ratio <= 0) return fail("outlier neighbours >= 0 and ratio > 0");
   if (target_spacing_mm < 0) return fail("target spacing must be >= 0 mm");
-  return surface.IsValid(why) && pairwise.IsValid(why);
+  return surface.IsValid(why) && pairwise.IsValid(why) && tracker_adjustment.IsValid(why);
 }
 
 bool SweepMergeOptions::HasTrackerPrior() const { return tracker_deg > 0 || tracker_mm > 0; }
@@ -159,8 +159,8 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
       const auto pairs = AllCorrespondences(sweeps, P, links, options.global_points_per_pair, round_gate);
       const std::vector<Rigid3> previous = P;
       if (prior) {
-        TrackerAdjustmentOptions to;
-        const TrackerAdjustmentResult a = AdjustPosesToTracker(pairs, sweeps, *prior, &P, to);
+        const TrackerAdjustmentResult a =
+            AdjustPosesToTracker(pairs, sweeps, *prior, &P, options.tracker_adjustment);
         result.global_rms_before_mm = a.rms_before_mm;
         result.global_rms_after_mm = PointToPlaneRms(pairs, P);
         pinned = a.pairs;

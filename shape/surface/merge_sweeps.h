@@ -8,6 +8,7 @@
 #include "registration/icp.h"
 #include "shape/core/geometry.h"
 #include "shape/core/timings.h"
+#include "shape/surface/adjust_poses_to_tracker.h"
 #include "shape/surface/sweep_surface.h"
 
 namespace pectus {
@@ -46,6 +47,7 @@ struct SweepMergeOptions {
     o.target_pose_sd_fraction = 0.0;  // a start for the joint solve below, which uses every pair again
     return o;
   }();
+  TrackerAdjustmentOptions tracker_adjustment;  ///< each round's joint step, with a tracker prior
   int global_rounds = 10;             ///< at most this many rounds of correspondence search + joint solve
   int global_points_per_pair = 3000;  ///< source samples per linked pair, direction and round
   /// Finest gate of the joint solve (mm); 0 = 3 times the median point spacing of the sweeps.
