@@ -19,7 +19,7 @@
 //       [--sampling grid,random] [--sweeps 5] [--seeds 1] [--seed 1] [--pattern horizontal]
 //       [--spacing 1.5] [--no-open3d] [--png merge_grid.png] [--workdir /tmp/pectus_merge_grid]
 //       [--prior-deg D --prior-mm M --prior-lever L] [--min-overlap-fraction F] [--border-gap DEG]
-//       [--min-pinned-ratio R] [--sample-spacings S] [--points-per-pair N] [--rounds N]
+//       [--min-pinned-ratio R] [--sample-spacings S] [--points-per-pair N] [--rounds N] [--fit-tracker 0|1]
 // (the tracker prior, SweepMergeOptions::tracker_deg/tracker_mm/tracker_lever_mm, defaults MergeSweeps's;
 // the others override SweepMergeOptions::min_overlap_fraction, global_points_per_pair and global_rounds,
 // SweepSurfaceOptions::border_gap_deg and sample_spacings, and
@@ -62,6 +62,7 @@ struct Flags {
   double sample_spacings = -1.0;                                    // < 0: MergeSweeps's default
   int points_per_pair = -1;                                         // < 0: MergeSweeps's default
   int rounds = -1;                                                  // < 0: MergeSweeps's default
+  int fit_tracker = -1;                                             // 0 / 1; < 0: MergeSweeps's default
   bool open3d = true;
 };
 
@@ -129,6 +130,8 @@ Flags Parse(int argc, char** argv) {
       f.min_pinned_ratio = std::stod(value());
     else if (key == "--sample-spacings")
       f.sample_spacings = std::stod(value());
+    else if (key == "--fit-tracker")
+      f.fit_tracker = std::stoi(value());
     else if (key == "--rounds")
       f.rounds = std::stoi(value());
     else if (key == "--points-per-pair")
@@ -161,6 +164,7 @@ SweepMergeOptions MergeOptions(const Flags& f) {
   if (f.sample_spacings >= 0.0) options.surface.sample_spacings = f.sample_spacings;
   if (f.points_per_pair >= 0) options.global_points_per_pair = f.points_per_pair;
   if (f.rounds >= 0) options.global_rounds = f.rounds;
+  if (f.fit_tracker >= 0) options.fit_tracker_accuracy = f.fit_tracker != 0;
   return options;
 }
 
@@ -389,7 +393,8 @@ int main(int argc, char** argv) {
         {"min_pinned_ratio", MergeOptions(f).tracker_adjustment.min_pinned_ratio},
         {"sample_spacings", MergeOptions(f).surface.sample_spacings},
         {"points_per_pair", MergeOptions(f).global_points_per_pair},
-        {"global_rounds", MergeOptions(f).global_rounds}}},
+        {"global_rounds", MergeOptions(f).global_rounds},
+        {"fit_tracker_accuracy", MergeOptions(f).fit_tracker_accuracy}}},
       {"threads", omp_get_max_threads()},
       {"load_average", load},
       {"cells", cells}};
