@@ -190,7 +190,7 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
     // squared corrections in the prior's units, summed and divided by the number of pinned directions,
     // estimate the square of the factor by which the stated accuracy is off. The prior then holds what
     // the overlaps leave free with the accuracy the tracker showed, and the poses are adjusted again from
-    // where they are; twice more at most, while the factor still changes by more than 25 %.
+    // where they are: up to three times, while the factor is off 1 by more than 25 % and not clamped.
     const double stated_deg = prior ? prior->rotation_sd_deg : 0.0;
     const double stated_mm = prior ? prior->translation_sd_mm : 0.0;
     double total = 1.0;
@@ -206,7 +206,9 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
       for (const auto& pc : pinned) directions += pc.pinned_directions;
       const double factor = std::sqrt(sum / std::max(1, directions));
       if (factor > 0.8 && factor < 1.25) break;
-      total = std::clamp(total * factor, 0.01, 3.0);
+      const double next = std::clamp(total * factor, 0.01, 3.0);
+      if (next == total) break;
+      total = next;
       prior->rotation_sd_deg = stated_deg * total;
       prior->translation_sd_mm = stated_mm * total;
       result.tracker_accuracy_factor = total;
