@@ -155,10 +155,14 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
                       options.global_rounds * (prior && options.fit_tracker_accuracy ? 4 : 1));
     PoseAdjustmentOptions ao;
     ao.anchor = options.anchor;
-    auto run_rounds = [&](double first_gate, int rounds) {
+    // Rounds from `first_gate`; with `fixed` the correspondences are found once and kept (the poses move by
+    // less than the noise then, and the search is most of a round's cost).
+    std::vector<SweepCorrespondence> pairs;
+    auto run_rounds = [&](double first_gate, int rounds, bool fixed) {
       double round_gate = first_gate;
       for (int round = 0; round < rounds; ++round) {
-        const auto pairs = AllCorrespondences(sweeps, P, links, options.global_points_per_pair, round_gate);
+        if (!fixed || round == 0)
+          pairs = AllCorrespondences(sweeps, P, links, options.global_points_per_pair, round_gate);
         const std::vector<Rigid3> previous = P;
         if (prior) {
           const TrackerAdjustmentResult a =
@@ -184,7 +188,7 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
         round_gate = std::max(gate, round_gate / 2.0);
       }
     };
-    run_rounds(prior ? std::max(radius, gate) : gate, options.global_rounds);
+    run_rounds(prior ? std::max(radius, gate) : gate, options.global_rounds, false);
     // The tracker's actual accuracy, from the directions the overlaps pin (empirical Bayes): each pinned
     // direction of a pair's relative pose carries about one unit of the prior's variance, so the sweeps'
     // squared corrections in the prior's units, summed and divided by the number of pinned directions,
@@ -212,7 +216,7 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
       prior->rotation_sd_deg = stated_deg * total;
       prior->translation_sd_mm = stated_mm * total;
       result.tracker_accuracy_factor = total;
-      run_rounds(gate, options.global_rounds);
+      run_rounds(gate, options.global_rounds, true);
     }
     result.timings_s.Add("global_adjustment", Since(t0));
   }
