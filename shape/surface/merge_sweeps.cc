@@ -45,7 +45,7 @@ bool SweepMergeOptions::IsValid(std::string* why) const {
   if (smoothing_mm < 0) return fail("smoothing must be >= 0 mm");
   if (outlier_neighbours < 0 || outlier_std_ratio <= 0) return fail("outlier neighbours >= 0 and ratio > 0");
   if (target_spacing_mm < 0) return fail("target spacing must be >= 0 mm");
-  return surface.IsValid(why) && pairwise.IsValid(why);
+  return surface.IsValid(why) && pairwise.IsValid(why) && tracker_adjustment.IsValid(why);
 }
 
 bool SweepMergeOptions::HasTrackerPrior() const { return tracker_deg > 0 || tracker_mm > 0; }
@@ -151,35 +151,72 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
     // 4. Joint point-to-plane adjustment of all poses, with fresh correspondences every round, the gate
     // halving from the starting radius (with a prior) down to the finest gate.
     t0 = Clock::now();
-    Progress progress("global adjustment", options.global_rounds);
+    Progress progress("global adjustment",
+                      options.global_rounds * (prior && options.fit_tracker_accuracy ? 4 : 1));
     PoseAdjustmentOptions ao;
     ao.anchor = options.anchor;
-    double round_gate = prior ? std::max(radius, gate) : gate;
-    for (int round = 0; round < options.global_rounds; ++round) {
-      const auto pairs = AllCorrespondences(sweeps, P, links, options.global_points_per_pair, round_gate);
-      const std::vector<Rigid3> previous = P;
-      if (prior) {
-        TrackerAdjustmentOptions to;
-        const TrackerAdjustmentResult a = AdjustPosesToTracker(pairs, sweeps, *prior, &P, to);
-        result.global_rms_before_mm = a.rms_before_mm;
-        result.global_rms_after_mm = PointToPlaneRms(pairs, P);
-        pinned = a.pairs;
-      } else {
-        const PoseAdjustmentResult a = AdjustPoses(pairs, &P, ao);
-        result.global_rms_before_mm = a.rms_before_mm;
-        result.global_rms_after_mm = a.rms_after_mm;
+    // Rounds from `first_gate`; with `fixed` the correspondences are found once and kept (the poses move by
+    // less than the noise then, and the search is most of a round's cost).
+    std::vector<SweepCorrespondence> pairs;
+    auto run_rounds = [&](double first_gate, int rounds, bool fixed) {
+      double round_gate = first_gate;
+      for (int round = 0; round < rounds; ++round) {
+        if (!fixed || round == 0)
+          pairs = AllCorrespondences(sweeps, P, links, options.global_points_per_pair, round_gate);
+        const std::vector<Rigid3> previous = P;
+        if (prior) {
+          const TrackerAdjustmentResult a =
+              AdjustPosesToTracker(pairs, sweeps, *prior, &P, options.tracker_adjustment);
+          result.global_rms_before_mm = a.rms_before_mm;
+          result.global_rms_after_mm = PointToPlaneRms(pairs, P);
+          pinned = a.pairs;
+        } else {
+          const PoseAdjustmentResult a = AdjustPoses(pairs, &P, ao);
+          result.global_rms_before_mm = a.rms_before_mm;
+          result.global_rms_after_mm = a.rms_after_mm;
+        }
+        ++result.global_rounds;
+        progress.Advance();
+        double change_mm = 0;  // largest movement of a sweep's sample, roughly
+        for (std::size_t s = 0; s < n; ++s) {
+          const Rigid3 d = P[s] * previous[s].inverse();
+          const Eigen::Vector3d c = P[s] * sweeps[s].centroid;
+          const double extent = (ComputeBounds(clouds[s].positions).extent().norm()) / 2.0;
+          change_mm = std::max(change_mm, (d * c - c).norm() + AngleDeg(d.linear()) * M_PI / 180.0 * extent);
+        }
+        if (round_gate <= gate && change_mm < 0.01 * spacing) break;
+        round_gate = std::max(gate, round_gate / 2.0);
       }
-      ++result.global_rounds;
-      progress.Advance();
-      double change_mm = 0;  // largest movement of a sweep's sample, roughly
+    };
+    run_rounds(prior ? std::max(radius, gate) : gate, options.global_rounds, false);
+    // The tracker's actual accuracy, from the directions the overlaps pin (empirical Bayes): each pinned
+    // direction of a pair's relative pose carries about one unit of the prior's variance, so the sweeps'
+    // squared corrections in the prior's units, summed and divided by the number of pinned directions,
+    // estimate the square of the factor by which the stated accuracy is off. The prior then holds what
+    // the overlaps leave free with the accuracy the tracker showed, and the poses are adjusted again from
+    // where they are: up to three times, while the factor is off 1 by more than 25 % and not clamped.
+    const double stated_deg = prior ? prior->rotation_sd_deg : 0.0;
+    const double stated_mm = prior ? prior->translation_sd_mm : 0.0;
+    double total = 1.0;
+    for (int fit = 0; prior && options.fit_tracker_accuracy && fit < 3; ++fit) {
+      double sum = 0.0;
       for (std::size_t s = 0; s < n; ++s) {
-        const Rigid3 d = P[s] * previous[s].inverse();
-        const Eigen::Vector3d c = P[s] * sweeps[s].centroid;
-        const double extent = (ComputeBounds(clouds[s].positions).extent().norm()) / 2.0;
-        change_mm = std::max(change_mm, (d * c - c).norm() + AngleDeg(d.linear()) * M_PI / 180.0 * extent);
+        const Eigen::AngleAxisd turned(P[s].linear() * P_start[s].linear().transpose());
+        const Eigen::Vector3d moved = P[s] * sweeps[s].centroid - P_start[s] * sweeps[s].centroid;
+        sum += std::pow(turned.angle() * 180.0 / M_PI / prior->rotation_sd_deg, 2) +
+               moved.squaredNorm() / std::pow(prior->translation_sd_mm, 2);
       }
-      if (round_gate <= gate && change_mm < 0.01 * spacing) break;
-      round_gate = std::max(gate, round_gate / 2.0);
+      int directions = 0;
+      for (const auto& pc : pinned) directions += pc.pinned_directions;
+      const double factor = std::sqrt(sum / std::max(1, directions));
+      if (factor > 0.8 && factor < 1.25) break;
+      const double next = std::clamp(total * factor, 0.01, 3.0);
+      if (next == total) break;
+      total = next;
+      prior->rotation_sd_deg = stated_deg * total;
+      prior->translation_sd_mm = stated_mm * total;
+      result.tracker_accuracy_factor = total;
+      run_rounds(gate, options.global_rounds, true);
     }
     result.timings_s.Add("global_adjustment", Since(t0));
   }

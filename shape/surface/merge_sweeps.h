@@ -8,6 +8,7 @@
 #include "registration/icp.h"
 #include "shape/core/geometry.h"
 #include "shape/core/timings.h"
+#include "shape/surface/adjust_poses_to_tracker.h"
 #include "shape/surface/sweep_surface.h"
 
 namespace pectus {
@@ -46,6 +47,13 @@ struct SweepMergeOptions {
     o.target_pose_sd_fraction = 0.0;  // a start for the joint solve below, which uses every pair again
     return o;
   }();
+  TrackerAdjustmentOptions tracker_adjustment;  ///< each round's joint step, with a tracker prior
+  /// With a tracker prior: after the rounds, estimate how far off the stated accuracy the tracker really
+  /// was from the corrections along the directions the overlaps pin (empirical Bayes), scale the prior
+  /// by that factor (0.01 to 3 in all) and adjust again from there (up to three times, while the factor
+  /// is off 1 by more than 25 %), so that what the overlaps pin only weakly is held as tightly as the
+  /// tracker proved to be: given exact poses, the weak directions no longer follow the data's noise.
+  bool fit_tracker_accuracy = true;
   int global_rounds = 10;             ///< at most this many rounds of correspondence search + joint solve
   int global_points_per_pair = 3000;  ///< source samples per linked pair, direction and round
   /// Finest gate of the joint solve (mm); 0 = 3 times the median point spacing of the sweeps.
@@ -89,7 +97,10 @@ struct SweepMergeResult {
   double global_rms_before_mm = 0.0;  ///< RMS residual of the last joint solve's correspondences, before
   double global_rms_after_mm = 0.0;   ///< and after it
   int global_rounds = 0;              ///< rounds of the joint solve run
-  PointCloud merged;                  ///< world frame; normals; scalar "sweep" = source sweep index
+  /// With a tracker prior and fit_tracker_accuracy: the factor the stated accuracy was scaled by (0: not
+  /// fitted).
+  double tracker_accuracy_factor = 0.0;
+  PointCloud merged;  ///< world frame; normals; scalar "sweep" = source sweep index
   std::int64_t points_in = 0;
   std::int64_t outliers_removed = 0;
   std::int64_t points_out = 0;

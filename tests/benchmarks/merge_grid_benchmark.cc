@@ -19,8 +19,11 @@
 //       [--sampling grid,random] [--sweeps 5] [--seeds 1] [--seed 1] [--pattern horizontal]
 //       [--spacing 1.5] [--no-open3d] [--png merge_grid.png] [--workdir /tmp/pectus_merge_grid]
 //       [--prior-deg D --prior-mm M --prior-lever L] [--min-overlap-fraction F] [--border-gap DEG]
+//       [--min-pinned-ratio R] [--sample-spacings S] [--points-per-pair N] [--rounds N] [--fit-tracker 0|1]
 // (the tracker prior, SweepMergeOptions::tracker_deg/tracker_mm/tracker_lever_mm, defaults MergeSweeps's;
-// the last two override SweepMergeOptions::min_overlap_fraction and SweepSurfaceOptions::border_gap_deg)
+// the others override SweepMergeOptions::min_overlap_fraction, global_points_per_pair and global_rounds,
+// SweepSurfaceOptions::border_gap_deg and sample_spacings, and
+// TrackerAdjustmentOptions::min_pinned_ratio)
 #include <omp.h>
 
 #include <chrono>
@@ -55,6 +58,11 @@ struct Flags {
   double spacing_mm = 1.5, success_mm = 1.0, lever_mm = 200.0;
   double prior_deg = -1.0, prior_mm = -1.0, prior_lever_mm = -1.0;  // < 0: MergeSweeps's defaults
   double min_overlap_fraction = -1.0, border_gap_deg = -1.0;        // < 0: MergeSweeps's defaults
+  double min_pinned_ratio = -1.0;                                   // < 0: MergeSweeps's default
+  double sample_spacings = -1.0;                                    // < 0: MergeSweeps's default
+  int points_per_pair = -1;                                         // < 0: MergeSweeps's default
+  int rounds = -1;                                                  // < 0: MergeSweeps's default
+  int fit_tracker = -1;                                             // 0 / 1; < 0: MergeSweeps's default
   bool open3d = true;
 };
 
@@ -118,6 +126,16 @@ Flags Parse(int argc, char** argv) {
       f.min_overlap_fraction = std::stod(value());
     else if (key == "--border-gap")
       f.border_gap_deg = std::stod(value());
+    else if (key == "--min-pinned-ratio")
+      f.min_pinned_ratio = std::stod(value());
+    else if (key == "--sample-spacings")
+      f.sample_spacings = std::stod(value());
+    else if (key == "--fit-tracker")
+      f.fit_tracker = std::stoi(value());
+    else if (key == "--rounds")
+      f.rounds = std::stoi(value());
+    else if (key == "--points-per-pair")
+      f.points_per_pair = std::stoi(value());
     else if (key == "--png")
       f.png = value();
     else if (key == "--workdir")
@@ -142,6 +160,11 @@ SweepMergeOptions MergeOptions(const Flags& f) {
   if (f.prior_lever_mm >= 0.0) options.tracker_lever_mm = f.prior_lever_mm;
   if (f.min_overlap_fraction >= 0.0) options.min_overlap_fraction = f.min_overlap_fraction;
   if (f.border_gap_deg >= 0.0) options.surface.border_gap_deg = f.border_gap_deg;
+  if (f.min_pinned_ratio >= 0.0) options.tracker_adjustment.min_pinned_ratio = f.min_pinned_ratio;
+  if (f.sample_spacings >= 0.0) options.surface.sample_spacings = f.sample_spacings;
+  if (f.points_per_pair >= 0) options.global_points_per_pair = f.points_per_pair;
+  if (f.rounds >= 0) options.global_rounds = f.rounds;
+  if (f.fit_tracker >= 0) options.fit_tracker_accuracy = f.fit_tracker != 0;
   return options;
 }
 
@@ -366,7 +389,12 @@ int main(int argc, char** argv) {
       {"merge_options",
        {{"min_overlap_fraction", MergeOptions(f).min_overlap_fraction},
         {"border_gap_deg", MergeOptions(f).surface.border_gap_deg},
-        {"overlap_distance_mm", MergeOptions(f).overlap_distance_mm}}},
+        {"overlap_distance_mm", MergeOptions(f).overlap_distance_mm},
+        {"min_pinned_ratio", MergeOptions(f).tracker_adjustment.min_pinned_ratio},
+        {"sample_spacings", MergeOptions(f).surface.sample_spacings},
+        {"points_per_pair", MergeOptions(f).global_points_per_pair},
+        {"global_rounds", MergeOptions(f).global_rounds},
+        {"fit_tracker_accuracy", MergeOptions(f).fit_tracker_accuracy}}},
       {"threads", omp_get_max_threads()},
       {"load_average", load},
       {"cells", cells}};

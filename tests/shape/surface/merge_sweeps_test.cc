@@ -253,6 +253,83 @@ TEST(SweepMerge, ExactPosesStayPut) {
   }
 }
 
+// Horizontal strips of a chest-like surface (radius 150 mm across, 600 mm up), 1.5 mm apart on average
+// at uniformly random places, 0.2 mm noise along the surface normal (a handheld scanner's), each strip
+// 60 mm high reaching 12 mm into the next: the overlap bands pin the slide up the gentle curvature and the
+// turn about the vertical only weakly, as a chest's horizontal sweeps are pinned. World frame.
+std::vector<PointCloud> ChestLikeStrips(int strips, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, 0.2);
+  std::vector<PointCloud> out;
+  for (int s = 0; s < strips; ++s) {
+    const double y0 = 48.0 * s - 6.0, y1 = y0 + 60.0;
+    std::uniform_real_distribution<double> uu(-110.0, 110.0), vv(y0, y1);
+    const int count = int(220.0 * 60.0 / (1.5 * 1.5));
+    PointCloud c;
+    c.positions.resize(count, 3);
+    for (int k = 0; k < count; ++k) {
+      const double x = uu(rng), y = vv(rng);
+      const Eigen::Vector3d n = Eigen::Vector3d(x / 150.0, y / 600.0, 1.0).normalized();
+      c.positions.row(k) =
+          (Eigen::Vector3d(x, y, -x * x / 300.0 - y * y / 1200.0) + noise(rng) * n).transpose();
+    }
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+// Given exact poses, the overlaps' corrections along the directions they pin are at the noise, far below
+// the tracker's stated accuracy: the fitted accuracy is a small fraction of it, and the weakly pinned
+// directions, which follow the data's noise (0.1-0.25 mm per pair on the issue's chests) under the stated
+// prior, are held. Issue 13: no sweep moves by more than 0.05 mm RMS.
+TEST(SweepMerge, FittedTrackerAccuracyHoldsExactPoses) {
+  const std::vector<Rigid3> truth(3, Rigid3::Identity());
+  for (const std::uint64_t seed : {1, 2}) {
+    const std::vector<PointCloud> strips = ChestLikeStrips(3, seed);
+    const SweepMergeResult fitted = MergeSweeps(strips, truth);
+    SweepMergeOptions stated;
+    stated.fit_tracker_accuracy = false;
+    const SweepMergeResult unfitted = MergeSweeps(strips, truth, stated);
+    double worst = 0.0, worst_unfitted = 0.0;
+    for (std::size_t s = 0; s < strips.size(); ++s) {
+      worst = std::max(worst, RmsDisplacement(strips[s].positions, fitted.T_world_sweep[s], truth[s]));
+      worst_unfitted =
+          std::max(worst_unfitted, RmsDisplacement(strips[s].positions, unfitted.T_world_sweep[s], truth[s]));
+    }
+    // Measured 0.017 and 0.007 mm (refits searching correspondences afresh; 0.029 and 0.028 mm with the
+    // stated prior on these strips, which pin better than the issue's chests), the fitted accuracy at
+    // its floor, 0.01 of the stated.
+    EXPECT_LT(worst, 0.05) << "seed " << seed;
+    EXPECT_LE(worst, worst_unfitted + 1e-3) << "seed " << seed;
+    EXPECT_GT(fitted.tracker_accuracy_factor, 0.0);
+    EXPECT_LT(fitted.tracker_accuracy_factor, 0.3);
+    EXPECT_EQ(unfitted.tracker_accuracy_factor, 0.0);
+  }
+}
+
+// A tracker about as bad as it states: the fit keeps the prior near its stated accuracy (or leaves it)
+// and the error is removed as before. Measured: the fitted accuracy 0.59 of the stated (the disturbance
+// draws magnitudes up to the stated values), each strip 0.37-0.62 mm from the truth after 1.7-2.3 mm.
+TEST(SweepMerge, FittedTrackerAccuracyKeepsAStatedError) {
+  const std::vector<Rigid3> truth(3, Rigid3::Identity());
+  const std::vector<PointCloud> strips = ChestLikeStrips(3, 3);
+  std::mt19937_64 rng(8);
+  std::vector<Rigid3> start;
+  SweepMergeOptions o;  // the default prior: 0.5 degrees, 1.5 mm, lever 200 mm
+  for (std::size_t s = 0; s < strips.size(); ++s)
+    start.push_back(DisturbAbout(&rng, 0.5, 2.3, strips[s], truth[s]));
+  const SweepMergeResult r = MergeSweeps(strips, start, o);
+  const Rigid3 G = BestCommonMotion(strips, r.T_world_sweep, truth);
+  for (std::size_t s = 0; s < strips.size(); ++s) {
+    EXPECT_LT(RmsDisplacement(strips[s].positions, G * r.T_world_sweep[s], truth[s]),
+              0.5 * RmsDisplacement(strips[s].positions, G * start[s], truth[s]))
+        << "strip " << s;
+  }
+  EXPECT_TRUE(r.tracker_accuracy_factor == 0.0 ||
+              (r.tracker_accuracy_factor > 0.3 && r.tracker_accuracy_factor <= 3.0))
+      << r.tracker_accuracy_factor;
+}
+
 TEST(SweepMerge, SmoothingBlendsOffsetSweepsAndDecimationSetsSpacing) {
   // Two copies of the same plane patch 0.4 mm apart: blending pulls them onto one surface.
   PointCloud a, b;
