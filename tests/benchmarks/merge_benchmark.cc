@@ -24,6 +24,7 @@
 #include <filesystem>
 #include <random>
 
+#include "registration/pose_error.h"
 #include "shape/io/mesh_io.h"
 #include "shape/io/stanford_conf.h"
 #include "shape/surface/merge_sweeps.h"
@@ -50,24 +51,6 @@ double RmsDisplacement(const Points3& p, const Rigid3& a, const Rigid3& b) {
   for (Eigen::Index i = 0; i < p.rows(); ++i)
     s += ((a * p.row(i).transpose()) - (b * p.row(i).transpose())).squaredNorm();
   return std::sqrt(s / static_cast<double>(p.rows()));
-}
-
-// The rigid motion G minimising sum |G a_k - b_k|^2 over every point of every sweep.
-Rigid3 BestCommonMotion(const std::vector<PointCloud>& sweeps, const std::vector<Rigid3>& estimate,
-                        const std::vector<Rigid3>& truth) {
-  Eigen::Index n = 0;
-  for (const auto& s : sweeps) n += s.size();
-  Eigen::Matrix3Xd A(3, n), B(3, n);
-  Eigen::Index k = 0;
-  for (std::size_t s = 0; s < sweeps.size(); ++s) {
-    for (Eigen::Index i = 0; i < sweeps[s].size(); ++i, ++k) {
-      A.col(k) = estimate[s] * sweeps[s].positions.row(i).transpose();
-      B.col(k) = truth[s] * sweeps[s].positions.row(i).transpose();
-    }
-  }
-  Rigid3 G;
-  G.matrix() = Eigen::umeyama(A, B, false);
-  return G;
 }
 
 double CpuSeconds() {

@@ -11,6 +11,7 @@
 #include "datasets/chest_surface.h"
 #include "datasets/scan_simulator.h"
 #include "datasets/surface_query.h"
+#include "registration/pose_error.h"
 #include "registration/kdtree.h"
 
 namespace pectus::merge_grid {
@@ -82,17 +83,9 @@ inline void CentroidAndRadius(const Points3& p, Eigen::Vector3d* c, double* radi
 inline Figures Evaluate(const std::vector<Points3>& inliers, const std::vector<Rigid3>& estimate,
                         const std::vector<Rigid3>& truth) {
   Eigen::Index n = 0;
-  for (const Points3& p : inliers) n += p.rows();
-  Eigen::Matrix3Xd A(3, n), B(3, n);
-  Eigen::Index k = 0;
-  for (std::size_t s = 0; s < inliers.size(); ++s) {
-    for (Eigen::Index i = 0; i < inliers[s].rows(); ++i, ++k) {
-      A.col(k) = estimate[s] * inliers[s].row(i).transpose();
-      B.col(k) = truth[s] * inliers[s].row(i).transpose();
-    }
-  }
-  Rigid3 G;
-  G.matrix() = Eigen::umeyama(A, B, false);
+  std::vector<PointCloud> clouds(inliers.size());
+  for (std::size_t s = 0; s < inliers.size(); ++s) clouds[s].positions = inliers[s], n += inliers[s].rows();
+  const Rigid3 G = BestCommonMotion(clouds, estimate, truth);
   Figures f;
   f.G = G;
   double total = 0.0;

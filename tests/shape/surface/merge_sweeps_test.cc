@@ -4,6 +4,7 @@
 
 #include <random>
 
+#include "registration/pose_error.h"
 #include "shape/core/error.h"
 #include "shape/io/mesh_io.h"
 #include "shape/io/stanford_conf.h"
@@ -75,8 +76,6 @@ std::vector<PointCloud> DomeStrips(int strips, std::vector<Rigid3>* T_world_swee
   return out;
 }
 
-Rigid3 BestCommonMotion(const std::vector<PointCloud>& sweeps, const std::vector<Rigid3>& estimate,
-                        const std::vector<Rigid3>& truth);
 
 // Starting poses disturbed by up to 3 degrees and 5 mm about each sweep's centroid: a tracker whose stated
 // accuracy is that bound.
@@ -103,7 +102,7 @@ TEST(SweepMerge, RecoversKnownPosesOfSyntheticStrips) {
   ASSERT_EQ(r.T_world_sweep.size(), 4u);
   // No sweep is held: the common frame is the tracker's average, so the strips are compared with the
   // truth up to one common rigid motion.
-  const Rigid3 G = BestCommonMotion(strips, r.T_world_sweep, truth);
+  const Rigid3 G = BestCommonMotion(strips, r.T_world_sweep, truth, 10);
   for (std::size_t s = 0; s < strips.size(); ++s) {
     EXPECT_LT(RmsDisplacement(strips[s].positions, G * r.T_world_sweep[s], truth[s]), kStripTolerance)
         << "strip " << s;
@@ -137,7 +136,7 @@ TEST(SweepMerge, FarFromOriginGivesTheSameAnswer) {
     far_start.push_back(shift * start[s]);
   }
   const SweepMergeResult far = MergeSweeps(strips, far_start, DisturbedTracker());
-  const Rigid3 G = BestCommonMotion(strips, far.T_world_sweep, far_truth);
+  const Rigid3 G = BestCommonMotion(strips, far.T_world_sweep, far_truth, 10);
   for (std::size_t s = 0; s < strips.size(); ++s) {
     EXPECT_LT(RmsDisplacement(strips[s].positions, far.T_world_sweep[s], shift * near.T_world_sweep[s]), 1e-3)
         << s;
@@ -319,7 +318,7 @@ TEST(SweepMerge, FittedTrackerAccuracyKeepsAStatedError) {
   for (std::size_t s = 0; s < strips.size(); ++s)
     start.push_back(DisturbAbout(&rng, 0.5, 2.3, strips[s], truth[s]));
   const SweepMergeResult r = MergeSweeps(strips, start, o);
-  const Rigid3 G = BestCommonMotion(strips, r.T_world_sweep, truth);
+  const Rigid3 G = BestCommonMotion(strips, r.T_world_sweep, truth, 10);
   for (std::size_t s = 0; s < strips.size(); ++s) {
     EXPECT_LT(RmsDisplacement(strips[s].positions, G * r.T_world_sweep[s], truth[s]),
               0.5 * RmsDisplacement(strips[s].positions, G * start[s], truth[s]))
@@ -354,26 +353,6 @@ TEST(SweepMerge, SmoothingBlendsOffsetSweepsAndDecimationSetsSpacing) {
   EXPECT_NEAR(static_cast<double>(r.points_out), 30.0 * 30.0, 120.0);
 }
 
-// The rigid motion G that best maps the placements `estimate` of all sweeps onto `truth` (least squares
-// over every 10th point of every sweep): the frame of a merge is fixed by its (disturbed) anchor sweep.
-Rigid3 BestCommonMotion(const std::vector<PointCloud>& sweeps, const std::vector<Rigid3>& estimate,
-                        const std::vector<Rigid3>& truth) {
-  std::vector<Eigen::Vector3d> a, b;
-  for (std::size_t s = 0; s < sweeps.size(); ++s) {
-    for (Eigen::Index i = 0; i < sweeps[s].size(); i += 10) {
-      a.push_back(estimate[s] * sweeps[s].positions.row(i).transpose());
-      b.push_back(truth[s] * sweeps[s].positions.row(i).transpose());
-    }
-  }
-  Eigen::Matrix3Xd A(3, Eigen::Index(a.size())), B(3, Eigen::Index(b.size()));
-  for (std::size_t k = 0; k < a.size(); ++k) {
-    A.col(Eigen::Index(k)) = a[k];
-    B.col(Eigen::Index(k)) = b[k];
-  }
-  Rigid3 G;
-  G.matrix() = Eigen::umeyama(A, B, false);
-  return G;
-}
 
 TEST(SweepMerge, RealBunnyFromDisturbedPosesReturnsToPublishedPlacement) {
   PECTUS_REQUIRE_SHARED_FILE(testing_support::kBunnyConf);
@@ -389,7 +368,7 @@ TEST(SweepMerge, RealBunnyFromDisturbedPosesReturnsToPublishedPlacement) {
   const SweepMergeResult r = MergeSweeps(sweeps, start, DisturbedTracker());
   // Every sweep started disturbed, so the merged set is compared with bun.conf up to one common rigid
   // motion.
-  const Rigid3 G = BestCommonMotion(sweeps, r.T_world_sweep, truth);
+  const Rigid3 G = BestCommonMotion(sweeps, r.T_world_sweep, truth, 10);
   for (std::size_t s = 0; s < sweeps.size(); ++s) {
     EXPECT_LE(RmsDisplacement(sweeps[s].positions, G * r.T_world_sweep[s], truth[s]), 0.3) << poses[s].file;
     EXPECT_GE(RmsDisplacement(sweeps[s].positions, G * start[s], truth[s]), s == 0 ? 0.0 : 0.3)
