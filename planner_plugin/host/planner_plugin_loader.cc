@@ -50,7 +50,10 @@ PlannerPlugin::PlannerPlugin(std::shared_ptr<void> handle, const PectusPlannerIn
 PlannerPlugin PlannerPlugin::Load(const fs::path& path) {
   dlerror();
   // RTLD_LOCAL: the plugin's own copies of pectus's core functions never clash with the host's.
-  void* raw = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+  // RTLD_NODELETE: the plugin stays mapped for the life of the process, as do the libraries it brings.
+  // Those are not made to be unloaded: libgomp (through CHOLMOD) keeps its environment and thread pool,
+  // and unmapping them leaves that memory unreachable (LeakSanitizer) or running threads without code.
+  void* raw = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
   if (raw == nullptr) {
     const char* why = dlerror();
     ThrowBadInput(path.string(),

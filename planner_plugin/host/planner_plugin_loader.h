@@ -19,7 +19,8 @@ inline constexpr const char* kPlannerPluginFileName = "libpectus_planner.so";
 /// ../planner_plugin from it; the build tree's plugin (PECTUS_PLANNER_PLUGIN_DEFAULT, set at compile time).
 std::vector<std::filesystem::path> PlannerPluginCandidates(const std::filesystem::path& explicit_path = {});
 
-/// A loaded planner plugin. Unloads it (dlclose) when the last copy goes.
+/// A loaded planner plugin. Its handle is released (dlclose) when the last copy goes; the library itself
+/// stays mapped for the life of the process (RTLD_NODELETE: its OpenMP runtime cannot be unloaded).
 class PlannerPlugin {
  public:
   /// Loads the plugin at `path` and checks its interface version. Throws Error(kBadInput) naming the file
