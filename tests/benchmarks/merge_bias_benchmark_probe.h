@@ -14,6 +14,7 @@
 
 #include "shape/core/geometry.h"
 #include "shape/surface/sweep_surface.h"
+#include "tests/benchmarks/merge_grid_benchmark_flags.h"
 
 namespace pectus::merge_bias {
 
@@ -25,22 +26,15 @@ struct Flags {
   double spacing_mm = 1.5, block_mm = 10.0, border_mm = 5.0;
 };
 
-inline std::vector<std::string> Split(const std::string& text) {
-  std::vector<std::string> v;
-  std::stringstream in(text);
-  for (std::string item; std::getline(in, item, ',');) v.push_back(item);
-  return v;
-}
-
 inline Flags Parse(int argc, char** argv) {
   Flags f;
   for (int a = 1; a + 1 < argc; a += 2) {
     const std::string key = argv[a], value = argv[a + 1];
     if (key == "--overlap") {
       f.overlap.clear();
-      for (const auto& s : Split(value)) f.overlap.push_back(std::stod(s));
+      for (const auto& s : merge_grid::Words(value)) f.overlap.push_back(std::stod(s));
     } else if (key == "--sampling") {
-      f.sampling = Split(value);
+      f.sampling = merge_grid::Words(value);
     } else if (key == "--sweeps") {
       f.sweeps = std::stoi(value);
     } else if (key == "--seeds") {
