@@ -1,8 +1,12 @@
-// pectus: Image, PNG, text and stacking on OpenCV.
+// pectus: Image, text and stacking on OpenCV's drawing; PNG through libpng's simplified API (OpenCV's
+// image codecs would bring 140 shared libraries, GDAL, DICOM and video codecs among them, into every
+// process that may write a picture: most of `pectus`'s start-up).
 #include "shape/render/image.h"
 
+#include <png.h>
+
 #include <algorithm>
-#include <opencv2/imgcodecs.hpp>
+#include <memory>
 #include <opencv2/imgproc.hpp>
 
 #include "shape/core/atomic_file.h"
@@ -43,7 +47,8 @@ void Image::Set(int x, int y, Rgb c) {
 void DrawText(Image* image, int x, int y, const std::string& text, double scale, Rgb colour, int thickness) {
   if (image->empty()) return;
   cv::Mat m = View(image);
-  cv::putText(m, text, cv::Point(x, y), cv::FONT_HERSHEY_SIMPLEX, scale, Colour(colour), thickness, cv::LINE_AA);
+  cv::putText(m, text, cv::Point(x, y), cv::FONT_HERSHEY_SIMPLEX, scale, Colour(colour), thickness,
+              cv::LINE_AA);
 }
 
 void TextSize(const std::string& text, double scale, int thickness, int* width, int* height) {
@@ -62,8 +67,8 @@ void DrawLine(Image* image, int x0, int y0, int x1, int y1, Rgb colour, int thic
 void FillRect(Image* image, int x0, int y0, int x1, int y1, Rgb colour) {
   if (image->empty()) return;
   cv::Mat m = View(image);
-  cv::rectangle(m, cv::Point(std::min(x0, x1), std::min(y0, y1)), cv::Point(std::max(x0, x1), std::max(y0, y1)),
-                Colour(colour), cv::FILLED);
+  cv::rectangle(m, cv::Point(std::min(x0, x1), std::min(y0, y1)),
+                cv::Point(std::max(x0, x1), std::max(y0, y1)), Colour(colour), cv::FILLED);
 }
 
 namespace {
@@ -122,12 +127,22 @@ Image WithTitle(const Image& image, const std::string& title, int height, double
 
 std::string EncodePng(const Image& image) {
   if (image.empty()) ThrowFailure("cannot encode an empty image as PNG");
-  cv::Mat rgb(image.height, image.width, CV_8UC3, const_cast<std::uint8_t*>(image.rgb.data()));
-  cv::Mat bgr;
-  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-  std::vector<std::uint8_t> bytes;
-  if (!cv::imencode(".png", bgr, bytes)) ThrowFailure("PNG encoding failed");
-  return std::string(bytes.begin(), bytes.end());
+  png_image png{};
+  png.version = PNG_IMAGE_VERSION;
+  png.width = static_cast<png_uint_32>(image.width);
+  png.height = static_cast<png_uint_32>(image.height);
+  png.format = PNG_FORMAT_RGB;
+  const png_int_32 stride = image.width * 3;
+  png_alloc_size_t size = 0;  // first call: the size the encoding needs
+  if (!png_image_write_to_memory(&png, nullptr, &size, 0, image.rgb.data(), stride, nullptr)) {
+    ThrowFailure(std::string("PNG encoding failed: ") + png.message);
+  }
+  std::string bytes(size, '\0');
+  if (!png_image_write_to_memory(&png, bytes.data(), &size, 0, image.rgb.data(), stride, nullptr)) {
+    ThrowFailure(std::string("PNG encoding failed: ") + png.message);
+  }
+  bytes.resize(size);
+  return bytes;
 }
 
 void WritePng(const Image& image, const std::filesystem::path& path) {
@@ -135,12 +150,22 @@ void WritePng(const Image& image, const std::filesystem::path& path) {
 }
 
 Image ReadImage(const std::filesystem::path& path) {
-  const cv::Mat bgr = cv::imread(path.string(), cv::IMREAD_COLOR);
-  if (bgr.empty()) ThrowBadInput(path.string(), "not a readable image");
-  cv::Mat rgb;
-  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
-  Image out(rgb.cols, rgb.rows);
-  for (int y = 0; y < rgb.rows; ++y) std::copy_n(rgb.ptr<std::uint8_t>(y), rgb.cols * 3, out.rgb.data() + y * rgb.cols * 3);
+  png_image png{};
+  png.version = PNG_IMAGE_VERSION;
+  if (!png_image_begin_read_from_file(&png, path.c_str())) {
+    ThrowBadInput(path.string(), std::string("not a readable PNG image (") + png.message + ")");
+  }
+  // Frees libpng's reading state on every way out, as png_image_finish_read does on success.
+  const std::unique_ptr<png_image, void (*)(png_image*)> guard(&png, png_image_free);
+  png.format = PNG_FORMAT_RGB;  // grey, palette and alpha images are converted to 8-bit RGB
+  if (png.width == 0 || png.height == 0 || png.width > 1u << 15 || png.height > 1u << 15) {
+    ThrowBadInput(path.string(), "PNG image of " + std::to_string(png.width) + " x " +
+                                     std::to_string(png.height) + " pixels (1 to 32768 a side)");
+  }
+  Image out(static_cast<int>(png.width), static_cast<int>(png.height));
+  if (!png_image_finish_read(&png, nullptr, out.rgb.data(), out.width * 3, nullptr)) {
+    ThrowBadInput(path.string(), std::string("corrupt PNG image (") + png.message + ")");
+  }
   return out;
 }
 

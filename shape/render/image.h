@@ -53,7 +53,7 @@ Image WithTitle(const Image& image, const std::string& title, int height = 32, d
 std::string EncodePng(const Image& image);
 /// Writes the image as a PNG file, atomically (throws pectus::Error naming the file on failure).
 void WritePng(const Image& image, const std::filesystem::path& path);
-/// Reads a PNG (or any format OpenCV reads) back; throws pectus::Error(kBadInput) naming the file.
+/// Reads a PNG back as 8-bit RGB; throws pectus::Error(kBadInput) naming the file.
 Image ReadImage(const std::filesystem::path& path);
 
 }  // namespace pectus::render

@@ -23,16 +23,11 @@ json Pairs(int trials, int icp_only_trials) {
   std::int64_t points = 0;
   for (int k = 0; k < trials; ++k) {
     const auto seed = static_cast<std::uint64_t>(1000 + k);
-    std::mt19937_64 rng(seed);
-    std::uniform_real_distribution<double> u(0.0, 1.0);
-    const double angle = 10.0 * u(rng), shift = 30.0 * u(rng);
-    // The moving scan's frame: the fixed frame turned by `angle` about the chest and shifted by `shift`.
-    ScanPair p = MakeScanPair(seed);
-    const Eigen::Vector3d centre = p.moving.positions.colwise().mean().transpose();
-    MoveFrame(testing::RandomPose(&rng, angle, shift, centre), &p);
+    const NoisyChestPair c = MakeNoisyChestPair(seed);
+    const ScanPair& p = c.pair;
     points += p.fixed.size() + p.moving.size();
-    const LandmarkSet lf = Noisy(p.fixed_landmarks, 3.0, &rng);
-    const LandmarkSet lm = Noisy(p.moving_landmarks, 3.0, &rng);
+    const LandmarkSet& lf = c.fixed_landmarks;
+    const LandmarkSet& lm = c.moving_landmarks;
     for (const bool landmarks : {true, false}) {
       if (!landmarks && k >= icp_only_trials) continue;
       Tally& t = landmarks ? with : without;

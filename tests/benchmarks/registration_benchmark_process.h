@@ -142,14 +142,10 @@ json Process(int chest_pairs, bool bunny, const std::string& pectus_before) {
   // landmark step puts the moving scan.
   for (int k = 0; k < chest_pairs; ++k) {
     const auto seed = static_cast<std::uint64_t>(1000 + k);
-    std::mt19937_64 rng(seed);
-    std::uniform_real_distribution<double> u(0.0, 1.0);
-    const double angle = 10.0 * u(rng), shift = 30.0 * u(rng);
-    ScanPair p = MakeScanPair(seed);
-    const Eigen::Vector3d centre = p.moving.positions.colwise().mean().transpose();
-    MoveFrame(testing::RandomPose(&rng, angle, shift, centre), &p);
-    const LandmarkSet lf = Noisy(p.fixed_landmarks, 3.0, &rng);
-    const LandmarkSet lm = Noisy(p.moving_landmarks, 3.0, &rng);
+    const NoisyChestPair noisy = MakeNoisyChestPair(seed);
+    const ScanPair& p = noisy.pair;
+    const LandmarkSet& lf = noisy.fixed_landmarks;
+    const LandmarkSet& lm = noisy.moving_landmarks;
     ProcessCase c;
     c.name = "chest seed " + std::to_string(seed);
     c.truth = Similarity3::FromRigid(p.T_true);

@@ -9,16 +9,12 @@
 #include <vector>
 
 #include "shape/core/error.h"
+#include "tests/support/poses.h"
 
 namespace pectus {
 namespace {
 
-Rigid3 Pose(double deg, const Eigen::Vector3d& axis, const Eigen::Vector3d& t) {
-  Rigid3 T = Rigid3::Identity();
-  T.linear() = Eigen::AngleAxisd(deg * M_PI / 180.0, axis.normalized()).toRotationMatrix();
-  T.translation() = t;
-  return T;
-}
+using testing_support::AxisAnglePose;
 
 // Three strips of 200 random points, 100 mm long, in their own frames.
 std::vector<PointCloud> Strips() {
@@ -33,8 +29,10 @@ std::vector<PointCloud> Strips() {
 }
 
 TEST(PoseError, ComparesRotationAndTranslationAtThePointGiven) {
-  const Similarity3 truth = Similarity3::FromRigid(Pose(0.0, Eigen::Vector3d::UnitZ(), Eigen::Vector3d(1, 2, 3)));
-  const Similarity3 estimate = Similarity3::FromRigid(Pose(2.0, Eigen::Vector3d::UnitZ(), Eigen::Vector3d(1, 2, 3)));
+  const Similarity3 truth =
+      Similarity3::FromRigid(AxisAnglePose(0.0, Eigen::Vector3d::UnitZ(), Eigen::Vector3d(1, 2, 3)));
+  const Similarity3 estimate =
+      Similarity3::FromRigid(AxisAnglePose(2.0, Eigen::Vector3d::UnitZ(), Eigen::Vector3d(1, 2, 3)));
   const Eigen::Vector3d at(100.0, 0.0, 0.0);
   const PoseError e = ComparePoses(estimate, truth, at);
   EXPECT_NEAR(e.rotation_deg, 2.0, 1e-12);
@@ -45,18 +43,20 @@ TEST(PoseError, ComparesRotationAndTranslationAtThePointGiven) {
 
 TEST(PoseError, RmsDisplacementOfATranslationIsItsLength) {
   const Points3 p = Strips()[0].positions;
-  const Similarity3 a = Similarity3::FromRigid(Pose(0.0, Eigen::Vector3d::UnitX(), Eigen::Vector3d(3, 4, 0)));
+  const Similarity3 a =
+      Similarity3::FromRigid(AxisAnglePose(0.0, Eigen::Vector3d::UnitX(), Eigen::Vector3d(3, 4, 0)));
   EXPECT_NEAR(RmsDisplacement(p, a, Similarity3()), 5.0, 1e-12);
   EXPECT_NEAR(RmsDisplacement(p, a, a), 0.0, 1e-12);
 }
 
 TEST(BestCommonMotion, RecoversTheMotionBetweenTwoPlacements) {
   const std::vector<PointCloud> sets = Strips();
-  const std::vector<Rigid3> truth = {Pose(0.0, Eigen::Vector3d::UnitX(), Eigen::Vector3d(0, 0, 0)),
-                                     Pose(20.0, Eigen::Vector3d::UnitY(), Eigen::Vector3d(90, 0, 10)),
-                                     Pose(-35.0, Eigen::Vector3d(1, 1, 0), Eigen::Vector3d(0, 80, -5))};
+  const std::vector<Rigid3> truth = {
+      AxisAnglePose(0.0, Eigen::Vector3d::UnitX(), Eigen::Vector3d(0, 0, 0)),
+      AxisAnglePose(20.0, Eigen::Vector3d::UnitY(), Eigen::Vector3d(90, 0, 10)),
+      AxisAnglePose(-35.0, Eigen::Vector3d(1, 1, 0), Eigen::Vector3d(0, 80, -5))};
   // The same alignment seen from another frame: G maps `placed` onto `truth` exactly.
-  const Rigid3 G = Pose(7.0, Eigen::Vector3d(0.3, -1.0, 0.5), Eigen::Vector3d(-12.0, 4.0, 250.0));
+  const Rigid3 G = AxisAnglePose(7.0, Eigen::Vector3d(0.3, -1.0, 0.5), Eigen::Vector3d(-12.0, 4.0, 250.0));
   std::vector<Rigid3> placed;
   for (const Rigid3& T : truth) placed.push_back(G.inverse() * T);
   for (Eigen::Index stride : {1, 10}) {
@@ -66,7 +66,7 @@ TEST(BestCommonMotion, RecoversTheMotionBetweenTwoPlacements) {
   // One set moved 1 mm along z on top: no motion maps all sets exactly; the one found is the least-squares
   // optimum: better than G, and than itself nudged by 0.01 mm or 0.01 degrees along any of the six axes.
   std::vector<Rigid3> moved = placed;
-  moved[1] = Pose(0.0, Eigen::Vector3d::UnitX(), Eigen::Vector3d(0, 0, 1)) * moved[1];
+  moved[1] = AxisAnglePose(0.0, Eigen::Vector3d::UnitX(), Eigen::Vector3d(0, 0, 1)) * moved[1];
   const auto cost = [&](const Rigid3& M) {
     double sum = 0.0;
     for (std::size_t s = 0; s < sets.size(); ++s) {
@@ -83,8 +83,9 @@ TEST(BestCommonMotion, RecoversTheMotionBetweenTwoPlacements) {
   for (int axis = 0; axis < 3; ++axis) {
     for (double sign : {-1.0, 1.0}) {
       const Eigen::Vector3d e = sign * Eigen::Vector3d::Unit(axis);
-      EXPECT_GT(cost(Pose(0.0, Eigen::Vector3d::UnitX(), 0.01 * e) * found), best) << "shift " << axis;
-      EXPECT_GT(cost(Pose(0.01, e, Eigen::Vector3d::Zero()) * found), best) << "turn " << axis;
+      EXPECT_GT(cost(AxisAnglePose(0.0, Eigen::Vector3d::UnitX(), 0.01 * e) * found), best)
+          << "shift " << axis;
+      EXPECT_GT(cost(AxisAnglePose(0.01, e, Eigen::Vector3d::Zero()) * found), best) << "turn " << axis;
     }
   }
 }

@@ -52,6 +52,24 @@ TEST(Image, ReadingANonImageNamesTheFile) {
   std::filesystem::remove(path);
 }
 
+TEST(Image, ReadingATruncatedPngNamesTheFile) {
+  Image im(64, 48, kWhite);
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x)
+      im.Set(x, y, Rgb{static_cast<std::uint8_t>(x * 4), static_cast<std::uint8_t>(y * 5), 7});
+  const std::string png = EncodePng(im);
+  ASSERT_EQ(png.substr(0, 4), "\x89PNG");
+  const auto path = std::filesystem::temp_directory_path() / "pectus_truncated.png";
+  { std::ofstream(path, std::ios::binary) << png.substr(0, png.size() / 2); }  // header intact, data cut
+  try {
+    ReadImage(path);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("pectus_truncated.png"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(path);
+}
+
 TEST(Plot, HorizontalLineLandsOnItsValue) {
   PlotOptions o;
   o.width = 400;

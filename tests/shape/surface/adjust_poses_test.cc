@@ -5,16 +5,12 @@
 #include <random>
 
 #include "shape/core/error.h"
+#include "tests/support/poses.h"
 
 namespace pectus {
 namespace {
 
-Rigid3 Pose(double deg, const Eigen::Vector3d& axis, const Eigen::Vector3d& t) {
-  Rigid3 T = Rigid3::Identity();
-  T.linear() = Eigen::AngleAxisd(deg * M_PI / 180.0, axis.normalized()).toRotationMatrix();
-  T.translation() = t;
-  return T;
-}
+using testing_support::AxisAnglePose;
 
 // Three sweeps of a bumpy surface z = f(x, y) seen in their own frames; correspondences between every
 // pair made exactly at the true poses (the true point q of sweep i nearest each sample p of sweep j).
@@ -51,13 +47,13 @@ std::vector<SweepCorrespondence> Correspondences(const std::vector<Rigid3>& trut
 }
 
 TEST(PoseAdjustment, RecoversPosesFromDisturbedStartsWithOutliers) {
-  const std::vector<Rigid3> truth = {Pose(10, {1, 2, 3}, {5, -3, 200}),
-                                     Pose(-20, {0, 1, 0.2}, {-40, 10, 180}),
-                                     Pose(35, {1, 0, 1}, {30, 30, 210})};
+  const std::vector<Rigid3> truth = {AxisAnglePose(10, {1, 2, 3}, {5, -3, 200}),
+                                     AxisAnglePose(-20, {0, 1, 0.2}, {-40, 10, 180}),
+                                     AxisAnglePose(35, {1, 0, 1}, {30, 30, 210})};
   const auto pairs = Correspondences(truth, 0.1);
   std::vector<Rigid3> poses = truth;
-  poses[1] = Pose(1.5, {0.3, 1, 0}, {0.5, -0.4, 0.3}) * poses[1];
-  poses[2] = Pose(-1.0, {1, 0, 0.5}, {-0.3, 0.2, 0.6}) * poses[2];
+  poses[1] = AxisAnglePose(1.5, {0.3, 1, 0}, {0.5, -0.4, 0.3}) * poses[1];
+  poses[2] = AxisAnglePose(-1.0, {1, 0, 0.5}, {-0.3, 0.2, 0.6}) * poses[2];
   PoseAdjustmentOptions o;
   o.anchor = 0;
   // Twice, as the merge's rounds do: the second solve takes its robust scale from the residuals at the
@@ -75,7 +71,7 @@ TEST(PoseAdjustment, RecoversPosesFromDisturbedStartsWithOutliers) {
 }
 
 TEST(PoseAdjustment, NoCorrespondencesChangeNothingAndBadAnchorIsAUsageError) {
-  std::vector<Rigid3> poses = {Rigid3::Identity(), Pose(5, {0, 0, 1}, {1, 2, 3})};
+  std::vector<Rigid3> poses = {Rigid3::Identity(), AxisAnglePose(5, {0, 0, 1}, {1, 2, 3})};
   const std::vector<Rigid3> before = poses;
   const PoseAdjustmentResult r = AdjustPoses({}, &poses);
   EXPECT_TRUE(poses[1].isApprox(before[1]));
