@@ -45,6 +45,8 @@ bool SweepMergeOptions::IsValid(std::string* why) const {
   if (smoothing_mm < 0) return fail("smoothing must be >= 0 mm");
   if (outlier_neighbours < 0 || outlier_std_ratio <= 0) return fail("outlier neighbours >= 0 and ratio > 0");
   if (target_spacing_mm < 0) return fail("target spacing must be >= 0 mm");
+  if (!(final_min_pinned_ratio >= 1.0) || !std::isfinite(final_min_pinned_ratio))
+    return fail("the final pinned ratio must be >= 1");
   return surface.IsValid(why) && pairwise.IsValid(why) && tracker_adjustment.IsValid(why);
 }
 
@@ -151,13 +153,17 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
     // 4. Joint point-to-plane adjustment of all poses, with fresh correspondences every round, the gate
     // halving from the starting radius (with a prior) down to the finest gate.
     t0 = Clock::now();
+    const bool final_rounds =
+        prior && options.final_min_pinned_ratio < options.tracker_adjustment.min_pinned_ratio;
     Progress progress("global adjustment",
-                      options.global_rounds * (prior && options.fit_tracker_accuracy ? 4 : 1));
+                      options.global_rounds *
+                          (1 + (prior && options.fit_tracker_accuracy ? 3 : 0) + (final_rounds ? 1 : 0)));
     PoseAdjustmentOptions ao;
     ao.anchor = options.anchor;
     // Rounds from `first_gate`; with `fixed` the correspondences are found once and kept (the poses move by
     // less than the noise then, and the search is most of a round's cost).
     std::vector<SweepCorrespondence> pairs;
+    TrackerAdjustmentOptions adjustment = options.tracker_adjustment;
     auto run_rounds = [&](double first_gate, int rounds, bool fixed) {
       double round_gate = first_gate;
       for (int round = 0; round < rounds; ++round) {
@@ -165,8 +171,7 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
           pairs = AllCorrespondences(sweeps, P, links, options.global_points_per_pair, round_gate);
         const std::vector<Rigid3> previous = P;
         if (prior) {
-          const TrackerAdjustmentResult a =
-              AdjustPosesToTracker(pairs, sweeps, *prior, &P, options.tracker_adjustment);
+          const TrackerAdjustmentResult a = AdjustPosesToTracker(pairs, sweeps, *prior, &P, adjustment);
           result.global_rms_before_mm = a.rms_before_mm;
           result.global_rms_after_mm = PointToPlaneRms(pairs, P);
           pinned = a.pairs;
@@ -217,6 +222,14 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
       prior->translation_sd_mm = stated_mm * total;
       result.tracker_accuracy_factor = total;
       run_rounds(gate, options.global_rounds, true);
+    }
+    // Last, every direction the overlaps pin at all (final_min_pinned_ratio), from where the poses are,
+    // held by the prior at the accuracy the tracker showed: a tracker error of millimetres is corrected
+    // along the weakly pinned directions too, while the weak directions of a tracker found better than
+    // the data pin them stay held.
+    if (final_rounds) {
+      adjustment.min_pinned_ratio = options.final_min_pinned_ratio;
+      run_rounds(gate, options.global_rounds, false);
     }
     result.timings_s.Add("global_adjustment", Since(t0));
   }

@@ -48,6 +48,14 @@ struct SweepMergeOptions {
     return o;
   }();
   TrackerAdjustmentOptions tracker_adjustment;  ///< each round's joint step, with a tracker prior
+  /// With a tracker prior: after the rounds at tracker_adjustment.min_pinned_ratio (4) and the fit of the
+  /// tracker's accuracy below, the rounds are run once more with this pinned ratio, from where the poses
+  /// are and with the fitted prior: 1, every direction counts with what its information adds to the
+  /// normals' noise (lambda - 1). A tracker error of millimetres is then corrected along the weakly
+  /// pinned directions too, where the data, however weak, know more than the prior, while the fitted
+  /// prior still holds the weak directions of exact poses (chest grid: docs/benchmarks/merge.md).
+  /// tracker_adjustment.min_pinned_ratio or more: no final rounds.
+  double final_min_pinned_ratio = 2.0;
   /// With a tracker prior: after the rounds, estimate how far off the stated accuracy the tracker really
   /// was from the corrections along the directions the overlaps pin (empirical Bayes), scale the prior
   /// by that factor (0.01 to 3 in all) and adjust again from there (up to three times, while the factor

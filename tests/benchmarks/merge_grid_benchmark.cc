@@ -19,11 +19,12 @@
 //       [--sampling grid,random] [--sweeps 5] [--seeds 1] [--seed 1] [--pattern horizontal]
 //       [--spacing 1.5] [--no-open3d] [--png merge_grid.png] [--workdir /tmp/pectus_merge_grid]
 //       [--prior-deg D --prior-mm M --prior-lever L] [--min-overlap-fraction F] [--border-gap DEG]
-//       [--min-pinned-ratio R] [--sample-spacings S] [--points-per-pair N] [--rounds N] [--fit-tracker 0|1]
+//       [--min-pinned-ratio R] [--final-pinned-ratio R] [--sample-spacings S] [--points-per-pair N]
+//       [--rounds N] [--fit-tracker 0|1]
 // (the tracker prior, SweepMergeOptions::tracker_deg/tracker_mm/tracker_lever_mm, defaults MergeSweeps's;
 // the others override SweepMergeOptions::min_overlap_fraction, global_points_per_pair and global_rounds,
 // SweepSurfaceOptions::border_gap_deg and sample_spacings, and
-// TrackerAdjustmentOptions::min_pinned_ratio)
+// TrackerAdjustmentOptions::min_pinned_ratio, SweepMergeOptions::final_min_pinned_ratio)
 #include <omp.h>
 
 #include <chrono>
@@ -63,6 +64,7 @@ SweepMergeOptions MergeOptions(const Flags& f) {
   if (f.min_overlap_fraction >= 0.0) options.min_overlap_fraction = f.min_overlap_fraction;
   if (f.border_gap_deg >= 0.0) options.surface.border_gap_deg = f.border_gap_deg;
   if (f.min_pinned_ratio >= 0.0) options.tracker_adjustment.min_pinned_ratio = f.min_pinned_ratio;
+  if (f.final_pinned_ratio >= 0.0) options.final_min_pinned_ratio = f.final_pinned_ratio;
   if (f.sample_spacings >= 0.0) options.surface.sample_spacings = f.sample_spacings;
   if (f.points_per_pair >= 0) options.global_points_per_pair = f.points_per_pair;
   if (f.rounds >= 0) options.global_rounds = f.rounds;
@@ -75,6 +77,7 @@ struct Run {
   bool threw = false, success = false;
   std::string error;
   double seconds = 0.0;
+  double tracker_accuracy_factor = 0.0;  // pectus: the fitted factor on the stated accuracy (0: not fitted)
   merge_grid::Figures figures;
   json Json(const std::vector<merge_grid::Constraint>& constraints) const {
     if (threw) return {{"threw", error}, {"success", false}, {"seconds", seconds}};
@@ -94,6 +97,7 @@ struct Run {
             {"shape_rms_mm", figures.shape_rms_mm},
             {"shape_max_mm", figures.shape_max_mm},
             {"seconds", seconds},
+            {"tracker_accuracy_factor", tracker_accuracy_factor},
             {"sweeps", sweeps}};
   }
 };
@@ -125,6 +129,7 @@ Run RunPectus(const std::vector<PointCloud>& clouds, const std::vector<Rigid3>& 
   try {
     const SweepMergeResult r = MergeSweeps(clouds, start, MergeOptions(f));
     run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    run.tracker_accuracy_factor = r.tracker_accuracy_factor;
     return Score(run, inliers, r.T_world_sweep, truth, f.success_mm);
   } catch (const std::exception& e) {
     run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -293,6 +298,7 @@ int main(int argc, char** argv) {
         {"border_gap_deg", MergeOptions(f).surface.border_gap_deg},
         {"overlap_distance_mm", MergeOptions(f).overlap_distance_mm},
         {"min_pinned_ratio", MergeOptions(f).tracker_adjustment.min_pinned_ratio},
+        {"final_min_pinned_ratio", MergeOptions(f).final_min_pinned_ratio},
         {"sample_spacings", MergeOptions(f).surface.sample_spacings},
         {"points_per_pair", MergeOptions(f).global_points_per_pair},
         {"global_rounds", MergeOptions(f).global_rounds},

@@ -20,6 +20,7 @@ struct Flags {
   double prior_deg = -1.0, prior_mm = -1.0, prior_lever_mm = -1.0;  // < 0: MergeSweeps's defaults
   double min_overlap_fraction = -1.0, border_gap_deg = -1.0;        // < 0: MergeSweeps's defaults
   double min_pinned_ratio = -1.0;                                   // < 0: MergeSweeps's default
+  double final_pinned_ratio = -1.0;                                 // < 0: MergeSweeps's default
   double sample_spacings = -1.0;                                    // < 0: MergeSweeps's default
   int points_per_pair = -1;                                         // < 0: MergeSweeps's default
   int rounds = -1;                                                  // < 0: MergeSweeps's default
@@ -89,6 +90,8 @@ inline Flags Parse(int argc, char** argv) {
       f.border_gap_deg = std::stod(value());
     else if (key == "--min-pinned-ratio")
       f.min_pinned_ratio = std::stod(value());
+    else if (key == "--final-pinned-ratio")
+      f.final_pinned_ratio = std::stod(value());
     else if (key == "--sample-spacings")
       f.sample_spacings = std::stod(value());
     else if (key == "--fit-tracker")

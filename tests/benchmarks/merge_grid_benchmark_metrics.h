@@ -11,8 +11,8 @@
 #include "datasets/chest_surface.h"
 #include "datasets/scan_simulator.h"
 #include "datasets/surface_query.h"
-#include "registration/pose_error.h"
 #include "registration/kdtree.h"
+#include "registration/pose_error.h"
 
 namespace pectus::merge_grid {
 
