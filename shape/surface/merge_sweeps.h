@@ -50,11 +50,11 @@ struct SweepMergeOptions {
   TrackerAdjustmentOptions tracker_adjustment;  ///< each round's joint step, with a tracker prior
   /// With a tracker prior: after the rounds at tracker_adjustment.min_pinned_ratio (4) and the fit of the
   /// tracker's accuracy below, the rounds are run once more with this pinned ratio, from where the poses
-  /// are and with the fitted prior: 1, every direction counts with what its information adds to the
-  /// normals' noise (lambda - 1). A tracker error of millimetres is then corrected along the weakly
-  /// pinned directions too, where the data, however weak, know more than the prior, while the fitted
-  /// prior still holds the weak directions of exact poses (chest grid: docs/benchmarks/merge.md).
-  /// tracker_adjustment.min_pinned_ratio or more: no final rounds.
+  /// are and with the fitted prior: 2, every direction whose information is at least twice the normals'
+  /// noise counts (with lambda - 1). A tracker error of millimetres is then corrected along the weakly
+  /// pinned directions too, while the fitted prior still holds the weak directions of exact poses. 1 would
+  /// let a plane strip slide on its normals' noise (lambda scatters about 1 along a free direction).
+  /// tracker_adjustment.min_pinned_ratio or more: no final rounds (docs/benchmarks/merge.md).
   double final_min_pinned_ratio = 2.0;
   /// With a tracker prior: after the rounds, estimate how far off the stated accuracy the tracker really
   /// was from the corrections along the directions the overlaps pin (empirical Bayes), scale the prior
