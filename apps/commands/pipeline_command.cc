@@ -55,6 +55,14 @@ class PipelineCommand : public Command {
     app->add_option("--samples", options_.quality_options.specificity_samples,
                     "Random shapes for specificity")
         ->default_val(options_.quality_options.specificity_samples);
+    app->add_option("--impute-gap", options_.impute_gap_mm,
+                    "Grid vertices farther than this from the scan data (mm) are filled from the other "
+                    "subjects before the model; 0: off")
+        ->default_val(options_.impute_gap_mm);
+    app->add_option("--impute-scale", options_.imputation.local_scale_mm,
+                    "Length (mm) over which a filled region is joined to the seen vertices about it; 0: "
+                    "the others' prediction alone")
+        ->default_val(options_.imputation.local_scale_mm);
     app->add_flag("--no-quality", no_quality_, "Skip compactness, generalization and specificity");
     app->add_option("--distance-range", report_.distance_range_mm,
                     "Colour scale of the distance maps, +-mm (0: auto)")
@@ -97,6 +105,7 @@ class PipelineCommand : public Command {
       });
     }
     context->report.AddTimes(result.timings_s);
+    if (!result.imputation_message.empty()) Info("pipeline: " + result.imputation_message);
 
     // 9. Files: the model, tables, meshes per subject, and the report with its figures (the library writes
     // them; the app stages each one for the run's transaction).

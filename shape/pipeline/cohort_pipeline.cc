@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <exception>
 #include <sstream>
 
 #include "registration/generalised_procrustes.h"
+#include "registration/kdtree.h"
 #include "shape/core/error.h"
 #include "shape/io/landmark_io.h"
 #include "shape/io/mesh_io.h"
@@ -92,14 +94,40 @@ void MoveSubject(const Similarity3& T, SubjectOutcome* s) {
   s->T_reference_subject = T * s->T_reference_subject;
 }
 
+// Which grid vertices of each good subject count as seen: within `gap_mm` of its scan data ("scan_gap_mm",
+// ResampleSubject); every vertex when imputation is off (gap_mm <= 0 or infinite).
+Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> SeenVertices(const std::vector<int>& good, double gap_mm,
+                                                                 const PipelineResult& result) {
+  const Eigen::Index m = result.subjects[good[0]].grid.mesh.vertices.size();
+  Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> seen(static_cast<Eigen::Index>(good.size()), m);
+  seen.setConstant(true);
+  if (!(gap_mm > 0.0) || !std::isfinite(gap_mm)) return seen;
+  for (std::size_t k = 0; k < good.size(); ++k) {
+    const auto& scalars = result.subjects[good[k]].grid.mesh.vertices.scalars;
+    const auto gap = scalars.find("scan_gap_mm");
+    if (gap == scalars.end()) continue;
+    for (Eigen::Index v = 0; v < m; ++v) seen(static_cast<Eigen::Index>(k), v) = gap->second[v] <= gap_mm;
+  }
+  return seen;
+}
+
 // Generalized Procrustes analysis, rigid, of the grids (no reference: the mean floats with the grids);
-// each subject moved with its grid.
-void AlignGridsToTheirMean(const std::vector<int>& good, int iterations, PipelineResult* result) {
+// each subject moved with its grid. Only the vertices every subject saw are compared, when they are at
+// least half of the grid (a vertex filled in one subject would otherwise pull every pose).
+void AlignGridsToTheirMean(const std::vector<int>& good, int iterations,
+                           const Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic>& seen,
+                           PipelineResult* result) {
   if (iterations <= 0) return;
+  std::vector<Eigen::Index> common;
+  for (Eigen::Index v = 0; v < seen.cols(); ++v)
+    if (seen.col(v).all()) common.push_back(v);
+  const bool subset = static_cast<Eigen::Index>(common.size()) < seen.cols() &&
+                      2 * static_cast<Eigen::Index>(common.size()) >= seen.cols();
   std::vector<Points3> grids;
   std::vector<std::string> names;
   for (int i : good) {
-    grids.push_back(result->subjects[i].grid.mesh.vertices.positions);
+    const Points3& all = result->subjects[i].grid.mesh.vertices.positions;
+    grids.push_back(subset ? Points3(all(common, Eigen::all)) : all);
     names.push_back(result->subjects[i].name + " grid");
   }
   ProcrustesOptions o;
@@ -109,6 +137,36 @@ void AlignGridsToTheirMean(const std::vector<int>& good, int iterations, Pipelin
   o.min_spread_ratio = 0.0;
   const ProcrustesResult gpa = GeneralisedProcrustes(grids, o, names);
   for (std::size_t k = 0; k < good.size(); ++k) MoveSubject(gpa.T_mean_shape[k], &result->subjects[good[k]]);
+}
+
+// Each subject's unseen grid vertices filled from the other subjects (ImputeMissingVertices); the grids
+// take the fills and mark them ("filled_from_cohort": 1). Returns the shapes, N by 3m.
+Eigen::MatrixXd FillUnseenVertices(const std::vector<int>& good,
+                                   const Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic>& seen,
+                                   const PipelineOptions& options, PipelineResult* result) {
+  Eigen::MatrixXd shapes(static_cast<Eigen::Index>(good.size()),
+                         result->subjects[good[0]].grid.shape_vector.size());
+  for (std::size_t k = 0; k < good.size(); ++k) {
+    shapes.row(static_cast<Eigen::Index>(k)) = result->subjects[good[k]].grid.shape_vector.transpose();
+  }
+  if (seen.all()) return shapes;
+  ImputationResult filled = ImputeMissingVertices(shapes, seen, options.imputation, "resampled subjects");
+  for (std::size_t k = 0; k < good.size(); ++k) {
+    SubjectOutcome& s = result->subjects[good[k]];
+    const auto row = static_cast<Eigen::Index>(k);
+    s.grid.shape_vector = filled.shapes.row(row).transpose();
+    s.grid.mesh.vertices.positions = FromShapeVector(s.grid.shape_vector);
+    Eigen::VectorXd mark(seen.cols());
+    for (Eigen::Index v = 0; v < seen.cols(); ++v) mark[v] = seen(row, v) ? 0.0 : 1.0;
+    const bool too_little = std::find(filled.too_little_seen.begin(), filled.too_little_seen.end(),
+                                      static_cast<int>(k)) != filled.too_little_seen.end();
+    if (too_little) mark.setZero();
+    s.grid.mesh.vertices.scalars["filled_from_cohort"] = mark;
+    s.vertices_filled_from_cohort = filled.filled_vertices[k];
+    s.largest_fill_change_mm = filled.largest_change_mm[k];
+  }
+  result->imputation_message = filled.message;
+  return std::move(filled.shapes);
 }
 
 }  // namespace
@@ -140,6 +198,22 @@ void RegisterSubject(const IcpTarget& reference_surface, const LandmarkSet& refe
 
 void ResampleSubject(const PipelineOptions& options, SubjectOutcome* s) {
   s->grid = ResampleSurface(s->surface, s->landmarks, options.roi, options.resample, s->name);
+  // How far each grid vertex is from the scan's points: the resampler's gap to its profiles' data, or,
+  // where the reconstruction filled a hole (its vertices' "data_distance", TrimToData), that distance.
+  Eigen::VectorXd gap = s->grid.mesh.vertices.scalars.at("data_gap_mm");
+  const auto surface_gap = s->surface.vertices.scalars.find("data_distance");
+  if (surface_gap != s->surface.vertices.scalars.end() && s->surface.num_vertices() > 0) {
+    const KdTree3 tree(s->surface.vertices.positions);
+    const Points3& grid = s->grid.mesh.vertices.positions;
+    for (Eigen::Index v = 0; v < grid.rows(); ++v) {
+      std::uint32_t nearest = 0;
+      double d2 = 0.0;
+      if (tree.Nearest(grid.row(v).transpose(), &nearest, &d2)) {
+        gap[v] = std::max(gap[v], surface_gap->second[nearest] - std::sqrt(d2));
+      }
+    }
+  }
+  s->grid.mesh.vertices.scalars["scan_gap_mm"] = gap;
 }
 
 std::vector<CohortSubject> FindCohortSubjects(const fs::path& folder, const std::string& sweep_pattern,
@@ -180,14 +254,15 @@ std::string PipelineResult::BriefReport() const {
 
 bool PipelineOptions::IsValid(std::string* why) const {
   if (!merge.IsValid(why) || !reconstruct.IsValid(why) || !registration.IsValid(why) || !roi.IsValid(why) ||
-      !resample.IsValid(why) || !model.IsValid(why)) {
+      !resample.IsValid(why) || !model.IsValid(why) || !imputation.IsValid(why)) {
     return false;
   }
-  if (!(crop_margin_mm >= 0.0) || min_sweep_points < 10 || procrustes_iterations < 0) {
+  if (!(crop_margin_mm >= 0.0) || min_sweep_points < 10 || procrustes_iterations < 0 ||
+      std::isnan(impute_gap_mm) || impute_min_subjects < 3) {
     if (why != nullptr) {
       *why =
-          "the crop margin must be >= 0 mm, a sweep needs at least 10 points and the Procrustes iterations "
-          "must be >= 0";
+          "the crop margin must be >= 0 mm, a sweep needs at least 10 points, the Procrustes iterations "
+          "must be >= 0, the imputation gap a number of mm and imputation needs at least 3 subjects";
     }
     return false;
   }
@@ -272,12 +347,10 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
   result.succeeded = static_cast<int>(good.size());
   Clock::time_point start = Clock::now();
   if (good.size() >= 2) {
-    AlignGridsToTheirMean(good, options.procrustes_iterations, &result);
-    Eigen::MatrixXd shapes(static_cast<Eigen::Index>(good.size()),
-                           result.subjects[good[0]].grid.shape_vector.size());
-    for (std::size_t k = 0; k < good.size(); ++k) {
-      shapes.row(static_cast<Eigen::Index>(k)) = result.subjects[good[k]].grid.shape_vector.transpose();
-    }
+    const bool impute = static_cast<int>(good.size()) >= options.impute_min_subjects;
+    const auto seen = SeenVertices(good, impute ? options.impute_gap_mm : 0.0, result);
+    AlignGridsToTheirMean(good, options.procrustes_iterations, seen, &result);
+    const Eigen::MatrixXd shapes = FillUnseenVertices(good, seen, options, &result);
     ShapeModel& model = result.model.emplace(BuildShapeModel(shapes, options.model, "resampled subjects"));
     for (int i : good) model.names.push_back(result.subjects[i].name);
     model.faces = GridFaces(options.resample.grid);

@@ -78,7 +78,9 @@ nlohmann::json PipelineJson(const PipelineResult& r) {
     if (s.grid.mesh.num_vertices() > 0) {
       j["resample"] = {{"fit_rms_mm", s.grid.fit_rms_mm},
                        {"max_data_gap_mm", s.grid.max_data_gap_mm},
-                       {"supported_fraction", s.grid.supported_fraction}};
+                       {"supported_fraction", s.grid.supported_fraction},
+                       {"vertices_filled_from_cohort", s.vertices_filled_from_cohort},
+                       {"largest_fill_change_mm", s.largest_fill_change_mm}};
       j["measures"] = s.measures.ToJson();
     }
     if (s.to_mean.distances.size() > 0) j["distance_to_mean"] = s.to_mean.stats.ToJson();
@@ -87,6 +89,7 @@ nlohmann::json PipelineJson(const PipelineResult& r) {
   }
   nlohmann::json out = {
       {"subjects", subjects}, {"reference", r.reference}, {"succeeded", r.succeeded}, {"message", r.message}};
+  if (!r.imputation_message.empty()) out["imputation"] = r.imputation_message;
   if (r.model) {
     nlohmann::json modes = nlohmann::json::array();
     const Eigen::VectorXd f = r.model->ExplainedFraction(), c = r.model->CumulativeFraction();

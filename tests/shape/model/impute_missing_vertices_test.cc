@@ -1,0 +1,156 @@
+// Filling unseen vertices from the other subjects: shapes drawn from a known low-rank model are recovered
+// from wrong starting values, seen vertices and fully seen subjects stay as they are, a local bump the
+// model cannot predict is joined to the seen rim by the local correction, and bad input is named.
+#include "shape/model/impute_missing_vertices.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "shape/core/error.h"
+
+namespace pectus {
+namespace {
+
+using Mask = Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic>;
+
+// A 21 x 21 grid of vertices, 3 mm apart, in the plane z = 0.
+Eigen::MatrixXd GridPositions() {
+  Eigen::MatrixXd p(21 * 21, 3);
+  for (int i = 0; i < 21; ++i)
+    for (int j = 0; j < 21; ++j) p.row(i * 21 + j) << 3.0 * j, 3.0 * i, 0.0;
+  return p;
+}
+
+// N shapes: the grid displaced along z by three smooth modes with random weights (sd 3, 2, 1 mm), plus
+// independent noise of sd `noise` mm on every coordinate. Rows: x1 y1 z1 x2 ...
+Eigen::MatrixXd LowRankShapes(int N, double noise, std::mt19937* rng) {
+  const Eigen::MatrixXd p = GridPositions();
+  std::normal_distribution<double> g(0.0, 1.0);
+  Eigen::MatrixXd X(N, 3 * p.rows());
+  for (int n = 0; n < N; ++n) {
+    const double a = 3.0 * g(*rng), b = 2.0 * g(*rng), c = 1.0 * g(*rng);
+    for (Eigen::Index v = 0; v < p.rows(); ++v) {
+      const double u = p(v, 0) / 60.0, w = p(v, 1) / 60.0;
+      const double z =
+          a * std::sin(M_PI * u) * std::sin(M_PI * w) + b * (u - 0.5) + c * (w - 0.5) * (u + 0.2);
+      X.row(n).segment<3>(3 * v) = Eigen::RowVector3d(p(v, 0), p(v, 1), z);
+      for (int d = 0; d < 3; ++d) X(n, 3 * v + d) += noise * g(*rng);
+    }
+  }
+  return X;
+}
+
+// Vertices within `radius` mm of (cx, cy) unseen for subject n.
+void Hide(int n, double cx, double cy, double radius, Mask* seen) {
+  const Eigen::MatrixXd p = GridPositions();
+  for (Eigen::Index v = 0; v < p.rows(); ++v) {
+    if (std::hypot(p(v, 0) - cx, p(v, 1) - cy) <= radius) (*seen)(n, v) = false;
+  }
+}
+
+double LargestError(const Eigen::MatrixXd& filled, const Eigen::MatrixXd& truth, int n, const Mask& seen) {
+  double worst = 0.0;
+  for (Eigen::Index v = 0; v < seen.cols(); ++v) {
+    if (!seen(n, v))
+      worst = std::max(worst, (filled.row(n).segment<3>(3 * v) - truth.row(n).segment<3>(3 * v)).norm());
+  }
+  return worst;
+}
+
+TEST(ImputeMissingVertices, RecoversShapesOfALowRankModelFromWrongStartingValues) {
+  std::mt19937 rng(3);
+  const Eigen::MatrixXd truth = LowRankShapes(12, 0.01, &rng);
+  Mask seen = Mask::Constant(12, 441, true);
+  Hide(2, 30.0, 30.0, 10.0, &seen);  // a hole in the middle
+  Hide(5, 0.0, 60.0, 15.0, &seen);   // one at a corner (the grid's border)
+  Hide(9, 45.0, 15.0, 8.0, &seen);
+  Eigen::MatrixXd start = truth;
+  for (int n : {2, 5, 9})
+    for (Eigen::Index v = 0; v < 441; ++v)
+      if (!seen(n, v)) start(n, 3 * v + 2) += 10.0;  // the resampler's fill 10 mm off
+  ImputationOptions o;
+  o.noise_mm = 0.05;
+  for (double scale : {0.0, 10.0}) {
+    o.local_scale_mm = scale;
+    const ImputationResult r = ImputeMissingVertices(start, seen, o);
+    EXPECT_TRUE(r.converged) << r.message;
+    for (int n : {2, 5, 9}) {
+      EXPECT_LT(LargestError(r.shapes, truth, n, seen), 0.1) << "subject " << n << ", scale " << scale;
+      EXPECT_GT(r.filled_vertices[n], 0);
+      EXPECT_NEAR(r.largest_change_mm[n], 10.0, 0.2);
+    }
+    // Seen coordinates and fully seen subjects are untouched.
+    for (Eigen::Index n = 0; n < 12; ++n) {
+      for (Eigen::Index v = 0; v < 441; ++v) {
+        if (seen(n, v)) {
+          EXPECT_EQ(r.shapes.row(n).segment<3>(3 * v), start.row(n).segment<3>(3 * v));
+        }
+      }
+    }
+    EXPECT_EQ(r.filled_vertices[0], 0);
+    EXPECT_NE(r.message.find("of 3 of 12 subjects"), std::string::npos) << r.message;
+  }
+}
+
+TEST(ImputeMissingVertices, TheLocalCorrectionJoinsABumpTheModelCannotPredict) {
+  std::mt19937 rng(5);
+  Eigen::MatrixXd truth = LowRankShapes(12, 0.01, &rng);
+  // Subject 4 alone has a 2 mm bump of 8 mm sd centred on the rim of its hole: outside every mode.
+  const Eigen::MatrixXd p = GridPositions();
+  for (Eigen::Index v = 0; v < p.rows(); ++v) {
+    const double r2 = std::pow(p(v, 0) - 40.0, 2) + std::pow(p(v, 1) - 30.0, 2);
+    truth(4, 3 * v + 2) += 2.0 * std::exp(-r2 / (2.0 * 64.0));
+  }
+  Mask seen = Mask::Constant(12, 441, true);
+  Hide(4, 30.0, 30.0, 10.0, &seen);
+  ImputationOptions o;
+  o.noise_mm = 0.05;
+  o.local_scale_mm = 0.0;
+  const double alone = LargestError(ImputeMissingVertices(truth, seen, o).shapes, truth, 4, seen);
+  o.local_scale_mm = 8.0;
+  o.local_sd_mm = 2.0;
+  const double joined = LargestError(ImputeMissingVertices(truth, seen, o).shapes, truth, 4, seen);
+  EXPECT_GT(alone, 1.0);  // the population's prediction misses the bump
+  std::printf("bump on the rim: largest fill error %.3f mm alone, %.3f mm with the local correction\n", alone,
+              joined);
+  EXPECT_LT(joined, 0.35 * alone) << "without " << alone << " mm, with the local correction " << joined
+                                  << " mm";
+}
+
+TEST(ImputeMissingVertices, ASubjectSeenTooLittleIsLeftAsItWasAndReported) {
+  std::mt19937 rng(1);
+  const Eigen::MatrixXd X = LowRankShapes(6, 0.01, &rng);
+  Mask seen = Mask::Constant(6, 441, true);
+  Hide(1, 30.0, 30.0, 100.0, &seen);  // nothing seen
+  const ImputationResult r = ImputeMissingVertices(X, seen);
+  ASSERT_EQ(r.too_little_seen.size(), 1u);
+  EXPECT_EQ(r.too_little_seen[0], 1);
+  EXPECT_EQ(r.shapes, X);
+  EXPECT_NE(r.message.find("seen too little"), std::string::npos) << r.message;
+}
+
+TEST(ImputeMissingVertices, BadInputIsNamed) {
+  std::mt19937 rng(1);
+  const Eigen::MatrixXd X = LowRankShapes(4, 0.01, &rng);
+  const Mask seen = Mask::Constant(4, 441, true);
+  try {
+    ImputeMissingVertices(X, Mask::Constant(4, 440, true), {}, "cohort grids");
+    FAIL() << "a mask of the wrong size was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kBadInput);
+    EXPECT_NE(std::string(e.what()).find("cohort grids"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(ImputeMissingVertices(X.topRows(2), seen.topRows(2)), Error);
+  Eigen::MatrixXd bad = X;
+  bad(1, 5) = std::nan("");
+  EXPECT_THROW(ImputeMissingVertices(bad, seen), Error);
+  ImputationOptions o;
+  o.noise_mm = 0.0;
+  EXPECT_THROW(ImputeMissingVertices(X, seen, o), Error);
+}
+
+}  // namespace
+}  // namespace pectus
