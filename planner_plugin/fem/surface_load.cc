@@ -48,11 +48,9 @@ constexpr double kWeights7[7] = {0.5 * 0.225,
 
 }  // namespace
 
-double AddProfiledTraction(const Points3& nodes, const Tri6Connectivity& faces,
-                           const Eigen::Vector3d& traction,
-                           const std::function<double(const Eigen::Vector3d&)>& phi,
-                           Eigen::VectorXd* forces) {
-  double integral = 0.0;
+std::vector<FaceQuadraturePoint> FaceQuadrature7(const Points3& nodes, const Tri6Connectivity& faces) {
+  std::vector<FaceQuadraturePoint> points;
+  points.reserve(static_cast<std::size_t>(7 * faces.rows()));
   Eigen::Matrix<double, 6, 1> N;
   Eigen::Matrix<double, 6, 2> dN;
   for (Eigen::Index f = 0; f < faces.rows(); ++f) {
@@ -60,14 +58,27 @@ double AddProfiledTraction(const Points3& nodes, const Tri6Connectivity& faces,
     for (int a = 0; a < 6; ++a) X.row(a) = nodes.row(faces(f, a));
     for (int q = 0; q < 7; ++q) {
       Tri6(kPoints7[q][0], kPoints7[q][1], &N, &dN);
-      const Eigen::Vector3d x = X.transpose() * N;
       const Eigen::Vector3d xr = X.transpose() * dN.col(0), xs = X.transpose() * dN.col(1);
-      const double w = kWeights7[q] * xr.cross(xs).norm() * phi(x);
-      if (w == 0.0) continue;
-      integral += w;
-      if (forces == nullptr) continue;
-      for (int a = 0; a < 6; ++a) forces->segment<3>(3 * faces(f, a)) += (w * N(a)) * traction;
+      FaceQuadraturePoint& p = points.emplace_back();
+      p.x = X.transpose() * N;
+      p.weight = kWeights7[q] * xr.cross(xs).norm();
+      for (int a = 0; a < 6; ++a) p.nodes[a] = faces(f, a), p.N[a] = N(a);
     }
+  }
+  return points;
+}
+
+double AddProfiledTraction(const Points3& nodes, const Tri6Connectivity& faces,
+                           const Eigen::Vector3d& traction,
+                           const std::function<double(const Eigen::Vector3d&)>& phi,
+                           Eigen::VectorXd* forces) {
+  double integral = 0.0;
+  for (const FaceQuadraturePoint& p : FaceQuadrature7(nodes, faces)) {
+    const double w = p.weight * phi(p.x);
+    if (w == 0.0) continue;
+    integral += w;
+    if (forces == nullptr) continue;
+    for (int a = 0; a < 6; ++a) forces->segment<3>(3 * p.nodes[a]) += (w * p.N[a]) * traction;
   }
   return integral;
 }

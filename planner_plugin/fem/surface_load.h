@@ -2,7 +2,10 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
+#include <cstdint>
 #include <functional>
+#include <vector>
 
 #include "planner_plugin/fem/tet_mesh.h"
 #include "shape/core/geometry.h"
@@ -26,6 +29,21 @@ void AddUniformTraction(const Points3& nodes, const Tri6Connectivity& faces, con
 /// to F exactly). Throws Error(kBadInput) if the patch is empty or has zero area.
 void AddForceOverPatch(const Points3& nodes, const Tri6Connectivity& patch, const Eigen::Vector3d& force_n,
                        Eigen::VectorXd* forces);
+
+/// One point of the 7-point rule (Dunavant, degree 5) on a 6-node boundary triangle: where it lies, its
+/// weight (the rule's weight times the area element, mm²) and the face's nodes with their shape
+/// functions there. A traction t phi(x) gives node nodes[a] the force sum over points of
+/// weight phi(x) N[a] t.
+struct FaceQuadraturePoint {
+  Eigen::Vector3d x;
+  double weight = 0.0;
+  std::array<std::int32_t, 6> nodes{};
+  std::array<double, 6> N{};
+};
+
+/// The 7-point rule of AddProfiledTraction over `faces`, 7 points per face in face order.
+/// @param[in] nodes  #nodes by 3 positions, mm
+std::vector<FaceQuadraturePoint> FaceQuadrature7(const Points3& nodes, const Tri6Connectivity& faces);
 
 /// Adds to `forces` the consistent nodal forces f_a = integral N_a phi(x) t dA of a traction t shaped by
 /// a profile phi >= 0 (7-point rule per face, degree 5), and returns integral phi dA (mm²). A profile

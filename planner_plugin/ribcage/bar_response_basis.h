@@ -1,0 +1,114 @@
+// pectus planner: the chest's exact response to the bar at any position and force, at haptic rates
+// (issue 14). The FE model is linear and the bar's push is a weighted sum of unit loads on the nodes of
+// the sternum's back: a bar at level s with force F loads node j with F w_j(s) d (d the push direction,
+// w_j(s) the consistent weights of its raised-cosine contact profile, summing to 1), so the displacement
+// is u(s, F) = F sum_j w_j(s) K^-1 (d e_j). The basis solves K^-1 (d e_j) for every contact node on the
+// one factorisation (many right-hand sides at once), keeps only the points a user sees (bone surface,
+// skin through its fixed ties to the bone, landmarks: each a fixed linear combination of nodes), and
+// compresses them with a truncated SVD of the responses to the bar at finely sampled levels, to a stated
+// tolerance. An evaluation is then one small product,
+// w(s) from the same quadrature as RibcageFem::NodalForces, without allocation, lock or throw.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "planner_plugin/ribcage/ribcage_fem.h"
+#include "shape/core/timings.h"
+
+namespace pectus::planner {
+
+/// An output point: a fixed linear combination of mesh nodes, (node, weight) pairs (a bone vertex is one
+/// node with weight 1; a skin vertex its ties, SkinSurface::ties).
+using NodeTies = std::vector<std::pair<std::int32_t, double>>;
+
+/// How the basis is built.
+struct BarResponseBasisOptions {
+  /// The compression keeps the fewest singular vectors of the output response for which no coordinate
+  /// of any evaluation up to `max_force_n` can differ from the uncompressed response by more than this,
+  /// mm (the bound sigma_{r+1} max_force_n; BarResponseBasis::truncation_bound_mm_per_n). Default
+  /// 0.001 mm at 2000 N: a tenth of what the planner is asked to hold against the direct solve.
+  double tolerance_mm = 1e-3;
+  double max_force_n = 2000.0;  ///< the largest bar force the tolerance is stated for, N (> 0)
+  /// Right-hand sides solved together (memory: 3 #nodes doubles each, twice). > 0.
+  int block_columns = 64;
+
+  /// False, with the reason, for a value out of range.
+  bool IsValid(std::string* why) const;
+};
+
+/// Reusable buffers for evaluation (one per thread that evaluates): sized once by
+/// BarResponseBasis::MakeWorkspace(), so that evaluation never allocates.
+struct BarResponseWorkspace {
+  Eigen::VectorXd weights;            ///< per contact node
+  Eigen::VectorXd coefficients;       ///< per retained singular vector
+  std::vector<std::int32_t> touched;  ///< contact nodes with a weight
+  std::vector<std::uint8_t> mark;     ///< per contact node: 1 if in `touched`
+};
+
+/// The exact, compressed response of one patient's chest to the bar.
+class BarResponseBasis {
+ public:
+  /// Solves the response to a unit push at every contact node (the nodes of the sternum's posterior
+  /// faces) and keeps it at `points` (each a combination of nodes; their displacements are the output)
+  /// and at the sternal lift's measurement (RibcageFem::SternumLift). Throws Error(kUsage) for invalid
+  /// options or a tie to a node outside the mesh.
+  BarResponseBasis(const RibcageFem& fem, const std::vector<NodeTies>& points,
+                   const BarResponseBasisOptions& options = {});
+
+  /// A workspace for Evaluate(), LiftPerNewton() and Weights().
+  BarResponseWorkspace MakeWorkspace() const;
+
+  /// The contact weights w_j(level) of a bar at height `level_z_mm` into `ws->weights` (zero elsewhere);
+  /// false if the profile there touches no contact face (the bar is off the sternum). No allocation.
+  bool Weights(double level_z_mm, BarResponseWorkspace* ws) const noexcept;
+
+  /// Displacements (#points by 3, row-major, mm) of the output points for a bar at `level_z_mm` pushing
+  /// with `force_n` into `out` (3 #points doubles). False, with `out` untouched, if the bar is off the
+  /// sternum. No allocation, lock or throw: callable from a 1 kHz thread.
+  bool Evaluate(double level_z_mm, double force_n, BarResponseWorkspace* ws, double* out) const noexcept;
+
+  /// Sternal lift per newton of a bar at `level_z_mm` (mm/N), 0 if off the sternum; the force for a
+  /// wanted lift is lift / this. No allocation.
+  double LiftPerNewton(double level_z_mm, BarResponseWorkspace* ws) const noexcept;
+
+  /// The bar level z of a position along the sternum (fraction of its length, or mm: as BarLoad).
+  double LevelZ(const BarLoad& load) const {
+    return notch_z_mm_ - (load.position_in_mm ? load.position : load.position * sternal_length_mm_);
+  }
+
+  Eigen::Index num_points() const { return num_points_; }
+  Eigen::Index num_contact_nodes() const { return static_cast<Eigen::Index>(contact_nodes_.size()); }
+  Eigen::Index rank() const { return modes_.cols(); }
+  /// Bytes held by the basis (the compressed response, the quadrature and the lift row).
+  std::size_t bytes() const;
+  /// The compression's error at the sampled bar levels (every 16th of the contact width; 2-norm over every
+  /// output coordinate), mm per newton of bar force. Between them it is measured (tests, benchmark).
+  double truncation_bound_mm_per_n() const { return truncation_bound_mm_per_n_; }
+  /// Wall time of the build, s: "solve" (the right-hand sides on the factorisation), "compress" (SVD).
+  const Timings& timings_s() const { return timings_s_; }
+  /// Singular values of the responses to the bar at the sampled levels (descending), mm/N.
+  const Eigen::VectorXd& singular_values() const { return singular_values_; }
+
+ private:
+  struct QuadraturePoint {
+    double z = 0.0, weight = 0.0;
+    std::int32_t contact[6] = {};  // indices into contact_nodes_
+    double N[6] = {};
+  };
+  Eigen::Index num_points_ = 0;
+  std::vector<std::int32_t> contact_nodes_;  // mesh nodes of the sternum's back
+  std::vector<QuadraturePoint> quadrature_;  // sorted by z
+  double contact_width_mm_ = 0.0, notch_z_mm_ = 0.0, sternal_length_mm_ = 0.0;
+  Eigen::MatrixXd modes_;   // 3 #points by r: U_r, orthonormal
+  Eigen::MatrixXd mixing_;  // r by #contact nodes: U_r' R
+  Eigen::VectorXd lift_;    // per contact node: sternal lift per newton (exact, uncompressed)
+  double truncation_bound_mm_per_n_ = 0.0;
+  Eigen::VectorXd singular_values_;
+  Timings timings_s_;
+};
+
+}  // namespace pectus::planner
