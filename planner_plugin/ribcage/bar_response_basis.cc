@@ -26,6 +26,25 @@ bool BarResponseBasisOptions::IsValid(std::string* why) const {
 
 namespace {
 
+// out[i] = sum_j U(i, j) c[j] over the panels (BarResponseBasis::panels_): single-precision modes, double
+// sums, kPanel coordinates at a time. Compiled also for AVX2 and chosen at load time where the processor
+// has it (GCC's function multi-versioning); the build itself targets plain x86-64.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+void PanelsTimesVector(const float* panels, const double* c, Eigen::Index rows, Eigen::Index r, double* out) noexcept {
+  constexpr int P = 8;
+  for (Eigen::Index first = 0; first < rows; first += P) {
+    const float* panel = panels + first * r;
+    double sum[P] = {};
+    for (Eigen::Index j = 0; j < r; ++j) {
+      for (int k = 0; k < P; ++k) sum[k] += static_cast<double>(panel[j * P + k]) * c[j];
+    }
+    const Eigen::Index count = std::min<Eigen::Index>(P, rows - first);
+    for (Eigen::Index k = 0; k < count; ++k) out[first + k] = sum[k];
+  }
+}
+
 double Since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -142,8 +161,50 @@ BarResponseBasis::BarResponseBasis(const RibcageFem& fem, const std::vector<Node
   Eigen::Index r = 0;
   while (r < sv.size() && sv[r] > cut) ++r;
   const Eigen::MatrixXd V = eig.eigenvectors().rowwise().reverse().leftCols(r);
-  modes_ = Y * V * sv.head(r).cwiseInverse().asDiagonal();  // U_r, orthonormal columns
-  mixing_ = modes_.transpose() * R;
+  const Eigen::MatrixXd modes = Y * V * sv.head(r).cwiseInverse().asDiagonal();  // U_r, orthonormal columns
+  const Eigen::MatrixXd mixing = modes.transpose() * R;                          // M = U_r' R, r x J
+  static_assert(kPanel == 8, "PanelsTimesVector sums 8 coordinates at a time");
+  rows_ = modes.rows();
+  rank_ = r;
+  const Eigen::Index panels = (rows_ + kPanel - 1) / kPanel;
+  panels_.assign(static_cast<std::size_t>(panels * kPanel * r), 0.0f);
+  for (Eigen::Index i = 0; i < rows_; ++i) {
+    for (Eigen::Index j = 0; j < r; ++j) {
+      panels_[static_cast<std::size_t>((i / kPanel) * kPanel * r + j * kPanel + i % kPanel)] =
+          static_cast<float>(modes(i, j));
+    }
+  }
+
+  // 3. Evaluation in O(r) after two binary searches. With the profile phi_q = (1 + cos(pi (z_q - s) / W)) / 2
+  // = (1 + cos(pi z_q / W) cos(pi s / W) + sin(pi z_q / W) sin(pi s / W)) / 2, every window sum over the
+  // quadrature points with |z_q - s| < W is three differences of prefix sums: of the point's weight
+  // (for the area), of its share of the mixing m_q = w_q sum_a N_a M[:, j_a] (for the coefficients) and
+  // of its share of the exact lift (for the force to lift), each plain, times cos and times sin.
+  const auto Q = static_cast<Eigen::Index>(quadrature_.size());
+  z_.resize(Q);
+  for (int k = 0; k < 3; ++k) {
+    prefix_area_[k] = Eigen::VectorXd::Zero(Q + 1);
+    prefix_lift_[k] = Eigen::VectorXd::Zero(Q + 1);
+    prefix_mixing_[k] = Eigen::MatrixXd::Zero(r, Q + 1);
+  }
+  Eigen::VectorXd m(r);
+  for (Eigen::Index q = 0; q < Q; ++q) {
+    const QuadraturePoint& p = quadrature_[static_cast<std::size_t>(q)];
+    z_[q] = p.z;
+    m.setZero();
+    double lift = 0.0;
+    for (int a = 0; a < 6; ++a) {
+      m += p.N[a] * mixing.col(p.contact[a]);
+      lift += p.N[a] * lift_[p.contact[a]];
+    }
+    const double angle = std::numbers::pi * p.z / contact_width_mm_;
+    const double factor[3] = {1.0, std::cos(angle), std::sin(angle)};
+    for (int k = 0; k < 3; ++k) {
+      prefix_area_[k][q + 1] = prefix_area_[k][q] + p.weight * factor[k];
+      prefix_lift_[k][q + 1] = prefix_lift_[k][q] + p.weight * lift * factor[k];
+      prefix_mixing_[k].col(q + 1) = prefix_mixing_[k].col(q) + (p.weight * factor[k]) * m;
+    }
+  }
   truncation_bound_mm_per_n_ = r < sv.size() ? sv[r] : 0.0;
   timings_s_.Add("compress", Since(start));
 }
@@ -155,6 +216,24 @@ BarResponseWorkspace BarResponseBasis::MakeWorkspace() const {
   ws.touched.reserve(contact_nodes_.size());
   ws.mark.assign(contact_nodes_.size(), 0);
   return ws;
+}
+
+bool BarResponseBasis::Window(double level_z_mm, Eigen::Index* first, Eigen::Index* last, double* c,
+                              double* s) const noexcept {
+  const double* begin = z_.data();
+  const double* end = begin + z_.size();
+  *first = std::lower_bound(begin, end, level_z_mm - contact_width_mm_) - begin;
+  *last = std::lower_bound(begin, end, level_z_mm + contact_width_mm_) - begin;
+  const double angle = std::numbers::pi * level_z_mm / contact_width_mm_;
+  *c = std::cos(angle);
+  *s = std::sin(angle);
+  return *last > *first;
+}
+
+double BarResponseBasis::WindowSum(const Eigen::VectorXd (&prefix)[3], Eigen::Index first, Eigen::Index last,
+                                   double c, double s) noexcept {
+  return 0.5 * ((prefix[0][last] - prefix[0][first]) + c * (prefix[1][last] - prefix[1][first]) +
+                s * (prefix[2][last] - prefix[2][first]));
 }
 
 bool BarResponseBasis::Weights(double level_z_mm, BarResponseWorkspace* ws) const noexcept {
@@ -186,24 +265,35 @@ bool BarResponseBasis::Weights(double level_z_mm, BarResponseWorkspace* ws) cons
 
 bool BarResponseBasis::Evaluate(double level_z_mm, double force_n, BarResponseWorkspace* ws,
                                 double* out) const noexcept {
-  if (!Weights(level_z_mm, ws)) return false;
-  ws->coefficients.setZero();
-  for (std::int32_t j : ws->touched)
-    ws->coefficients.noalias() += (force_n * ws->weights[j]) * mixing_.col(j);
-  Eigen::Map<Eigen::VectorXd>(out, modes_.rows()).noalias() = modes_ * ws->coefficients;
+  Eigen::Index first = 0, last = 0;
+  double c = 0.0, s = 0.0;
+  if (!Window(level_z_mm, &first, &last, &c, &s)) return false;
+  const double area = WindowSum(prefix_area_, first, last, c, s);
+  if (!(area > kLeastArea * prefix_area_[0][z_.size()])) return false;
+  const double scale = 0.5 * force_n / area;
+  ws->coefficients.noalias() = scale * ((prefix_mixing_[0].col(last) - prefix_mixing_[0].col(first)) +
+                                        c * (prefix_mixing_[1].col(last) - prefix_mixing_[1].col(first)) +
+                                        s * (prefix_mixing_[2].col(last) - prefix_mixing_[2].col(first)));
+  PanelsTimesVector(panels_.data(), ws->coefficients.data(), rows_, rank_, out);
   return true;
 }
 
-double BarResponseBasis::LiftPerNewton(double level_z_mm, BarResponseWorkspace* ws) const noexcept {
-  if (!Weights(level_z_mm, ws)) return 0.0;
-  double lift = 0.0;
-  for (std::int32_t j : ws->touched) lift += ws->weights[j] * lift_[j];
-  return lift;
+double BarResponseBasis::LiftPerNewton(double level_z_mm) const noexcept {
+  Eigen::Index first = 0, last = 0;
+  double c = 0.0, s = 0.0;
+  if (!Window(level_z_mm, &first, &last, &c, &s)) return 0.0;
+  const double area = WindowSum(prefix_area_, first, last, c, s);
+  if (!(area > kLeastArea * prefix_area_[0][z_.size()])) return 0.0;
+  return WindowSum(prefix_lift_, first, last, c, s) / area;
 }
 
 std::size_t BarResponseBasis::bytes() const {
-  return sizeof(double) * static_cast<std::size_t>(modes_.size() + mixing_.size() + lift_.size()) +
-         sizeof(QuadraturePoint) * quadrature_.size() + sizeof(std::int32_t) * contact_nodes_.size();
+  std::size_t numbers = panels_.size() / 2 + static_cast<std::size_t>(lift_.size() + z_.size());
+  for (int k = 0; k < 3; ++k)
+    numbers +=
+        static_cast<std::size_t>(prefix_area_[k].size() + prefix_lift_[k].size() + prefix_mixing_[k].size());
+  return sizeof(double) * numbers + sizeof(QuadraturePoint) * quadrature_.size() +
+         sizeof(std::int32_t) * contact_nodes_.size();
 }
 
 }  // namespace pectus::planner

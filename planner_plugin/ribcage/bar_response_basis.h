@@ -67,13 +67,14 @@ class BarResponseBasis {
   bool Weights(double level_z_mm, BarResponseWorkspace* ws) const noexcept;
 
   /// Displacements (#points by 3, row-major, mm) of the output points for a bar at `level_z_mm` pushing
-  /// with `force_n` into `out` (3 #points doubles). False, with `out` untouched, if the bar is off the
-  /// sternum. No allocation, lock or throw: callable from a 1 kHz thread.
+  /// with `force_n` into `out` (3 #points doubles): the r coefficients from prefix sums over the contact
+  /// profile's quadrature (two binary searches), then one product with the modes. False, with `out`
+  /// untouched, if the bar is off the sternum. No allocation, lock or throw: callable from a 1 kHz thread.
   bool Evaluate(double level_z_mm, double force_n, BarResponseWorkspace* ws, double* out) const noexcept;
 
   /// Sternal lift per newton of a bar at `level_z_mm` (mm/N), 0 if off the sternum; the force for a
-  /// wanted lift is lift / this. No allocation.
-  double LiftPerNewton(double level_z_mm, BarResponseWorkspace* ws) const noexcept;
+  /// wanted lift is lift / this. O(log #quadrature points), no allocation.
+  double LiftPerNewton(double level_z_mm) const noexcept;
 
   /// The bar level z of a position along the sternum (fraction of its length, or mm: as BarLoad).
   double LevelZ(const BarLoad& load) const {
@@ -82,7 +83,7 @@ class BarResponseBasis {
 
   Eigen::Index num_points() const { return num_points_; }
   Eigen::Index num_contact_nodes() const { return static_cast<Eigen::Index>(contact_nodes_.size()); }
-  Eigen::Index rank() const { return modes_.cols(); }
+  Eigen::Index rank() const { return rank_; }
   /// Bytes held by the basis (the compressed response, the quadrature and the lift row).
   std::size_t bytes() const;
   /// The compression's error at the sampled bar levels (every 16th of the contact width; 2-norm over every
@@ -103,9 +104,27 @@ class BarResponseBasis {
   std::vector<std::int32_t> contact_nodes_;  // mesh nodes of the sternum's back
   std::vector<QuadraturePoint> quadrature_;  // sorted by z
   double contact_width_mm_ = 0.0, notch_z_mm_ = 0.0, sternal_length_mm_ = 0.0;
-  Eigen::MatrixXd modes_;   // 3 #points by r: U_r, orthonormal
-  Eigen::MatrixXd mixing_;  // r by #contact nodes: U_r' R
-  Eigen::VectorXd lift_;    // per contact node: sternal lift per newton (exact, uncompressed)
+  // The quadrature window |z_q - level| < W: [first, last) into z_, and cos, sin of pi level / W.
+  bool Window(double level_z_mm, Eigen::Index* first, Eigen::Index* last, double* c,
+              double* s) const noexcept;
+  // The window's sum of w_q phi_q x_q from the prefix sums of x_q, x_q cos(pi z_q / W), x_q sin(...).
+  static double WindowSum(const Eigen::VectorXd (&prefix)[3], Eigen::Index first, Eigen::Index last, double c,
+                          double s) noexcept;
+  // Below this fraction of the whole back's area the profile counts as off the sternum.
+  static constexpr double kLeastArea = 1e-9;
+  // The modes U_r (3 #points by r, orthonormal columns) packed in panels of kPanel output coordinates:
+  // panel p holds rows kPanel p .. kPanel p + kPanel - 1 (zero beyond the last) column after column, so
+  // the update reads it once, contiguously, and sums kPanel coordinates side by side (vectorised, each
+  // in order). Single precision (half the bytes; its rounding, 6e-8 of each term, is far below the
+  // tolerance), summed in double.
+  static constexpr int kPanel = 8;
+  std::vector<float> panels_;
+  Eigen::Index rows_ = 0, rank_ = 0;
+  Eigen::VectorXd lift_;  // per contact node: sternal lift per newton (exact, uncompressed)
+  Eigen::VectorXd z_;     // the quadrature points' heights, ascending
+  // Prefix sums over the quadrature points (index q + 1: points 0..q), plain, times cos, times sin.
+  Eigen::VectorXd prefix_area_[3], prefix_lift_[3];
+  Eigen::MatrixXd prefix_mixing_[3];  // r by #quadrature points + 1
   double truncation_bound_mm_per_n_ = 0.0;
   Eigen::VectorXd singular_values_;
   Timings timings_s_;
