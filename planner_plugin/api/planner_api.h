@@ -55,9 +55,10 @@ typedef struct PectusPlannerPatient {
   double first_sternum_slice; /**< with last_sternum_slice and slice_spacing_mm (> 0): the sternal length */
   double last_sternum_slice;
   double slice_spacing_mm;
-  double depression_mm;   /**< sternal depression, 0 to 60 */
-  double torsion_deg;     /**< sternal torsion, -45 to 45 (positive: the right edge deeper) */
-  double ct_haller_index; /**< as measured on the CT, 0 if unknown (reported, not used) */
+  double depression_mm; /**< sternal depression, 0 to 60 */
+  double torsion_deg;   /**< sternal torsion, -45 to 45 (positive: the right edge deeper) */
+  double
+      ct_haller_index; /**< as measured on the CT, 0 if unknown; given, the spine is placed to give it back */
 } PectusPlannerPatient;
 
 /** Materials, mesh and skin settings. Fill with default_options() first, then change what you need. */

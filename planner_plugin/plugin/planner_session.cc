@@ -61,6 +61,7 @@ PatientMeasurements MeasurementsFrom(const PectusPlannerPatient& patient) {
   if (end == nullptr) ThrowBadInput("patient", "the patient id is not NUL-terminated within 64 bytes");
   m.patient = patient.id;
   CopyCtMeasurements(patient, &m);
+  m.haller_index = patient.ct_haller_index;
   m.first_sternum_slice = patient.first_sternum_slice;
   m.last_sternum_slice = patient.last_sternum_slice;
   m.slice_spacing_mm = patient.slice_spacing_mm;

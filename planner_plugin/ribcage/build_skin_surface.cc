@@ -41,8 +41,11 @@ SkinSurface BuildSkinSurface(const PatientRibcage& ribcage, const SkinSurfaceOpt
   const double top = ribcage.measured.notch_z_mm + options.above_notch_mm;
   const double bottom =
       ribcage.measured.notch_z_mm - ribcage.measured.sternal_length_mm - options.below_xiphoid_mm;
-  // The axis the rays leave from: midway between the sternum and the spine, per height.
-  const Points3& spine = ribcage.surface.spine_anterior;
+  // The axis the rays leave from: midway between the sternum and the spine, per height. The spine of the
+  // generic ribcage, scaled: a construction axis, not moved where the CT's Haller index places the
+  // vertebral bodies (PatientRibcage::spine_shift_mm), so that the skin's rays stay as they were built.
+  Points3 spine = ribcage.surface.spine_anterior;
+  spine.col(1).array() -= ribcage.spine_shift_mm;
   auto axis_y = [&](double z) {
     double spine_y = spine(0, 1);
     for (Eigen::Index i = 1; i < spine.rows(); ++i) {

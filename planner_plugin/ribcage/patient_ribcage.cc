@@ -50,6 +50,7 @@ PatientMeasurements MeasurementsOf(const PatientTableRow& row) {
   PatientMeasurements m;
   m.patient = std::to_string(row.patient);
   CopyCtMeasurements(row, &m);
+  m.haller_index = row.haller_index;
   return m;
 }
 
@@ -69,6 +70,8 @@ bool PatientMeasurements::IsValid(std::string* why) const {
   if (!in(TrueDepression(), 0, 0.5 * TrueDepth()))
     return fail("sternal depression must be under half the depth");
   if (!in(torsion_deg, -45, 45)) return fail("sternal torsion must be -45 to 45 degrees");
+  if (haller_index != 0 && !in(haller_index, 1, 50))
+    return fail("the Haller index must be 1 to 50 (0: unknown)");
   return true;
 }
 
@@ -191,10 +194,22 @@ PatientRibcage MakePatientRibcage(const GenericRibcage& generic, const PatientMe
   m = best_m;
   out.residual_mm = best_worst;
   if (!out.converged) out.surface.nodes = MapGenericNodes(generic, p, options.skinning);
+  out.surface.spine_anterior = Scaled(generic.spine_anterior, p.scale);
+  // The spine's anterior surface, which only the Haller index sees: moved along y until the sternum-to-
+  // spine distance gives back the CT's index (a few passes, in case the measured slice moves with it).
+  if (targets.haller_index > 0) {
+    for (int pass = 0; pass < 5; ++pass) {
+      const double shift = m.inner_width_mm / targets.haller_index - m.sternum_to_spine_mm;
+      if (std::abs(shift) < 1e-3) break;
+      out.surface.spine_anterior.col(1).array() += shift;
+      out.spine_shift_mm += shift;
+      m = MeasureRibcage(out.surface, options.measurement);
+    }
+  }
   out.iterations = std::min(out.iterations, options.max_iterations);
   out.parameters = p;
   out.measured = m;
-  char line[400];
+  char line[500];
   std::snprintf(line, sizeof(line),
                 "patient %s: %s after %d iterations; residuals width %.3f, depth %.3f, sternal length %.3f, "
                 "depression %.3f mm, torsion %.3f deg",
@@ -202,6 +217,11 @@ PatientRibcage MakePatientRibcage(const GenericRibcage& generic, const PatientMe
                 width - m.width_mm, depth - m.depth_mm, length - m.sternal_length_mm,
                 depression - m.depression_mm, torsion - m.torsion_deg);
   out.message = line;
+  if (targets.haller_index > 0) {
+    std::snprintf(line, sizeof(line), "; Haller index %.3f (CT %.3f), the spine moved %+.1f mm",
+                  m.haller_index, targets.haller_index, out.spine_shift_mm);
+    out.message += line;
+  }
 
   ThrowIfFolded(generic, out.surface.nodes, targets);
 

@@ -32,6 +32,10 @@ struct PatientMeasurements {
   double first_sternum_slice = 0, last_sternum_slice = 0, slice_spacing_mm = 0;
   double depression_mm = 0;  ///< sternal depression on the image, 0 to 60
   double torsion_deg = 0;    ///< sternal torsion, -45 to 45 (positive: the right edge deeper)
+  /// The CT's Haller index (inner width / sternum to spine on the slice of deepest depression), 1 to
+  /// 50; 0 if unknown. Given, the spine's anterior surface is placed to give it back (the other five
+  /// measurements do not see the spine); unknown, the generic ribcage's spine is kept.
+  double haller_index = 0;
 
   /// False, with the reason (naming the patient), if a value is out of range.
   bool IsValid(std::string* why) const;
@@ -93,10 +97,13 @@ struct PatientRibcage {
       landmarks;  ///< sternal_notch, manubrium_centre, sternal_angle, xiphoid (joint), xiphoid_tip (mm)
   RibcageSurface surface;           ///< the corner-node bone surface with parts and spine, for measurements
   PatientMapParameters parameters;  ///< the fitted map
-  PatientMeasurements targets;      ///< what was asked for
-  RibcageMeasurements measured;     ///< what the generated ribcage measures
-  bool converged = false;           ///< every residual within options.tolerance_mm
-  double residual_mm = 0;           ///< the largest residual of the returned map (mm, or degrees for torsion)
+  /// How far the spine's anterior surface was moved along y (mm, + posterior) from the scaled generic
+  /// one to give back targets.haller_index (0 when it is unknown).
+  double spine_shift_mm = 0;
+  PatientMeasurements targets;   ///< what was asked for
+  RibcageMeasurements measured;  ///< what the generated ribcage measures
+  bool converged = false;        ///< every residual within options.tolerance_mm
+  double residual_mm = 0;        ///< the largest residual of the returned map (mm, or degrees for torsion)
   int iterations = 0;
   std::string message;  ///< one line: converged or not, residuals
 };
