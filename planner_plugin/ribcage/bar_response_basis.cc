@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <numbers>
 
 #include "planner_plugin/fem/surface_load.h"
@@ -15,6 +16,10 @@ bool BarResponseBasisOptions::IsValid(std::string* why) const {
   if (!(tolerance_mm > 0.0) || !std::isfinite(tolerance_mm) || !(max_force_n > 0.0) ||
       !std::isfinite(max_force_n)) {
     if (why) *why = "the basis' tolerance (mm) and largest force (N) must be > 0";
+    return false;
+  }
+  if (samples_per_width < 1) {
+    if (why) *why = "the basis needs at least 1 bar level per contact width";
     return false;
   }
   if (block_columns < 1) {
@@ -97,45 +102,31 @@ BarResponseBasis::BarResponseBasis(const RibcageFem& fem, const std::vector<Node
   std::sort(quadrature_.begin(), quadrature_.end(),
             [](const QuadraturePoint& a, const QuadraturePoint& b) { return a.z < b.z; });
 
-  // 1. The response to a unit push at every contact node, kept at the output points (R, 3P x J) and at
-  // the sternal lift, block by block of right-hand sides on the one factorisation.
-  auto start = std::chrono::steady_clock::now();
+  // Solves blocks of right-hand sides (3 #nodes each) on the one factorisation; `use` gets each block.
   const auto J = static_cast<Eigen::Index>(contact_nodes_.size());
-  Eigen::MatrixXd R(3 * num_points_, J);
-  lift_.resize(J);
   const Eigen::Vector3d d = fem.options().push_direction.normalized();
-  for (Eigen::Index first = 0; first < J; first += options.block_columns) {
-    const Eigen::Index count = std::min<Eigen::Index>(options.block_columns, J - first);
-    std::vector<LoadCase> cases(static_cast<std::size_t>(count));
-    for (Eigen::Index c = 0; c < count; ++c) {
-      LoadCase& load = cases[static_cast<std::size_t>(c)];
-      load.name = "unit push at node " + std::to_string(contact_nodes_[static_cast<std::size_t>(first + c)]);
-      load.nodal_forces = Eigen::VectorXd::Zero(3 * n);
-      load.nodal_forces.segment<3>(3 * contact_nodes_[static_cast<std::size_t>(first + c)]) = d;
-    }
-    const std::vector<Points3> u = fem.solver().Solve(cases);
-    for (Eigen::Index c = 0; c < count; ++c) {
-      const Points3& uc = u[static_cast<std::size_t>(c)];
-      lift_[first + c] = fem.SternumLift(uc);
-      for (Eigen::Index p = 0; p < num_points_; ++p) {
-        Eigen::RowVector3d v = Eigen::RowVector3d::Zero();
-        for (const auto& [node, w] : points[static_cast<std::size_t>(p)]) v += w * uc.row(node);
-        R.block<3, 1>(3 * p, first + c) = v.transpose();
+  auto solve = [&](Eigen::Index columns, const std::function<void(Eigen::Index, Eigen::VectorXd*)>& load,
+                   const std::function<void(Eigen::Index, const Points3&)>& use) {
+    for (Eigen::Index first = 0; first < columns; first += options.block_columns) {
+      const Eigen::Index count = std::min<Eigen::Index>(options.block_columns, columns - first);
+      std::vector<LoadCase> cases(static_cast<std::size_t>(count));
+      for (Eigen::Index c = 0; c < count; ++c) {
+        cases[static_cast<std::size_t>(c)].name = "basis column " + std::to_string(first + c);
+        cases[static_cast<std::size_t>(c)].nodal_forces = Eigen::VectorXd::Zero(3 * n);
+        load(first + c, &cases[static_cast<std::size_t>(c)].nodal_forces);
       }
+      const std::vector<Points3> u = fem.solver().Solve(cases);
+      for (Eigen::Index c = 0; c < count; ++c) use(first + c, u[static_cast<std::size_t>(c)]);
     }
-  }
-  timings_s_.Add("solve", Since(start));
+  };
 
-  // 2. Compression in the space of the loads a bar can make. A unit push at one node is a point load with
-  // a sharp, local response (R has full rank J), but a bar's weights w(s) are smooth in its level s, so
-  // the responses Y = R W to the bar at levels every kSamplesPerWidth-th of the contact width (W: J x S,
-  // covering every level where the profile touches the sternum) span what any bar does. Their left
-  // singular vectors U_r (through the S x S Gram matrix Y'Y = V S^2 V') give the modes U_r and the
-  // mixing M = U_r' R, so that u(s) = U_r M w(s); at the sampled levels the error (2-norm over every
-  // output coordinate) is at most sigma_{r+1} per newton.
-  start = std::chrono::steady_clock::now();
-  constexpr int kSamplesPerWidth = 16;
-  const double step = contact_width_mm_ / kSamplesPerWidth;
+  // 1. The responses Y (3P x S) of the output points to the bar at levels every
+  // `samples_per_width`-th of the contact width, covering every level where the profile touches the
+  // sternum (the loads F = d (x) W, W: J x S the contact weights at those levels). A unit push at one
+  // node is a point load with a sharp, local response, but a bar's weights w(s) are smooth in s, so these
+  // responses span what any bar does.
+  auto start = std::chrono::steady_clock::now();
+  const double step = contact_width_mm_ / options.samples_per_width;
   const double lowest = quadrature_.front().z - contact_width_mm_,
                highest = quadrature_.back().z + contact_width_mm_;
   std::vector<Eigen::VectorXd> samples;
@@ -148,10 +139,29 @@ BarResponseBasis::BarResponseBasis(const RibcageFem& fem, const std::vector<Node
       if (Weights(z, &ws)) samples.push_back(ws.weights);
     }
   }
-  Eigen::MatrixXd W(J, static_cast<Eigen::Index>(samples.size()));
-  for (std::size_t k = 0; k < samples.size(); ++k) W.col(static_cast<Eigen::Index>(k)) = samples[k];
-  const Eigen::MatrixXd Y = R * W;
-  Eigen::MatrixXd gram(Y.cols(), Y.cols());
+  const auto S = static_cast<Eigen::Index>(samples.size());
+  Eigen::MatrixXd Y(3 * num_points_, S);
+  solve(
+      S,
+      [&](Eigen::Index k, Eigen::VectorXd* f) {
+        for (Eigen::Index j = 0; j < J; ++j)
+          f->segment<3>(3 * contact_nodes_[static_cast<std::size_t>(j)]) =
+              samples[static_cast<std::size_t>(k)][j] * d;
+      },
+      [&](Eigen::Index k, const Points3& u) {
+        for (Eigen::Index p = 0; p < num_points_; ++p) {
+          Eigen::RowVector3d v = Eigen::RowVector3d::Zero();
+          for (const auto& [node, w] : points[static_cast<std::size_t>(p)]) v += w * u.row(node);
+          Y.block<3, 1>(3 * p, k) = v.transpose();
+        }
+      });
+  timings_s_.Add("solve_bar_levels", Since(start));
+
+  // 2. The modes: the left singular vectors U_r of Y (through the S x S Gram matrix Y'Y = V S^2 V'), the
+  // fewest for which the error at the sampled levels (2-norm over every output coordinate) is at most
+  // sigma_{r+1} per newton <= tolerance / largest force.
+  start = std::chrono::steady_clock::now();
+  Eigen::MatrixXd gram(S, S);
   gram.setZero();
   gram.selfadjointView<Eigen::Lower>().rankUpdate(Y.transpose());
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(gram.selfadjointView<Eigen::Lower>());
@@ -162,7 +172,40 @@ BarResponseBasis::BarResponseBasis(const RibcageFem& fem, const std::vector<Node
   while (r < sv.size() && sv[r] > cut) ++r;
   const Eigen::MatrixXd V = eig.eigenvectors().rowwise().reverse().leftCols(r);
   const Eigen::MatrixXd modes = Y * V * sv.head(r).cwiseInverse().asDiagonal();  // U_r, orthonormal columns
-  const Eigen::MatrixXd mixing = modes.transpose() * R;                          // M = U_r' R, r x J
+  timings_s_.Add("compress", Since(start));
+
+  // 3. The mixing M = U_r' P K^-1 D (r x J; P the output ties, D the unit pushes d e_j) by the adjoint:
+  // K is symmetric, so M[:, j] = d . Z[node_j] with Z = K^-1 P' U_r, r right-hand sides (and one more,
+  // K^-1 l for the lift functional l, for the exact lift per unit push), instead of J.
+  start = std::chrono::steady_clock::now();
+  Eigen::MatrixXd mixing(r, J);
+  lift_.resize(J);
+  const std::vector<std::pair<std::int32_t, double>> lift_ties = fem.SternumLiftTies();
+  solve(
+      r + 1,
+      [&](Eigen::Index k, Eigen::VectorXd* f) {
+        if (k == r) {
+          for (const auto& [node, w] : lift_ties) (*f)[3 * node + 1] += w;  // the lift reads -u_y (ties' w)
+          return;
+        }
+        for (Eigen::Index p = 0; p < num_points_; ++p) {
+          for (const auto& [node, w] : points[static_cast<std::size_t>(p)])
+            f->segment<3>(3 * node) += w * modes.block<3, 1>(3 * p, k);
+        }
+      },
+      [&](Eigen::Index k, const Points3& z) {
+        for (Eigen::Index j = 0; j < J; ++j) {
+          const double v = z.row(contact_nodes_[static_cast<std::size_t>(j)]).dot(d.transpose());
+          if (k == r) {
+            lift_[j] = v;
+          } else {
+            mixing(k, j) = v;
+          }
+        }
+      });
+  timings_s_.Add("solve_adjoint", Since(start));
+  start = std::chrono::steady_clock::now();
+
   static_assert(kPanel == 8, "PanelsTimesVector sums 8 coordinates at a time");
   rows_ = modes.rows();
   rank_ = r;
@@ -206,7 +249,7 @@ BarResponseBasis::BarResponseBasis(const RibcageFem& fem, const std::vector<Node
     }
   }
   truncation_bound_mm_per_n_ = r < sv.size() ? sv[r] : 0.0;
-  timings_s_.Add("compress", Since(start));
+  timings_s_.Add("pack", Since(start));
 }
 
 BarResponseWorkspace BarResponseBasis::MakeWorkspace() const {

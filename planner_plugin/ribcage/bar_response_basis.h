@@ -2,12 +2,13 @@
 // (issue 14). The FE model is linear and the bar's push is a weighted sum of unit loads on the nodes of
 // the sternum's back: a bar at level s with force F loads node j with F w_j(s) d (d the push direction,
 // w_j(s) the consistent weights of its raised-cosine contact profile, summing to 1), so the displacement
-// is u(s, F) = F sum_j w_j(s) K^-1 (d e_j). The basis solves K^-1 (d e_j) for every contact node on the
-// one factorisation (many right-hand sides at once), keeps only the points a user sees (bone surface,
-// skin through its fixed ties to the bone, landmarks: each a fixed linear combination of nodes), and
-// compresses them with a truncated SVD of the responses to the bar at finely sampled levels, to a stated
-// tolerance. An evaluation is then one small product,
-// w(s) from the same quadrature as RibcageFem::NodalForces, without allocation, lock or throw.
+// is u(s, F) = F P K^-1 D w(s) at the output points P (bone surface, skin through its fixed ties to the
+// bone, landmarks: each a fixed linear combination of nodes). The basis solves the bar at finely sampled
+// levels on the one factorisation (many right-hand sides at once), takes the truncated SVD of those
+// responses as the modes U_r (to a stated tolerance), and the mixing M = U_r' P K^-1 D by the adjoint
+// (r right-hand sides, not one per contact node): u(s, F) = F U_r M w(s). An evaluation is then one
+// small product, w(s) entering through prefix sums over the same quadrature as RibcageFem::NodalForces,
+// without allocation, lock or throw.
 #pragma once
 
 #include <Eigen/Core>
@@ -33,6 +34,9 @@ struct BarResponseBasisOptions {
   /// 0.001 mm at 2000 N: a tenth of what the planner is asked to hold against the direct solve.
   double tolerance_mm = 1e-3;
   double max_force_n = 2000.0;  ///< the largest bar force the tolerance is stated for, N (> 0)
+  /// Bar levels sampled per contact width for the modes (the responses to the bar there span what any
+  /// bar does; > 0). 8: every 1.5 mm for the 12 mm bar.
+  int samples_per_width = 8;
   /// Right-hand sides solved together (memory: 3 #nodes doubles each, twice). > 0.
   int block_columns = 64;
 
@@ -52,10 +56,9 @@ struct BarResponseWorkspace {
 /// The exact, compressed response of one patient's chest to the bar.
 class BarResponseBasis {
  public:
-  /// Solves the response to a unit push at every contact node (the nodes of the sternum's posterior
-  /// faces) and keeps it at `points` (each a combination of nodes; their displacements are the output)
-  /// and at the sternal lift's measurement (RibcageFem::SternumLift). Throws Error(kUsage) for invalid
-  /// options or a tie to a node outside the mesh.
+  /// Builds the basis of the response at `points` (each a combination of nodes; their displacements are
+  /// the output) and of the sternal lift (RibcageFem::SternumLift) to the bar on the sternum's posterior
+  /// faces. Throws Error(kUsage) for invalid options or a tie to a node outside the mesh.
   BarResponseBasis(const RibcageFem& fem, const std::vector<NodeTies>& points,
                    const BarResponseBasisOptions& options = {});
 
@@ -89,7 +92,8 @@ class BarResponseBasis {
   /// The compression's error at the sampled bar levels (every 16th of the contact width; 2-norm over every
   /// output coordinate), mm per newton of bar force. Between them it is measured (tests, benchmark).
   double truncation_bound_mm_per_n() const { return truncation_bound_mm_per_n_; }
-  /// Wall time of the build, s: "solve" (the right-hand sides on the factorisation), "compress" (SVD).
+  /// Wall time of the build, s: "solve_bar_levels" (the bar at the sampled levels), "compress" (SVD),
+  /// "solve_adjoint" (the mixing and the lift, rank + 1 right-hand sides), "pack" (panels, prefix sums).
   const Timings& timings_s() const { return timings_s_; }
   /// Singular values of the responses to the bar at the sampled levels (descending), mm/N.
   const Eigen::VectorXd& singular_values() const { return singular_values_; }

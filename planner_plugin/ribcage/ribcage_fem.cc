@@ -110,7 +110,7 @@ Eigen::VectorXd RibcageFem::NodalForces(const BarLoad& load) const {
   return f;
 }
 
-double RibcageFem::SternumLift(const Points3& displacement) const {
+std::vector<std::pair<std::int32_t, double>> RibcageFem::SternumLiftTies() const {
   const double level = ribcage_.measured.slice_z_mm;
   const auto& midline = ribcage_.sternum_anterior_midline;
   const Points3& x = ribcage_.mesh.nodes;
@@ -118,11 +118,16 @@ double RibcageFem::SternumLift(const Points3& displacement) const {
     const double z0 = x(midline[i - 1], 2), z1 = x(midline[i], 2);
     if ((z0 - level) * (z1 - level) <= 0 && z0 != z1) {
       const double t = (z0 - level) / (z0 - z1);
-      const double u0 = -displacement(midline[i - 1], 1), u1 = -displacement(midline[i], 1);
-      return u0 + t * (u1 - u0);
+      return {{midline[i - 1], -(1.0 - t)}, {midline[i], -t}};  // anterior is -y
     }
   }
   ThrowFailure("sternal lift: the measurement slice at z = " + std::to_string(level) + " misses the sternum");
+}
+
+double RibcageFem::SternumLift(const Points3& displacement) const {
+  double lift = 0.0;
+  for (const auto& [node, w] : SternumLiftTies()) lift += w * displacement(node, 1);
+  return lift;
 }
 
 std::vector<BarResult> RibcageFem::Solve(const std::vector<BarLoad>& loads) const {

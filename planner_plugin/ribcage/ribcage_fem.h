@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "planner_plugin/fem/linear_elastic_solver.h"
@@ -87,6 +88,9 @@ class RibcageFem {
   /// Anterior displacement of the sternum's anterior midline at the measurement slice (the level of
   /// deepest depression), interpolated between midline nodes, mm.
   double SternumLift(const Points3& displacement) const;
+  /// SternumLift as a linear functional: (node, weight) pairs on the nodes' y displacement (lift = sum of
+  /// weight u_y(node)).
+  std::vector<std::pair<std::int32_t, double>> SternumLiftTies() const;
   /// ForceToLift for each position (fractions of the sternal length, or mm).
   std::vector<ForceToLift> ForceToLiftSternum(const std::vector<BarLoad>& positions) const;
 
