@@ -1,0 +1,141 @@
+// The bar as a shape: one-sided contact against the direct FE solve with the forces found, a bar behind
+// the chest wall everywhere pushes nothing, a flat bar lifted into patient 57's depressed chest touches
+// the sternum first, and a deeper lift brings the cartilages in.
+#include "planner_plugin/ribcage/bar_contact.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "planner_plugin/ribcage/build_generic_ribcage.h"
+#include "shape/core/error.h"
+#include "tests/support/require_shared_data.h"
+
+namespace pectus::planner {
+namespace {
+
+const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
+// A flat bar's half length: across the front of the chest, between the anterior axillary lines (patient
+// 57's ribcage is 250 mm wide).
+constexpr double kHalfLength = 70.0;
+
+// Patient 57 on the coarse test mesh of ribcage_fem_test.cc (10 mm cells).
+class BarContactTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    if (!testing_support::MissingSharedFile(testing_support::kPatientTable).empty()) return;  // see SetUp
+    GenericRibcageOptions o;
+    o.sternum_cells_along = 28;
+    o.rib_cell_length_mm = 10.0;
+    generic_ = new GenericRibcage(BuildGenericRibcage(o));
+    const auto rows = ReadPatientTable(kTable);
+    patient_ =
+        new PatientRibcage(MakePatientRibcage(*generic_, MeasurementsOf(FindPatient(rows, 57, kTable))));
+    fem_ = new RibcageFem(*patient_);
+  }
+  void SetUp() override { PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable); }
+  static void TearDownTestSuite() {
+    delete fem_;
+    delete patient_;
+    delete generic_;
+  }
+  // The candidates' largest y (the most posterior point of the chest wall's back at the level).
+  static double MostPosteriorY(const BarContactResult& r) {
+    double y = -1e9;
+    for (std::int32_t node : r.nodes) y = std::max(y, patient_->mesh.nodes(node, 1));
+    return y;
+  }
+  static GenericRibcage* generic_;
+  static PatientRibcage* patient_;
+  static RibcageFem* fem_;
+};
+GenericRibcage* BarContactTest::generic_ = nullptr;
+PatientRibcage* BarContactTest::patient_ = nullptr;
+RibcageFem* BarContactTest::fem_ = nullptr;
+
+// The gaps of the direct solve with the found forces: closed (within 0.01 mm) where a force acts, open
+// everywhere else; forces only push.
+void ExpectComplementarity(const PatientRibcage& patient, const BarContactResult& r, const BarShape& bar,
+                           const Eigen::Vector3d& d) {
+  ASSERT_TRUE(r.converged) << r.message;
+  for (std::size_t i = 0; i < r.nodes.size(); ++i) {
+    const auto k = static_cast<Eigen::Index>(i);
+    // Small displacements: along the push direction, at the node's undeformed lateral position.
+    const Eigen::Vector3d x0 = patient.mesh.nodes.row(r.nodes[i]).transpose();
+    const Eigen::Vector3d p = x0 + r.displacement.row(r.nodes[i]).transpose();
+    const double gap = p.dot(d) - (-bar.Y(x0.x()) + bar.lift_mm);
+    EXPECT_GE(r.force_n[k], 0.0);
+    EXPECT_GE(gap, -0.01) << "node " << r.nodes[i] << " goes through the bar";
+    if (r.force_n[k] > 0.0) {
+      EXPECT_NEAR(gap, 0.0, 0.01) << "node " << r.nodes[i] << " pushed but not touching";
+    }
+    EXPECT_NEAR(gap, r.gap_mm[k], 0.01)
+        << "the compliance and the direct solve disagree at node " << r.nodes[i];
+  }
+}
+
+TEST_F(BarContactTest, ABarBehindTheChestWallPushesNothing) {
+  const double level = fem_->BarLevelZ({0.8, false, 1.0});
+  const BarContactResult probe = SolveBarContact(*fem_, BarShape::Flat(level, 0.0, kHalfLength));
+  const BarShape behind = BarShape::Flat(level, MostPosteriorY(probe) + 5.0, kHalfLength);
+  const BarContactResult r = SolveBarContact(*fem_, behind);
+  EXPECT_EQ(r.contacts, 0) << r.message;
+  EXPECT_EQ(r.total_force_n, 0.0);
+  EXPECT_EQ(r.displacement.cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_GT(r.gap0_mm.minCoeff(), 4.9);
+}
+
+// At the level of deepest depression (the CT's slice, where the surgeon places the bar) a flat bar lifted
+// from behind touches the chest wall where it is deepest, by the sternum, and only pushes. (On the
+// generated ribcage the cartilages' backs beside their sternal joints lie behind the sternum's back,
+// so they touch first: docs/benchmarks.md, issue 14.)
+TEST_F(BarContactTest, AFlatBarTouchesTheDepressionFirstAndOnlyPushes) {
+  const double level = patient_->measured.slice_z_mm;
+  const BarContactResult probe = SolveBarContact(*fem_, BarShape::Flat(level, 0.0, kHalfLength));
+  BarShape bar = BarShape::Flat(level, MostPosteriorY(probe), kHalfLength);
+  bar.lift_mm = 3.0;
+  const BarContactResult r = SolveBarContact(*fem_, bar);
+  ASSERT_GT(r.contacts, 0) << r.message;
+  for (std::size_t i = 0; i < r.nodes.size(); ++i) {
+    if (r.force_n[static_cast<Eigen::Index>(i)] > 0.0) {
+      EXPECT_LT(std::abs(patient_->mesh.nodes(r.nodes[i], 0)), 30.0)
+          << "a contact away from the sternum: " << r.message;
+    }
+  }
+  ExpectComplementarity(*patient_, r, bar, fem_->options().push_direction);
+  // The contact lifts the chest wall by the bar's 3 mm where it touches, for a force of the order of the
+  // force-to-lift figures per millimetre (patient 57: about 6 N/mm on this mesh).
+  EXPECT_GT(r.total_force_n, 3.0);
+  EXPECT_LT(r.total_force_n, 300.0);
+}
+
+TEST_F(BarContactTest, ABentBarLiftedFarBringsTheCartilagesIn) {
+  const double level = fem_->BarLevelZ({0.8, false, 1.0});
+  const BarContactResult probe = SolveBarContact(*fem_, BarShape::Flat(level, 0.0, kHalfLength));
+  // A bar bent forward at its ends (curved like the chest wall) and lifted by 25 mm.
+  BarShape bar;
+  bar.level_z_mm = level;
+  const double back = MostPosteriorY(probe);
+  for (double x = -90.0; x <= 90.0; x += 15.0) {
+    bar.x_mm.push_back(x);
+    bar.y_mm.push_back(back - 0.002 * x * x);
+  }
+  bar.lift_mm = 25.0;
+  const BarContactResult r = SolveBarContact(*fem_, bar);
+  int cartilage = 0;
+  for (std::size_t i = 0; i < r.nodes.size(); ++i)
+    cartilage += r.force_n[static_cast<Eigen::Index>(i)] > 0.0 && r.regions[i] == kCartilageRegion;
+  EXPECT_GT(cartilage, 0) << r.message;
+  ExpectComplementarity(*patient_, r, bar, fem_->options().push_direction);
+}
+
+TEST_F(BarContactTest, ABadBarIsRefused) {
+  BarShape bar = BarShape::Flat(0.0, 0.0, kHalfLength);
+  bar.x_mm = {0.0, 0.0};
+  bar.y_mm = {1.0, 2.0};
+  EXPECT_THROW(SolveBarContact(*fem_, bar), Error);
+  EXPECT_THROW(SolveBarContact(*fem_, BarShape::Flat(1e4, 0.0, kHalfLength)), Error);  // far above the chest
+}
+
+}  // namespace
+}  // namespace pectus::planner
