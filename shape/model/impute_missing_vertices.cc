@@ -177,6 +177,13 @@ void AddLocalCorrection(const Eigen::MatrixXd& X, const Eigen::MatrixXd& G, Eige
   }
 }
 
+// G = X X' (N x N), from the lower triangle.
+Eigen::MatrixXd GramMatrix(const Eigen::MatrixXd& X) {
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(X.rows(), X.rows());
+  G.selfadjointView<Eigen::Lower>().rankUpdate(X);
+  return G.selfadjointView<Eigen::Lower>();
+}
+
 }  // namespace
 
 ImputationResult ImputeMissingVertices(const Eigen::MatrixXd& shapes,
@@ -216,10 +223,7 @@ ImputationResult ImputeMissingVertices(const Eigen::MatrixXd& shapes,
   Eigen::MatrixXd X = shapes;
   for (int it = 0; it < options.max_iterations && !to_fill.empty(); ++it) {
     // One sweep: every subject filled from the others' fills of the sweep before (Jacobi).
-    Eigen::MatrixXd G(N, N);
-    G.setZero();
-    G.selfadjointView<Eigen::Lower>().rankUpdate(X);
-    G = G.selfadjointView<Eigen::Lower>();
+    const Eigen::MatrixXd G = GramMatrix(X);
     std::vector<Eigen::VectorXd> fills(to_fill.size());
 #pragma omp parallel for schedule(dynamic)
     for (std::int64_t k = 0; k < static_cast<std::int64_t>(to_fill.size()); ++k) {
@@ -246,10 +250,7 @@ ImputationResult ImputeMissingVertices(const Eigen::MatrixXd& shapes,
   if (to_fill.empty()) result.converged = true;
   if (options.local_scale_mm > 0.0 && !to_fill.empty()) {
     // The local correction of every fill, once the fills have converged.
-    Eigen::MatrixXd G(N, N);
-    G.setZero();
-    G.selfadjointView<Eigen::Lower>().rankUpdate(X);
-    G = G.selfadjointView<Eigen::Lower>();
+    const Eigen::MatrixXd G = GramMatrix(X);
     std::vector<Eigen::VectorXd> fills(to_fill.size());
 #pragma omp parallel for schedule(dynamic)
     for (std::int64_t k = 0; k < static_cast<std::int64_t>(to_fill.size()); ++k) {

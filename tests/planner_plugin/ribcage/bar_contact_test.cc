@@ -9,49 +9,24 @@
 
 #include "planner_plugin/ribcage/build_generic_ribcage.h"
 #include "shape/core/error.h"
-#include "tests/support/require_shared_data.h"
+#include "tests/planner_plugin/ribcage/coarse_patient.h"
 
 namespace pectus::planner {
 namespace {
 
-const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
 // A flat bar's half length: across the front of the chest, between the anterior axillary lines (patient
 // 57's ribcage is 250 mm wide).
 constexpr double kHalfLength = 70.0;
 
-// Patient 57 on the coarse test mesh of ribcage_fem_test.cc (10 mm cells).
-class BarContactTest : public ::testing::Test {
+class BarContactTest : public testing::CoarsePatient57Test {
  protected:
-  static void SetUpTestSuite() {
-    if (!testing_support::MissingSharedFile(testing_support::kPatientTable).empty()) return;  // see SetUp
-    GenericRibcageOptions o;
-    o.sternum_cells_along = 28;
-    o.rib_cell_length_mm = 10.0;
-    generic_ = new GenericRibcage(BuildGenericRibcage(o));
-    const auto rows = ReadPatientTable(kTable);
-    patient_ =
-        new PatientRibcage(MakePatientRibcage(*generic_, MeasurementsOf(FindPatient(rows, 57, kTable))));
-    fem_ = new RibcageFem(*patient_);
-  }
-  void SetUp() override { PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable); }
-  static void TearDownTestSuite() {
-    delete fem_;
-    delete patient_;
-    delete generic_;
-  }
   // The candidates' largest y (the most posterior point of the chest wall's back at the level).
   static double MostPosteriorY(const BarContactResult& r) {
     double y = -1e9;
     for (std::int32_t node : r.nodes) y = std::max(y, patient_->mesh.nodes(node, 1));
     return y;
   }
-  static GenericRibcage* generic_;
-  static PatientRibcage* patient_;
-  static RibcageFem* fem_;
 };
-GenericRibcage* BarContactTest::generic_ = nullptr;
-PatientRibcage* BarContactTest::patient_ = nullptr;
-RibcageFem* BarContactTest::fem_ = nullptr;
 
 // The gaps of the direct solve with the found forces: closed (within 0.01 mm) where a force acts, open
 // everywhere else; forces only push.

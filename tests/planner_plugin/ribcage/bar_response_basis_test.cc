@@ -9,28 +9,20 @@
 
 #include "planner_plugin/ribcage/build_skin_surface.h"
 #include "shape/core/error.h"
-#include "tests/support/require_shared_data.h"
+#include "tests/planner_plugin/ribcage/coarse_patient.h"
 
 namespace pectus::planner {
 namespace {
 
-const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
-
-// Patient 57 on the coarse test mesh of ribcage_fem_test.cc (10 mm cells).
-class BarResponseBasisTest : public ::testing::Test {
+// Patient 57 on the coarse test mesh (10 mm cells).
+class BarResponseBasisTest : public testing::CoarsePatient57Test {
  protected:
-  static void SetUpTestSuite() {
-    if (!testing_support::MissingSharedFile(testing_support::kPatientTable).empty()) return;  // see SetUp
-    GenericRibcageOptions o;
-    o.sternum_cells_along = 28;
-    o.rib_cell_length_mm = 10.0;
-    generic_ = new GenericRibcage(BuildGenericRibcage(o));
-    const auto rows = ReadPatientTable(kTable);
-    patient_ =
-        new PatientRibcage(MakePatientRibcage(*generic_, MeasurementsOf(FindPatient(rows, 57, kTable))));
-    fem_ = new RibcageFem(*patient_);
+  static void TearDownTestSuite() {
+    delete basis_;
+    delete skin_;
+    basis_ = nullptr, skin_ = nullptr;
+    CoarsePatient57Test::TearDownTestSuite();
   }
-  void SetUp() override { PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable); }
   // The basis, built on first use (each test runs in its own process): output points every node, then
   // every skin vertex through its ties.
   static const BarResponseBasis& Basis() {
@@ -43,24 +35,9 @@ class BarResponseBasisTest : public ::testing::Test {
     }
     return *basis_;
   }
-  static void TearDownTestSuite() {
-    delete basis_;
-    delete skin_;
-    delete fem_;
-    delete patient_;
-    delete generic_;
-  }
-  static GenericRibcage* generic_;
-  static PatientRibcage* patient_;
-  static RibcageFem* fem_;
-  static SkinSurface* skin_;
-  static BarResponseBasis* basis_;
+  static inline SkinSurface* skin_ = nullptr;
+  static inline BarResponseBasis* basis_ = nullptr;
 };
-SkinSurface* BarResponseBasisTest::skin_ = nullptr;
-GenericRibcage* BarResponseBasisTest::generic_ = nullptr;
-PatientRibcage* BarResponseBasisTest::patient_ = nullptr;
-RibcageFem* BarResponseBasisTest::fem_ = nullptr;
-BarResponseBasis* BarResponseBasisTest::basis_ = nullptr;
 
 TEST_F(BarResponseBasisTest, EqualsTheDirectSolveForTheDissertationCasesAndRandomBars) {
   std::vector<BarLoad> loads = DissertationLoadCases();

@@ -4,41 +4,14 @@
 
 #include "planner_plugin/fem/surface_load.h"
 #include "shape/core/error.h"
+#include "tests/planner_plugin/ribcage/coarse_patient.h"
 #include "tests/planner_plugin/ribcage/direct_lift.h"
-#include "tests/support/require_shared_data.h"
 
 namespace pectus::planner {
 namespace {
 
-const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
-
 // Patient 57 on a coarser mesh than the default (10 mm cells), to keep the test quick.
-class RibcageFemTest : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    if (!testing_support::MissingSharedFile(testing_support::kPatientTable).empty()) return;  // see SetUp
-    GenericRibcageOptions o;
-    o.sternum_cells_along = 28;
-    o.rib_cell_length_mm = 10.0;
-    generic_ = new GenericRibcage(BuildGenericRibcage(o));
-    const auto rows = ReadPatientTable(kTable);
-    patient_ =
-        new PatientRibcage(MakePatientRibcage(*generic_, MeasurementsOf(FindPatient(rows, 57, kTable))));
-    fem_ = new RibcageFem(*patient_);
-  }
-  void SetUp() override { PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable); }
-  static void TearDownTestSuite() {
-    delete fem_;
-    delete patient_;
-    delete generic_;
-  }
-  static GenericRibcage* generic_;
-  static PatientRibcage* patient_;
-  static RibcageFem* fem_;
-};
-GenericRibcage* RibcageFemTest::generic_ = nullptr;
-PatientRibcage* RibcageFemTest::patient_ = nullptr;
-RibcageFem* RibcageFemTest::fem_ = nullptr;
+class RibcageFemTest : public testing::CoarsePatient57Test {};
 
 TEST_F(RibcageFemTest, TwentyFourLoadCasesOnOneFactorisation) {
   const std::vector<BarLoad> loads = DissertationLoadCases();
