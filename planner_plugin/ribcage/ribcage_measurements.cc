@@ -18,11 +18,26 @@ struct SlicePoint {
   int part;
 };
 
+// The faces binned by height (each in every bin of kBinMm its z-range overlaps, in index order), so that
+// a slice visits only the faces near its level, not the whole surface, in the surface's own order (sums
+// over them come out the same as over every face).
+struct FacesByHeight {
+  static constexpr double kBinMm = 2.0;
+  double z0 = 0.0;                              // bottom of bin 0
+  std::vector<std::vector<Eigen::Index>> bins;  // bins[k]: faces reaching into [z0 + k h, z0 + (k+1) h]
+  const std::vector<Eigen::Index>& Straddling(double level) const {
+    static const std::vector<Eigen::Index> kNone;
+    const double k = std::floor((level - z0) / kBinMm);
+    if (!(k >= 0 && k < static_cast<double>(bins.size()))) return kNone;
+    return bins[static_cast<std::size_t>(k)];
+  }
+};
+
 // Where the plane z = level cuts the surface: one segment (two points) per straddling triangle, oriented
 // counter-clockwise (seen from above) around the section of the solid, so Green's theorem applies.
-std::vector<SlicePoint> Slice(const RibcageSurface& s, const std::vector<Eigen::Index>& faces, double level) {
+std::vector<SlicePoint> Slice(const RibcageSurface& s, const FacesByHeight& by_height, double level) {
   std::vector<SlicePoint> out;
-  for (Eigen::Index f : faces) {
+  for (Eigen::Index f : by_height.Straddling(level)) {
     Eigen::Vector3d p[3];
     for (int i = 0; i < 3; ++i) p[i] = s.nodes.row(s.faces(f, i)).transpose();
     Eigen::Vector3d cut[2];
@@ -103,7 +118,7 @@ double SpineY(const Points3& spine, double z) {
 }
 
 struct Setup {
-  std::vector<Eigen::Index> faces;  // faces that reach into the search range
+  FacesByHeight faces;  // faces that reach into the search range
   double top = -std::numeric_limits<double>::infinity(), bottom = std::numeric_limits<double>::infinity();
 };
 
@@ -122,13 +137,30 @@ Setup Prepare(const RibcageSurface& s, const RibcageMeasurementOptions& o) {
   if (!(setup.top > setup.bottom)) ThrowBadInput("ribcage surface", "no sternum faces (part 0) to measure");
   const double length = setup.top - setup.bottom;
   const double hi = setup.top - o.search_from * length + 1, lo = setup.top - o.search_to * length - 1;
+  struct Reach {
+    Eigen::Index face;
+    double zmin, zmax;
+  };
+  std::vector<Reach> reach;
   for (Eigen::Index f = 0; f < s.faces.rows(); ++f) {
     double zmin = std::numeric_limits<double>::infinity(), zmax = -zmin;
     for (int i = 0; i < 3; ++i) {
       zmin = std::min(zmin, s.nodes(s.faces(f, i), 2));
       zmax = std::max(zmax, s.nodes(s.faces(f, i), 2));
     }
-    if (zmax >= lo && zmin <= hi) setup.faces.push_back(f);
+    if (zmax >= lo && zmin <= hi) reach.push_back({f, zmin, zmax});
+  }
+  // Bins over the faces' whole height range (a face straddles a level only within its own range).
+  double z_lo = std::numeric_limits<double>::infinity(), z_hi = -z_lo;
+  for (const Reach& r : reach) z_lo = std::min(z_lo, r.zmin), z_hi = std::max(z_hi, r.zmax);
+  FacesByHeight& by_height = setup.faces;
+  by_height.z0 = reach.empty() ? 0.0 : z_lo;
+  by_height.bins.resize(reach.empty() ? 0 : static_cast<std::size_t>((z_hi - z_lo) / FacesByHeight::kBinMm) + 1);
+  for (const Reach& r : reach) {
+    const auto first = static_cast<std::size_t>((r.zmin - z_lo) / FacesByHeight::kBinMm);
+    const auto last = std::min(by_height.bins.size() - 1,
+                               static_cast<std::size_t>((r.zmax - z_lo) / FacesByHeight::kBinMm));
+    for (std::size_t k = first; k <= last; ++k) by_height.bins[k].push_back(r.face);
   }
   return setup;
 }
