@@ -13,7 +13,13 @@
  *    z superior) with the origin at the patient's sternal notch on the front of the manubrium.
  *  - Arrays are row-major. Arrays the plugin hands out (PectusPlannerMesh) belong to the planner and stay
  *    valid until it is destroyed; arrays the host passes in are the host's.
- *  - One planner may be used by one thread at a time; different planners are independent.
+ *  - One planner may be used by one thread at a time; different planners are independent. A deformer
+ *    (version 2) belongs to one thread; several deformers may read one planner's basis at once, while
+ *    nothing else calls that planner.
+ *
+ * Version 2 added the exact response basis (build_basis) and the real-time deform call: a deformer made
+ * once per thread (create_deformer) evaluates the chest for any bar position and force without
+ * allocation, lock, exception or I/O, at haptic rates (docs/planner.md, "The exact response basis").
  */
 #ifndef PECTUS_PLANNER_API_H_
 #define PECTUS_PLANNER_API_H_
@@ -26,7 +32,7 @@ extern "C" {
 #endif
 
 /** The interface version this header describes. Any change to a struct or function below bumps it. */
-#define PECTUS_PLANNER_INTERFACE_VERSION 1u
+#define PECTUS_PLANNER_INTERFACE_VERSION 2u
 /** The name of the one exported symbol (for dlsym). */
 #define PECTUS_PLANNER_ENTRY_POINT "pectus_planner_interface"
 
@@ -148,7 +154,24 @@ typedef struct PectusPlannerDatasetSummary {
   double seconds;
 } PectusPlannerDatasetSummary;
 
-typedef struct PectusPlanner PectusPlanner; /**< opaque */
+/** How build_basis() compresses the response (fill with zeros for the defaults). */
+typedef struct PectusPlannerBasisOptions {
+  double tolerance_mm; /**< largest difference from the uncompressed response up to max_force_n; 0: 0.001 */
+  double max_force_n;  /**< the largest bar force the tolerance is stated for; 0: 2000 */
+} PectusPlannerBasisOptions;
+
+/** What build_basis() built. */
+typedef struct PectusPlannerBasisSummary {
+  int64_t rank;                     /**< modes kept */
+  int64_t contact_nodes;            /**< mesh nodes of the sternum's back the bar can load */
+  int64_t points;                   /**< outputs: bone vertices + skin vertices + skin landmarks */
+  int64_t bytes;                    /**< held by the basis */
+  double truncation_bound_mm;       /**< the compression's bound at max_force_n, mm */
+  double seconds;                   /**< wall time of the build */
+} PectusPlannerBasisSummary;
+
+typedef struct PectusPlanner PectusPlanner;                 /**< opaque */
+typedef struct PectusPlannerDeformer PectusPlannerDeformer; /**< opaque: one per thread (version 2) */
 
 /** The plugin's function table. Every function returning int32_t returns a PectusPlannerCode and fills
  *  `status` (which may be NULL if the caller does not want the message). */
@@ -208,6 +231,32 @@ typedef struct PectusPlannerInterface {
                            const PectusPlannerOptions* options, PectusPlannerProgressFn progress,
                            void* progress_user, PectusPlannerDatasetSummary* out,
                            PectusPlannerStatus* status);
+
+  /* ---- version 2: the exact response basis and the real-time deform call ---- */
+
+  /** Builds (or rebuilds) the planner's exact response basis: the bar solved at finely sampled levels on
+   *  the one factorisation, compressed to `options` (NULL: defaults). Seconds per patient. Deformers made
+   *  before a rebuild must be destroyed first. `out` may be NULL. */
+  int32_t (*build_basis)(PectusPlanner* planner, const PectusPlannerBasisOptions* options,
+                         PectusPlannerBasisSummary* out, PectusPlannerStatus* status);
+  /** A deformer for one thread: its buffers sized once here. Needs build_basis() first. It refers to
+   *  the planner, which must outlive it. */
+  int32_t (*create_deformer)(const PectusPlanner* planner, PectusPlannerDeformer** out,
+                             PectusPlannerStatus* status);
+  /** Frees a deformer (NULL is allowed). */
+  void (*destroy_deformer)(PectusPlannerDeformer* deformer);
+  /** The chest under one bar, from the basis: deformed bone vertices (bone vertices x 3), skin vertices
+   *  (skin vertices x 3) and skin landmarks (landmark count x 3), each NULL if not wanted, and the sternal
+   *  lift (mm; NULL if not wanted). Real time: no allocation, no lock, no exception, no I/O (a
+   *  fraction of a millisecond for the whole surface). Returns USAGE (outputs untouched) for a bar off
+   *  the sternum or a non-finite value; `status` may be NULL. Matches solve() to 0.01 mm. */
+  int32_t (*deform)(PectusPlannerDeformer* deformer, const PectusPlannerBar* bar, double* bone_positions,
+                    double* skin_positions, double* skin_landmarks, double* sternum_lift_mm,
+                    PectusPlannerStatus* status);
+  /** The force that lifts the sternum by `lift_mm` with the bar at `bar->position` (bar->force_n is
+   *  ignored), from the basis: real time, as deform(). */
+  int32_t (*lift_force)(PectusPlannerDeformer* deformer, const PectusPlannerBar* bar, double lift_mm,
+                        double* force_n, PectusPlannerStatus* status);
 } PectusPlannerInterface;
 
 /** The one exported symbol: the plugin's function table (static storage; never NULL). */

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 
 #include "planner_plugin/fem/tet_mesh.h"
 #include "shape/core/error.h"
@@ -215,6 +216,85 @@ void PlannerSession::Solve(const std::vector<BarLoad>& loads, double* bone_posit
       results[k].contact_faces = r.contact_faces;
     }
   }
+}
+
+std::vector<NodeTies> PlannerSession::OutputPoints() const {
+  std::vector<NodeTies> points;
+  points.reserve(bone_.mesh_nodes.size() + skin_.ties.size() + skin_.landmark_points.size());
+  for (std::int32_t node : bone_.mesh_nodes) points.push_back({{node, 1.0}});
+  points.insert(points.end(), skin_.ties.begin(), skin_.ties.end());
+  // A skin landmark is a combination of skin vertices, each a combination of nodes.
+  for (const SkinPoint& landmark : skin_.landmark_points) {
+    NodeTies ties;
+    for (const auto& [vertex, w] : landmark.weights) {
+      for (const auto& [node, tie] : skin_.ties[static_cast<std::size_t>(vertex)]) ties.emplace_back(node, w * tie);
+    }
+    points.push_back(std::move(ties));
+  }
+  return points;
+}
+
+const BarResponseBasis& PlannerSession::BuildBasis(const BarResponseBasisOptions& options) {
+  const std::vector<NodeTies> points = OutputPoints();
+  auto basis = std::make_unique<BarResponseBasis>(*fem_, points, options);
+  // The undeformed outputs (the skin's ties carry displacements only: the skin lies over the bone).
+  Eigen::VectorXd rest(3 * static_cast<Eigen::Index>(points.size()));
+  Eigen::Index at = 0;
+  auto append = [&](const Eigen::Vector3d& p) {
+    rest.segment<3>(at) = p;
+    at += 3;
+  };
+  for (Eigen::Index i = 0; i < bone_.vertices.rows(); ++i) append(bone_.vertices.row(i).transpose());
+  const Points3& skin = skin_.mesh.vertices.positions;
+  for (Eigen::Index i = 0; i < skin.rows(); ++i) append(skin.row(i).transpose());
+  for (const Landmark& landmark : skin_landmarks_.items) append(landmark.position);
+  basis_ = std::move(basis);
+  rest_positions_ = std::move(rest);
+  return *basis_;
+}
+
+SessionDeformer::SessionDeformer(const PlannerSession& session) : session_(&session), basis_(session.basis()) {
+  if (basis_ == nullptr) ThrowUsage("deformer: the planner has no response basis yet; build it first (build_basis)");
+  workspace_ = basis_->MakeWorkspace();
+  displacement_.resize(3 * basis_->num_points());
+}
+
+bool SessionDeformer::Deform(const BarLoad& bar, double* bone_positions, double* skin_positions,
+                             double* skin_landmarks, double* sternum_lift_mm, const char** why) noexcept {
+  if (!(std::isfinite(bar.position) && std::isfinite(bar.force_n) && bar.force_n > 0)) {
+    *why = "the bar's position and force must be finite and the force positive";
+    return false;
+  }
+  const double level = basis_->LevelZ(bar);
+  if (!basis_->Evaluate(level, bar.force_n, &workspace_, displacement_.data())) {
+    *why = "the bar is off the sternum (its contact profile touches no face of the sternum's back)";
+    return false;
+  }
+  const Eigen::VectorXd& rest = session_->rest_positions();
+  const Eigen::Index nb = 3 * session_->num_bone_vertices(), ns = 3 * session_->num_skin_vertices(),
+                     nl = 3 * session_->num_skin_landmarks();
+  auto write = [&](double* out, Eigen::Index first, Eigen::Index count) {
+    if (out == nullptr) return;
+    for (Eigen::Index i = 0; i < count; ++i) out[i] = rest[first + i] + displacement_[first + i];
+  };
+  write(bone_positions, 0, nb);
+  write(skin_positions, nb, ns);
+  write(skin_landmarks, nb + ns, nl);
+  if (sternum_lift_mm != nullptr) *sternum_lift_mm = bar.force_n * basis_->LiftPerNewton(level);
+  return true;
+}
+
+double SessionDeformer::LiftForce(const BarLoad& bar, double lift_mm, const char** why) const noexcept {
+  if (!(std::isfinite(bar.position) && std::isfinite(lift_mm))) {
+    *why = "the bar's position and the lift must be finite";
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  const double per_newton = basis_->LiftPerNewton(basis_->LevelZ(bar));
+  if (!(per_newton > 0)) {
+    *why = "the bar is off the sternum (no lift there)";
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  return lift_mm / per_newton;
 }
 
 }  // namespace pectus::planner

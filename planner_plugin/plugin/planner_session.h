@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "planner_plugin/api/planner_api.h"
+#include "planner_plugin/ribcage/bar_response_basis.h"
 #include "planner_plugin/ribcage/build_generic_ribcage.h"
 #include "planner_plugin/ribcage/build_skin_surface.h"
 #include "planner_plugin/ribcage/patient_ribcage.h"
@@ -69,6 +70,20 @@ class PlannerSession {
   void Solve(const std::vector<BarLoad>& loads, double* bone_positions, double* skin_positions,
              double* skin_landmarks, PectusPlannerCaseResult* results) const;
 
+  /// The points the basis answers for, in the order of the deform call's outputs: the bone surface's
+  /// vertices, the skin's vertices, the skin landmarks (each a fixed combination of mesh nodes).
+  std::vector<NodeTies> OutputPoints() const;
+  /// Builds the exact response basis of OutputPoints() on the one factorisation, replacing any before
+  /// (SessionDeformers of the old one must be gone). Throws pectus::Error for invalid options.
+  const BarResponseBasis& BuildBasis(const BarResponseBasisOptions& options);
+  /// The basis, or nullptr before BuildBasis().
+  const BarResponseBasis* basis() const { return basis_.get(); }
+  /// Undeformed positions of OutputPoints(), 3 #points (row-major), mm.
+  const Eigen::VectorXd& rest_positions() const { return rest_positions_; }
+  Eigen::Index num_bone_vertices() const { return bone_.vertices.rows(); }
+  Eigen::Index num_skin_vertices() const { return skin_.mesh.num_vertices(); }
+  Eigen::Index num_skin_landmarks() const { return static_cast<Eigen::Index>(skin_landmarks_.size()); }
+
   const PatientRibcage& ribcage() const { return ribcage_; }
   const RibcageFem& fem() const { return *fem_; }
 
@@ -81,6 +96,32 @@ class PlannerSession {
   Points3 reference_skin_;  // the skin without the deformity
   BoneSurface bone_;
   Timings timings_s_;  // "assembly_and_factorisation", s
+  std::unique_ptr<BarResponseBasis> basis_;
+  Eigen::VectorXd rest_positions_;  // of OutputPoints(), with basis_
+};
+
+/// One thread's real-time view of a session's basis (the object behind PectusPlannerDeformer): its
+/// buffers are sized on construction, so Deform() and LiftForce() never allocate, lock or throw.
+class SessionDeformer {
+ public:
+  /// Throws Error(kUsage) if the session has no basis yet.
+  explicit SessionDeformer(const PlannerSession& session);
+
+  /// The deformed bone vertices, skin vertices and skin landmarks (row-major #points by 3, mm; each
+  /// nullptr if not wanted) and the sternal lift (mm; nullptr if not wanted) under `bar`. False, with the
+  /// outputs untouched and `why` set to a static reason, for a non-finite or non-positive value or a bar
+  /// off the sternum.
+  bool Deform(const BarLoad& bar, double* bone_positions, double* skin_positions, double* skin_landmarks,
+              double* sternum_lift_mm, const char** why) noexcept;
+  /// The force that lifts the sternum by `lift_mm` with the bar at `bar`'s position (its force ignored),
+  /// N; NaN, with `why`, off the sternum or for a non-finite value.
+  double LiftForce(const BarLoad& bar, double lift_mm, const char** why) const noexcept;
+
+ private:
+  const PlannerSession* session_;
+  const BarResponseBasis* basis_;
+  BarResponseWorkspace workspace_;
+  Eigen::VectorXd displacement_;  // 3 #points
 };
 
 }  // namespace pectus::planner

@@ -1,6 +1,7 @@
 // pectus planner plugin: the C entry points of planner_api.h. Every function runs its C++ body inside
 // Guard(), which turns any exception into a status code and a message: nothing is thrown across the
 // boundary and nothing aborts the host.
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <new>
@@ -18,6 +19,10 @@
 
 struct PectusPlanner {
   pectus::planner::PlannerSession session;
+};
+
+struct PectusPlannerDeformer {
+  pectus::planner::SessionDeformer deformer;
 };
 
 namespace {
@@ -170,6 +175,84 @@ std::int32_t WriteDataset(const char* table_path, const char* output_path,
   });
 }
 
+std::int32_t BuildBasis(PectusPlanner* planner, const PectusPlannerBasisOptions* options,
+                        PectusPlannerBasisSummary* out, PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(planner, "planner");
+    pectus::planner::BarResponseBasisOptions o;
+    if (options != nullptr) {
+      if (options->tolerance_mm != 0) o.tolerance_mm = options->tolerance_mm;
+      if (options->max_force_n != 0) o.max_force_n = options->max_force_n;
+    }
+    const auto& basis = planner->session.BuildBasis(o);
+    if (out != nullptr) {
+      *out = {basis.rank(),
+              basis.num_contact_nodes(),
+              basis.num_points(),
+              static_cast<std::int64_t>(basis.bytes()),
+              basis.truncation_bound_mm_per_n() * o.max_force_n,
+              basis.timings_s().Total()};
+    }
+  });
+}
+
+std::int32_t CreateDeformer(const PectusPlanner* planner, PectusPlannerDeformer** out,
+                            PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(planner, "planner");
+    Require(out, "out");
+    *out = nullptr;
+    *out = new PectusPlannerDeformer{pectus::planner::SessionDeformer(planner->session)};
+  });
+}
+
+void DestroyDeformer(PectusPlannerDeformer* deformer) { delete deformer; }
+
+// The real-time calls: no Guard (its messages allocate); a fixed reason copied into the status.
+std::int32_t RealTimeFailure(PectusPlannerStatus* status, const char* why) noexcept {
+  if (status != nullptr) {
+    status->code = PECTUS_PLANNER_USAGE;
+    std::snprintf(status->message, sizeof(status->message), "planner: %s", why);
+  }
+  return PECTUS_PLANNER_USAGE;
+}
+
+std::int32_t RealTimeOk(PectusPlannerStatus* status) noexcept {
+  if (status != nullptr) {
+    status->code = PECTUS_PLANNER_OK;
+    status->message[0] = '\0';
+  }
+  return PECTUS_PLANNER_OK;
+}
+
+pectus::planner::BarLoad LoadOf(const PectusPlannerBar& bar) noexcept {
+  return {bar.position, bar.position_in_mm != 0, bar.force_n};
+}
+
+std::int32_t Deform(PectusPlannerDeformer* deformer, const PectusPlannerBar* bar, double* bone_positions,
+                    double* skin_positions, double* skin_landmarks, double* sternum_lift_mm,
+                    PectusPlannerStatus* status) noexcept {
+  if (deformer == nullptr || bar == nullptr) return RealTimeFailure(status, "deformer and bar must not be NULL");
+  const char* why = "";
+  if (!deformer->deformer.Deform(LoadOf(*bar), bone_positions, skin_positions, skin_landmarks, sternum_lift_mm,
+                                 &why)) {
+    return RealTimeFailure(status, why);
+  }
+  return RealTimeOk(status);
+}
+
+std::int32_t LiftForce(PectusPlannerDeformer* deformer, const PectusPlannerBar* bar, double lift_mm,
+                       double* force_n, PectusPlannerStatus* status) noexcept {
+  if (deformer == nullptr || bar == nullptr || force_n == nullptr) {
+    return RealTimeFailure(status, "deformer, bar and force_n must not be NULL");
+  }
+  const char* why = "";
+  const double force = deformer->deformer.LiftForce(LoadOf(*bar), lift_mm, &why);
+  if (!std::isfinite(force)) return RealTimeFailure(status, why);
+  *force_n = force;
+  return RealTimeOk(status);
+}
+
 const PectusPlannerInterface kInterface = {
     PECTUS_PLANNER_INTERFACE_VERSION,
     sizeof(PectusPlannerInterface),
@@ -185,6 +268,11 @@ const PectusPlannerInterface kInterface = {
     Solve,
     ForceToLift,
     WriteDataset,
+    BuildBasis,
+    CreateDeformer,
+    DestroyDeformer,
+    Deform,
+    LiftForce,
 };
 
 }  // namespace

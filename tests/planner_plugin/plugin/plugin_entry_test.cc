@@ -4,7 +4,9 @@
 #include <dlfcn.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <string>
@@ -13,6 +15,9 @@
 #include "planner_plugin/plugin/planner_session.h"
 #include "tests/planner_plugin/ribcage/direct_lift.h"
 #include "tests/support/require_shared_data.h"
+#ifdef PECTUS_COUNT_ALLOCATIONS
+#include "tests/support/allocation_counter.h"
+#endif
 
 extern "C" void pectus_planner_api_layout_from_c(size_t* out, int capacity);
 
@@ -51,9 +56,9 @@ TEST_F(PluginEntry, ExportsOneVersionedTableThatCAndCppLayOutAlike) {
   EXPECT_EQ(api_->version, PECTUS_PLANNER_INTERFACE_VERSION);
   EXPECT_EQ(api_->struct_size, sizeof(PectusPlannerInterface));
   EXPECT_NE(std::string(api_->description).find("pectus planner"), std::string::npos);
-  size_t c[15] = {};
-  pectus_planner_api_layout_from_c(c, 15);
-  const size_t cpp[15] = {sizeof(PectusPlannerStatus),
+  size_t c[18] = {};
+  pectus_planner_api_layout_from_c(c, 18);
+  const size_t cpp[18] = {sizeof(PectusPlannerStatus),
                           sizeof(PectusPlannerPatient),
                           sizeof(PectusPlannerOptions),
                           sizeof(PectusPlannerMeasurements),
@@ -63,12 +68,15 @@ TEST_F(PluginEntry, ExportsOneVersionedTableThatCAndCppLayOutAlike) {
                           sizeof(PectusPlannerCaseResult),
                           sizeof(PectusPlannerForceToLift),
                           sizeof(PectusPlannerDatasetSummary),
+                          sizeof(PectusPlannerBasisOptions),
+                          sizeof(PectusPlannerBasisSummary),
+                          offsetof(PectusPlannerInterface, deform),
                           sizeof(PectusPlannerInterface),
                           offsetof(PectusPlannerInterface, write_dataset),
                           offsetof(PectusPlannerPatient, ct_haller_index),
                           offsetof(PectusPlannerOptions, skin_columns),
                           PECTUS_PLANNER_INTERFACE_VERSION};
-  for (int i = 0; i < 15; ++i) EXPECT_EQ(c[i], cpp[i]) << "layout item " << i;
+  for (int i = 0; i < 18; ++i) EXPECT_EQ(c[i], cpp[i]) << "layout item " << i;
   // Nothing but the entry point is visible: not even the engine's functions (which this test binary
   // links itself, so the name below is the real one).
   EXPECT_EQ(dlsym(handle_, "_ZN6pectus7planner19BuildGenericRibcageERKNS0_21GenericRibcageOptionsE"),
@@ -189,6 +197,93 @@ TEST_F(PluginEntry, APlannerThroughTheBoundaryMeasuresLikeTheCtAndSolves) {
   EXPECT_NEAR(lift.lift_per_newton_mm, results[0].sternum_lift_mm / 100.0, 1e-12);
   api_->destroy(planner);
   api_->destroy(nullptr);
+}
+
+// Version 2: the basis built through the boundary; the deform call gives what solve() gives (0.01 mm,
+// the bound; the basis holds 0.001 mm) for bars between the dissertation's, with no allocation;
+// the force for a lift agrees with force_to_lift(); failures come back as statuses, outputs untouched.
+TEST_F(PluginEntry, TheDeformCallGivesTheSolvesAnswerInRealTime) {
+  PECTUS_REQUIRE_SHARED_FILE(pectus::testing_support::kPatientTable);
+  PectusPlannerStatus status{};
+  PectusPlannerPatient patient{};
+  ASSERT_EQ(api_->read_patient(kTable.c_str(), "57", &patient, &status), PECTUS_PLANNER_OK) << status.message;
+  const PectusPlannerOptions options = Coarse();
+  PectusPlanner* planner = nullptr;
+  ASSERT_EQ(api_->create(&patient, &options, &planner, &status), PECTUS_PLANNER_OK) << status.message;
+  // No basis yet: a deformer is refused, saying what to do.
+  PectusPlannerDeformer* deformer = nullptr;
+  EXPECT_EQ(api_->create_deformer(planner, &deformer, &status), PECTUS_PLANNER_USAGE);
+  EXPECT_NE(std::string(status.message).find("build_basis"), std::string::npos) << status.message;
+  EXPECT_EQ(deformer, nullptr);
+  PectusPlannerBasisSummary summary{};
+  ASSERT_EQ(api_->build_basis(planner, nullptr, &summary, &status), PECTUS_PLANNER_OK) << status.message;
+  PectusPlannerMesh bone{}, skin{};
+  ASSERT_EQ(api_->bone_surface(planner, &bone, &status), PECTUS_PLANNER_OK);
+  ASSERT_EQ(api_->skin_surface(planner, 0, &skin, &status), PECTUS_PLANNER_OK);
+  EXPECT_EQ(summary.points, bone.num_vertices + skin.num_vertices + 5);
+  EXPECT_GT(summary.rank, 0);
+  EXPECT_LE(summary.truncation_bound_mm, 1e-3);
+#ifdef PECTUS_COUNT_ALLOCATIONS
+  const std::size_t before_create = pectus::testing_support::AllocationCount();
+#endif
+  ASSERT_EQ(api_->create_deformer(planner, &deformer, &status), PECTUS_PLANNER_OK) << status.message;
+#ifdef PECTUS_COUNT_ALLOCATIONS
+  // The counter sees the plugin's allocations: making the deformer sizes its buffers.
+  EXPECT_GT(pectus::testing_support::AllocationCount(), before_create);
+#endif
+
+  const PectusPlannerBar bars[3] = {{0.62, 0, 80.0}, {0.77, 0, 450.0}, {131.0, 1, 1700.0}};
+  const auto nb = static_cast<std::size_t>(bone.num_vertices), ns = static_cast<std::size_t>(skin.num_vertices);
+  std::vector<double> bone_direct(3 * 3 * nb), skin_direct(3 * 3 * ns), marks_direct(3 * 5 * 3);
+  PectusPlannerCaseResult results[3];
+  ASSERT_EQ(api_->solve(planner, bars, 3, bone_direct.data(), skin_direct.data(), marks_direct.data(), results,
+                        &status),
+            PECTUS_PLANNER_OK)
+      << status.message;
+  std::vector<double> bone_fast(3 * nb), skin_fast(3 * ns), marks_fast(5 * 3);
+  double worst = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    double lift = 0.0;
+#ifdef PECTUS_COUNT_ALLOCATIONS
+    const std::size_t before = pectus::testing_support::AllocationCount();
+#endif
+    ASSERT_EQ(api_->deform(deformer, &bars[k], bone_fast.data(), skin_fast.data(), marks_fast.data(), &lift,
+                           &status),
+              PECTUS_PLANNER_OK)
+        << status.message;
+#ifdef PECTUS_COUNT_ALLOCATIONS
+    EXPECT_EQ(pectus::testing_support::AllocationCount(), before) << "the deform call allocated";
+#endif
+    for (std::size_t i = 0; i < 3 * nb; ++i) worst = std::max(worst, std::abs(bone_fast[i] - bone_direct[3 * nb * k + i]));
+    for (std::size_t i = 0; i < 3 * ns; ++i) worst = std::max(worst, std::abs(skin_fast[i] - skin_direct[3 * ns * k + i]));
+    for (std::size_t i = 0; i < 15; ++i) worst = std::max(worst, std::abs(marks_fast[i] - marks_direct[15 * k + i]));
+    EXPECT_NEAR(lift, results[k].sternum_lift_mm, 1e-3) << "bar " << k;
+    // Something moved: the comparison is not of two undeformed chests.
+    EXPECT_GT(results[k].max_displacement_mm, 1.0);
+  }
+  EXPECT_LT(worst, 0.01);
+  std::printf("deform vs solve: largest difference %.2e mm over bone, skin and landmarks (rank %lld)\n", worst,
+              static_cast<long long>(summary.rank));
+  // The force for a lift: what force_to_lift() finds for the depression.
+  PectusPlannerForceToLift to_lift{};
+  ASSERT_EQ(api_->force_to_lift(planner, &bars[1], 1, &to_lift, &status), PECTUS_PLANNER_OK);
+  PectusPlannerMeasurements m{};
+  ASSERT_EQ(api_->measurements(planner, &m, &status), PECTUS_PLANNER_OK);
+  double force = 0.0;
+  ASSERT_EQ(api_->lift_force(deformer, &bars[1], m.depression_mm, &force, &status), PECTUS_PLANNER_OK);
+  EXPECT_NEAR(force, to_lift.force_n, 1e-6 * to_lift.force_n);
+  // Off the sternum, or a bad force: a status with the reason, the outputs untouched.
+  const PectusPlannerBar off = {1.4, 0, 100.0}, bad = {0.8, 0, std::nan("")};
+  std::vector<double> untouched(3 * ns, -7.0);
+  EXPECT_EQ(api_->deform(deformer, &off, nullptr, untouched.data(), nullptr, nullptr, &status), PECTUS_PLANNER_USAGE);
+  EXPECT_NE(std::string(status.message).find("off the sternum"), std::string::npos) << status.message;
+  EXPECT_EQ(api_->deform(deformer, &bad, nullptr, untouched.data(), nullptr, nullptr, nullptr), PECTUS_PLANNER_USAGE);
+  EXPECT_EQ(api_->lift_force(deformer, &off, 10.0, &force, &status), PECTUS_PLANNER_USAGE);
+  EXPECT_TRUE(std::all_of(untouched.begin(), untouched.end(), [](double v) { return v == -7.0; }));
+  EXPECT_EQ(api_->deform(nullptr, &bars[0], nullptr, nullptr, nullptr, nullptr, &status), PECTUS_PLANNER_USAGE);
+  api_->destroy_deformer(deformer);
+  api_->destroy_deformer(nullptr);
+  api_->destroy(planner);
 }
 
 }  // namespace
