@@ -1,18 +1,42 @@
 // pectus planner host: how far a surface lies in front of (or behind) points, along one direction: the
 // depth difference between two chests as a surgeon reads it (the anterior direction), fast enough to
-// score hundreds of candidate plans (a 2D bin grid over the surface seen along the direction).
+// score thousands of candidate plans: the points are binned once across the direction (DepthProbe), and
+// each surface then costs one pass over its faces.
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
+#include <vector>
 
 #include "shape/core/geometry.h"
 
 namespace pectus::planner {
 
-/// For each point p (#points by 3, mm), the t (mm) with p + t * direction on `surface`: positive when
-/// the surface lies ahead of the point along `direction` (unit). Where the line meets the surface more
-/// than once (a fold), the smallest |t|; NaN where it misses the surface (the point lies beyond it).
-/// O(#points + #faces) for a surface that is a height field along `direction`.
+/// Fixed points and a direction, binned once, against which many surfaces are measured.
+class DepthProbe {
+ public:
+  /// @param[in] points     #points by 3, mm
+  /// @param[in] direction  the direction depths are measured along (normalised here; non-zero)
+  DepthProbe(const Points3& points, const Eigen::Vector3d& direction);
+
+  /// For each point p, the t (mm) with p + t * direction on `surface`: positive when the surface lies
+  /// ahead of the point along the direction. Where the line meets the surface more than once (a fold),
+  /// the smallest |t| (the first face in face order among equals); NaN where it misses the surface.
+  /// O(#faces + #points) for a surface that is a height field along the direction.
+  Eigen::VectorXd Depth(const TriangleMesh& surface) const;
+
+ private:
+  Eigen::Vector3d a_, u_, v_;  // the direction and two axes across it
+  Eigen::MatrixX2d q_;         // per point: (u, v)
+  Eigen::VectorXd h_;          // per point: height along a_
+  // Bins of the points over their (u, v) box: bin (i, j) holds points start_[i nv + j] .. start_[.. + 1]
+  // of order_.
+  Eigen::Vector2d lo_ = Eigen::Vector2d::Zero(), scale_ = Eigen::Vector2d::Zero();
+  int nu_ = 0, nv_ = 0;
+  std::vector<std::int32_t> start_, order_;
+};
+
+/// DepthProbe(points, direction).Depth(surface): for one surface.
 Eigen::VectorXd DepthDifference(const Points3& points, const Eigen::Vector3d& direction,
                                 const TriangleMesh& surface);
 

@@ -54,8 +54,11 @@ struct PlacementSearchResult {
   bool force_at_limit = false;
   PlanScore best_score;
   int evaluations = 0;  ///< chests scored
-  int solves = 0;       ///< positions solved by the plugin
-  Timings timings_s;    ///< wall time, s: "search" (the grid and its refinement)
+  int solves = 0;       ///< positions solved by the plugin (from its basis if it has one)
+  bool from_basis = false;  ///< the unit responses came from the plugin's exact response basis
+  /// Wall time, s: "search" (the grid and its refinement), within it "unit_responses" (the plugin's
+  /// responses to 1 N) and "scoring" (the chests scored against the average).
+  Timings timings_s;
   nlohmann::json ToJson() const;
 };
 

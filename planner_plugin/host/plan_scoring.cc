@@ -20,6 +20,13 @@ DistanceStats StatsOf(const Eigen::VectorXd& values, const Eigen::Matrix<bool, E
       Eigen::Map<const Eigen::VectorXd>(kept.data(), static_cast<Eigen::Index>(kept.size())));
 }
 
+// Points (#points by 3) moved by T.
+Points3 ToAverage(const Similarity3& T, const Points3& x) {
+  Points3 y(x.rows(), 3);
+  for (Eigen::Index i = 0; i < x.rows(); ++i) y.row(i) = (T * Eigen::Vector3d(x.row(i).transpose())).transpose();
+  return y;
+}
+
 }  // namespace
 
 bool PlanScoreOptions::IsValid(std::string* why) const {
@@ -90,47 +97,61 @@ PlanScore ScorePlan(const TriangleMesh& skin, const LandmarkSet& landmarks, cons
       average, modelled);
 }
 
-PlanScore ScorePlan(const TriangleMesh& skin, const Points3& without_deformity,
-                    const ChestRegistrationResult& registration, const AverageChest& average,
-                    const PlanScoreOptions& options) {
+PlanScorer::PlanScorer(const TriangleMesh& skin, const Points3& without_deformity,
+                       const ChestRegistrationResult& registration, const AverageChest& average,
+                       const PlanScoreOptions& options)
+    : average_(&average),
+      options_(options),
+      registration_(registration),
+      moved_(skin),
+      anterior_(AnteriorDirection(average.mesh, "average chest")),
+      probe_(average.mesh.vertices.positions, anterior_) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage("plan scoring: " + why);
   if (options.relative && without_deformity.rows() != skin.num_vertices()) {
     ThrowUsage(
         "plan scoring: the relative skin model needs the skin without the deformity, vertex by vertex");
   }
+  central_ = CentralRegion(average, options.central_fraction);
+  if (options.relative) {
+    TriangleMesh reference = skin;
+    reference.vertices.positions = ToAverage(registration.T_target_source, without_deformity);
+    reference_depth_ = probe_.Depth(reference);
+  }
+}
+
+PlanScore PlanScorer::Score(const Points3& positions) const {
+  if (positions.rows() != moved_.num_vertices()) {
+    ThrowUsage("plan scoring: " + std::to_string(positions.rows()) + " skin vertices, the skin has " +
+               std::to_string(moved_.num_vertices()));
+  }
   PlanScore score;
-  // Step 1: the predicted chest (and its undeformed self) in the average chest's frame.
-  score.registration = registration;
-  const Similarity3& T = score.registration.T_target_source;
-  auto to_average = [&](const Points3& x) {
-    Points3 y(x.rows(), 3);
-    for (Eigen::Index i = 0; i < x.rows(); ++i)
-      y.row(i) = (T * Eigen::Vector3d(x.row(i).transpose())).transpose();
-    return y;
-  };
-  TriangleMesh moved = skin;
-  moved.vertices.positions = to_average(skin.vertices.positions);
+  // Step 1: the predicted chest in the average chest's frame.
+  score.registration = registration_;
+  TriangleMesh moved = moved_;
+  moved.vertices.positions = ToAverage(registration_.T_target_source, positions);
   const Points3& p = moved.vertices.positions;
   score.predicted_in_average = p;
-  TriangleMesh reference = skin;
-  if (options.relative) reference.vertices.positions = to_average(without_deformity);
   // Step 2: at every average-chest vertex, how far in front of it the predicted chest lies: directly
   // (modelled skin), or as the average chest carrying the deformity and correction (relative).
-  const Eigen::Vector3d anterior = AnteriorDirection(average.mesh, "average chest");
-  const Points3& q = average.mesh.vertices.positions;
-  score.difference_mm = DepthDifference(q, anterior, moved);
-  if (options.relative) score.difference_mm -= DepthDifference(q, anterior, reference);
+  score.difference_mm = probe_.Depth(moved);
+  if (options_.relative) score.difference_mm -= reference_depth_;
   score.uncovered = score.difference_mm.array().isNaN().count();
   // Step 3: statistics over the region of interest and its central part.
-  score.central = CentralRegion(average, options.central_fraction);
+  score.central = central_;
   score.roi = StatsOf(score.difference_mm, nullptr);
   score.central_roi = StatsOf(score.difference_mm, &score.central);
   // Step 4 (pictures): the same difference on the predicted skin, inside the average chest's extent.
-  if (options.map_predicted_skin && !options.relative) {
-    score.predicted_distance_mm = -DepthDifference(p, anterior, average.mesh);
+  if (options_.map_predicted_skin && !options_.relative) {
+    score.predicted_distance_mm = -DepthDifference(p, anterior_, average_->mesh);
   }
   return score;
+}
+
+PlanScore ScorePlan(const TriangleMesh& skin, const Points3& without_deformity,
+                    const ChestRegistrationResult& registration, const AverageChest& average,
+                    const PlanScoreOptions& options) {
+  return PlanScorer(skin, without_deformity, registration, average, options).Score(skin.vertices.positions);
 }
 
 }  // namespace pectus::planner

@@ -18,6 +18,7 @@
 
 #include "planner_plugin/host/average_chest.h"
 #include "planner_plugin/host/chest_registration.h"
+#include "planner_plugin/host/depth_difference.h"
 #include "shape/core/geometry.h"
 #include "shape/core/landmarks.h"
 #include "shape/model/distance_map.h"
@@ -79,6 +80,30 @@ Eigen::Matrix<bool, Eigen::Dynamic, 1> CentralRegion(const AverageChest& average
 PlanScore ScorePlan(const TriangleMesh& skin, const Points3& without_deformity,
                     const ChestRegistrationResult& registration, const AverageChest& average,
                     const PlanScoreOptions& options = {});
+
+/// ScorePlan for many predicted chests of one patient (a search): what they share (the average chest's
+/// anterior direction and central region, the skin without the deformity in the average frame and its
+/// depth) is computed once; Score() then gives exactly what ScorePlan() gives for the skin's faces with
+/// those vertices.
+class PlanScorer {
+ public:
+  /// Arguments as ScorePlan's (`skin` gives the faces; its vertices are not used). The scorer keeps
+  /// references to `average`, which must outlive it. Throws as ScorePlan.
+  PlanScorer(const TriangleMesh& skin, const Points3& without_deformity, const ChestRegistrationResult& registration,
+             const AverageChest& average, const PlanScoreOptions& options = {});
+  /// The score of the skin with vertices `positions` (#skin vertices by 3, patient frame, mm).
+  PlanScore Score(const Points3& positions) const;
+
+ private:
+  const AverageChest* average_;
+  PlanScoreOptions options_;
+  ChestRegistrationResult registration_;
+  TriangleMesh moved_;                // the skin's faces; vertices set per Score()
+  Eigen::Vector3d anterior_;          // of the average chest
+  DepthProbe probe_;                  // the average chest's vertices along anterior_
+  Eigen::VectorXd reference_depth_;   // relative model: depth of the skin without the deformity
+  Eigen::Matrix<bool, Eigen::Dynamic, 1> central_;
+};
 
 /// Scores `skin` registered by its own `landmarks` (and its anterior direction), with the modelled skin
 /// (options.relative is ignored).

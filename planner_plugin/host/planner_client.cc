@@ -62,7 +62,45 @@ PlannerClient::PlannerClient(const PlannerPlugin& plugin, const PectusPlannerPat
   }
 }
 
-PlannerClient::~PlannerClient() { api_->destroy(planner_); }
+PlannerClient::~PlannerClient() {
+  deformer_.reset();  // it refers to the planner
+  api_->destroy(planner_);
+}
+
+PectusPlannerBasisSummary PlannerClient::BuildBasis(const PectusPlannerBasisOptions* options) {
+  deformer_.reset();  // a rebuild needs the old basis' deformers gone
+  PectusPlannerBasisSummary summary{};
+  PectusPlannerStatus status{};
+  ThrowIfFailed(api_->build_basis(planner_, options, &summary, &status), status);
+  PectusPlannerDeformer* deformer = nullptr;
+  ThrowIfFailed(api_->create_deformer(planner_, &deformer, &status), status);
+  deformer_ = std::unique_ptr<PectusPlannerDeformer, DeformerDeleter>(deformer, DeformerDeleter{api_});
+  return summary;
+}
+
+std::vector<PlannedCase> PlannerClient::Deform(const std::vector<BarPlacement>& bars, bool with_bone) const {
+  if (!deformer_) ThrowUsage("planner: no response basis; BuildBasis() first");
+  const Eigen::Index nb = bone_.num_vertices(), ns = skin_.num_vertices();
+  const auto nl = static_cast<Eigen::Index>(skin_landmarks_.size());
+  std::vector<PlannedCase> out(bars.size());
+  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> marks(nl, 3);
+  for (std::size_t k = 0; k < bars.size(); ++k) {
+    PlannedCase& c = out[k];
+    c.bar = bars[k];
+    if (with_bone) c.bone.resize(nb, 3);
+    c.skin.resize(ns, 3);
+    const PectusPlannerBar bar = ToBar(bars[k]);
+    PectusPlannerStatus status{};
+    ThrowIfFailed(api_->deform(deformer_.get(), &bar, with_bone ? c.bone.data() : nullptr, c.skin.data(),
+                               marks.data(), &c.figures.sternum_lift_mm, &status),
+                  status);
+    for (Eigen::Index i = 0; i < nl; ++i) {
+      c.skin_landmarks.items.push_back({skin_landmarks_.items[static_cast<std::size_t>(i)].label,
+                                        marks.row(i).transpose(), "on the predicted skin"});
+    }
+  }
+  return out;
+}
 
 LandmarkSet PlannerClient::Landmarks(int which) const {
   PectusPlannerStatus status{};

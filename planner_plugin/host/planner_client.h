@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -73,6 +74,15 @@ class PlannerClient {
   /// Force to lift the sternum by the depression at each position (force_n of the bars ignored).
   std::vector<PectusPlannerForceToLift> ForceToLift(const std::vector<BarPlacement>& positions) const;
 
+  /// Builds the plugin's exact response basis (interface version 2; seconds): Deform() then answers any
+  /// placement in a fraction of a millisecond, matching Solve() to 0.01 mm. `options` nullptr: defaults.
+  PectusPlannerBasisSummary BuildBasis(const PectusPlannerBasisOptions* options = nullptr);
+  bool has_basis() const { return deformer_ != nullptr; }
+  /// The placements from the basis (BuildBasis() first): deformed skin, skin landmarks, bone if
+  /// `with_bone`, and of the figures only the sternal lift (the others 0). Throws Error(kUsage) for a
+  /// bar off the sternum.
+  std::vector<PlannedCase> Deform(const std::vector<BarPlacement>& bars, bool with_bone = true) const;
+
  private:
   LandmarkSet Landmarks(int set) const;
   const PectusPlannerInterface* api_;
@@ -84,6 +94,11 @@ class PlannerClient {
   Points3 reference_skin_;
   Eigen::VectorXi bone_regions_;
   LandmarkSet bone_landmarks_, skin_landmarks_, reference_landmarks_;
+  struct DeformerDeleter {
+    const PectusPlannerInterface* api;
+    void operator()(PectusPlannerDeformer* d) const { api->destroy_deformer(d); }
+  };
+  std::unique_ptr<PectusPlannerDeformer, DeformerDeleter> deformer_;  // with the basis; before planner_ goes
 };
 
 /// Reads one patient of a patient table through the plugin.

@@ -30,7 +30,7 @@ TEST(NussPlan, TheSearchFindsTheKnownPlacementOfAnAverageChestMadeFromItAndTheFi
   options.sternum_cells_along = 28;
   options.skin_rows = 32;
   options.skin_columns = 48;
-  const PlannerClient planner(plugin, ReadPlannerPatient(plugin, kTable, "57"), options);
+  PlannerClient planner(plugin, ReadPlannerPatient(plugin, kTable, "57"), options);
 
   // The "average chest": patient 57 under a bar at 0.78 of the sternum lifting the sternum by 80 % of its
   // depression, in the pectus scan frame (x across, y up, z anterior), 10 % larger, written as a statismo
@@ -116,6 +116,21 @@ TEST(NussPlan, TheSearchFindsTheKnownPlacementOfAnAverageChestMadeFromItAndTheFi
   EXPECT_NE(note.find("caudal end of the positions searched (0.5-0.7 L)"), std::string::npos) << note;
   EXPECT_NE(note.find("largest searched"), std::string::npos) << note;
   EXPECT_EQ(edge.ToJson()["best_position_at_edge"], "last");
+
+  // The same search on the exact response basis: every grid score within 0.01 mm of the direct solves'
+  // (the basis holds 0.001 mm), the same best placement, no solve.
+  EXPECT_FALSE(plan.search->from_basis);
+  const PectusPlannerBasisSummary basis = planner.BuildBasis();
+  EXPECT_GT(basis.rank, 0);
+  const PlacementSearchResult fast =
+      SearchBestPlacement(planner, average, plan.registration, plan_options.score, plan_options.search_options);
+  EXPECT_TRUE(fast.from_basis);
+  ASSERT_EQ(fast.objective_mm.rows(), plan.search->objective_mm.rows());
+  EXPECT_LT((fast.objective_mm - plan.search->objective_mm).cwiseAbs().maxCoeff(), 0.01);
+  EXPECT_NEAR(fast.best_objective_mm, plan.search->best_objective_mm, 0.01);
+  EXPECT_NEAR(fast.best.position, plan.search->best.position, 1e-3);
+  EXPECT_NEAR(fast.best.force_n, plan.search->best.force_n, 1e-3 * plan.search->best.force_n);
+  EXPECT_EQ(fast.evaluations, plan.search->evaluations);
 
   // The files.
   const auto written = WriteNussPlan(plan, planner, average, plugin.description(), dir / "plan",
