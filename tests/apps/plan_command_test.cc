@@ -93,7 +93,11 @@ TEST_F(PlanCommandTest, Patient57GivesTwoScenariosTheBestPlacementAndAnHtmlRepor
   EXPECT_LT(best_rms, a["score"]["rms_mm"].get<double>());
   EXPECT_LT(best_rms, b["score"]["rms_mm"].get<double>());
   EXPECT_LT(best_rms, r["before"]["rms_mm"].get<double>());
-  EXPECT_NEAR(best_rms, r["search"]["best"]["objective_mm"].get<double>(), 1e-9);
+  // The search scored it from the response basis, the scenario from a direct solve: equal to the basis'
+  // tolerance (0.001 mm; in practice 1e-8).
+  EXPECT_TRUE(r["search"]["from_basis"].get<bool>());
+  EXPECT_GT(r["response_basis"]["rank"].get<int>(), 0);
+  EXPECT_NEAR(best_rms, r["search"]["best"]["objective_mm"].get<double>(), 1e-3);
   // The report shows the comparison, the search and the pictures, and every picture exists.
   std::ifstream html(dir_ / "plan57" / "report.html");
   std::stringstream text;
