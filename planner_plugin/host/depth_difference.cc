@@ -19,7 +19,8 @@ DepthProbe::DepthProbe(const Points3& points, const Eigen::Vector3d& direction)
   if (n == 0) return;
   // Bins of about two points each over the points' box (at most 4 #points + 16 bins).
   lo_ = q_.colwise().minCoeff().transpose();
-  const Eigen::Vector2d hi = q_.colwise().maxCoeff().transpose(), extent = (hi - lo_).cwiseMax(1e-9);
+  hi_ = q_.colwise().maxCoeff().transpose();
+  const Eigen::Vector2d extent = (hi_ - lo_).cwiseMax(1e-9);
   const double cell = std::max(std::sqrt(2.0 * extent.prod() / static_cast<double>(n)), 1e-6);
   nu_ = std::min(static_cast<int>(extent.x() / cell) + 1, 2 * static_cast<int>(n) + 4);
   nv_ = std::min(static_cast<int>(extent.y() / cell) + 1, 2 * static_cast<int>(n) + 4);
@@ -42,42 +43,61 @@ DepthProbe::DepthProbe(const Points3& points, const Eigen::Vector3d& direction)
 }
 
 Eigen::VectorXd DepthProbe::Depth(const TriangleMesh& surface) const {
-  const double kNaN = std::numeric_limits<double>::quiet_NaN();
-  Eigen::VectorXd t = Eigen::VectorXd::Constant(q_.rows(), kNaN);
-  if (surface.num_faces() == 0 || q_.rows() == 0) return t;
-  const Points3& x = surface.vertices.positions;
-  Eigen::MatrixX2d uv(x.rows(), 2);
-  Eigen::VectorXd h(x.rows());
+  return Depth(surface.vertices.positions, surface.faces);
+}
+
+Eigen::VectorXd DepthProbe::Depth(const Points3& x, const Faces3& faces) const {
+  return Depth(Project(x), faces);
+}
+
+DepthProbe::Projected DepthProbe::Project(const Points3& x) const {
+  Projected out;
+  out.uv.resize(x.rows(), 2);
+  out.h.resize(x.rows());
   for (Eigen::Index i = 0; i < x.rows(); ++i) {
     const Eigen::Vector3d p = x.row(i).transpose();
-    uv.row(i) << p.dot(u_), p.dot(v_);
-    h(i) = p.dot(a_);
+    out.uv.row(i) << p.dot(u_), p.dot(v_);
+    out.h(i) = p.dot(a_);
   }
+  return out;
+}
+
+Eigen::VectorXd DepthProbe::Depth(const Projected& projected, const Faces3& faces) const {
+  const double kNaN = std::numeric_limits<double>::quiet_NaN();
+  Eigen::VectorXd t = Eigen::VectorXd::Constant(q_.rows(), kNaN);
+  if (faces.rows() == 0 || q_.rows() == 0 || projected.uv.rows() == 0) return t;
+  const Eigen::MatrixX2d& uv = projected.uv;
+  const Eigen::VectorXd& h = projected.h;
   // Points outside the surface's box across the direction miss it.
   const Eigen::Vector2d box_lo = uv.colwise().minCoeff().transpose(), box_hi = uv.colwise().maxCoeff().transpose();
   auto clamp_u = [&](double value) { return std::clamp(static_cast<int>((value - lo_.x()) * scale_.x()), 0, nu_ - 1); };
   auto clamp_v = [&](double value) { return std::clamp(static_cast<int>((value - lo_.y()) * scale_.y()), 0, nv_ - 1); };
+  constexpr double kEps = 1e-9;  // barycentric tolerance: a point on an edge belongs to both faces
   // Every face meets the points binned under its box; faces in order, so among equal depths the first
   // face's stays.
-  for (Eigen::Index f = 0; f < surface.num_faces(); ++f) {
-    const int i0 = surface.faces(f, 0), i1 = surface.faces(f, 1), i2 = surface.faces(f, 2);
+  for (Eigen::Index f = 0; f < faces.rows(); ++f) {
+    const int i0 = faces(f, 0), i1 = faces(f, 1), i2 = faces(f, 2);
     const Eigen::Vector2d a0 = uv.row(i0).transpose(), e1 = uv.row(i1).transpose() - a0,
                           e2 = uv.row(i2).transpose() - a0;
     const double det = e1.x() * e2.y() - e1.y() * e2.x();
     if (std::abs(det) < 1e-15) continue;  // seen edge-on
     const Eigen::Vector2d fmin = a0.cwiseMin(uv.row(i1).transpose()).cwiseMin(uv.row(i2).transpose());
     const Eigen::Vector2d fmax = a0.cwiseMax(uv.row(i1).transpose()).cwiseMax(uv.row(i2).transpose());
+    if (fmax.x() < lo_.x() || fmin.x() > hi_.x() || fmax.y() < lo_.y() || fmin.y() > hi_.y()) continue;  // no point
+    // A point the barycentric test below accepts (weights >= -kEps) lies within 3 kEps extents of the box.
+    const double reach = 3 * kEps * (fmax - fmin).maxCoeff();
     const int u_first = clamp_u(fmin.x()), u_last = clamp_u(fmax.x());
     const int v_first = clamp_v(fmin.y()), v_last = clamp_v(fmax.y());
     for (int i = u_first; i <= u_last; ++i) {
       const auto row = static_cast<std::size_t>(i) * nv_;
       for (std::int32_t s = start_[row + v_first]; s < start_[row + v_last + 1]; ++s) {
         const std::int32_t k = order_[static_cast<std::size_t>(s)];
-        const Eigen::Vector2d q = q_.row(k).transpose();
-        if (q.x() < box_lo.x() || q.x() > box_hi.x() || q.y() < box_lo.y() || q.y() > box_hi.y()) continue;
-        const Eigen::Vector2d d = q - a0;
-        const double l1 = (d.x() * e2.y() - d.y() * e2.x()) / det, l2 = (e1.x() * d.y() - e1.y() * d.x()) / det;
-        constexpr double kEps = 1e-9;
+        const double qu = q_(k, 0), qv = q_(k, 1);
+        // Within the face's box (widened by the barycentric tolerance's reach) and the surface's.
+        if (qu < fmin.x() - reach || qu > fmax.x() + reach || qv < fmin.y() - reach || qv > fmax.y() + reach) continue;
+        if (qu < box_lo.x() || qu > box_hi.x() || qv < box_lo.y() || qv > box_hi.y()) continue;
+        const double du = qu - a0.x(), dv = qv - a0.y();
+        const double l1 = (du * e2.y() - dv * e2.x()) / det, l2 = (e1.x() * dv - e1.y() * du) / det;
         if (l1 < -kEps || l2 < -kEps || l1 + l2 > 1 + kEps) continue;
         const double depth = (1 - l1 - l2) * h(i0) + l1 * h(i1) + l2 * h(i2) - h_(k);
         if (std::isnan(t(k)) || std::abs(depth) < std::abs(t(k))) t(k) = depth;

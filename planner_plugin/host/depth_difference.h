@@ -24,6 +24,18 @@ class DepthProbe {
   /// the smallest |t| (the first face in face order among equals); NaN where it misses the surface.
   /// O(#faces + #points) for a surface that is a height field along the direction.
   Eigen::VectorXd Depth(const TriangleMesh& surface) const;
+  /// The same for a surface given as #vertices by 3 positions and #faces by 3 triangles.
+  Eigen::VectorXd Depth(const Points3& vertices, const Faces3& faces) const;
+
+  /// Vertices projected on the probe's axes: (u, v) across the direction and h along it. Linear in the
+  /// positions (no origin), so the projection of a + F b is that of a plus F times that of b.
+  struct Projected {
+    Eigen::MatrixX2d uv;  ///< #vertices by 2, mm
+    Eigen::VectorXd h;    ///< #vertices, mm
+  };
+  Projected Project(const Points3& vertices) const;
+  /// Depth() of a surface given by its projected vertices.
+  Eigen::VectorXd Depth(const Projected& vertices, const Faces3& faces) const;
 
  private:
   Eigen::Vector3d a_, u_, v_;  // the direction and two axes across it
@@ -31,7 +43,7 @@ class DepthProbe {
   Eigen::VectorXd h_;          // per point: height along a_
   // Bins of the points over their (u, v) box: bin (i, j) holds points start_[i nv + j] .. start_[.. + 1]
   // of order_.
-  Eigen::Vector2d lo_ = Eigen::Vector2d::Zero(), scale_ = Eigen::Vector2d::Zero();
+  Eigen::Vector2d lo_ = Eigen::Vector2d::Zero(), hi_ = Eigen::Vector2d::Zero(), scale_ = Eigen::Vector2d::Zero();
   int nu_ = 0, nv_ = 0;
   std::vector<std::int32_t> start_, order_;
 };

@@ -1,5 +1,6 @@
 #include "planner_plugin/host/placement_search.h"
 
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -86,6 +87,7 @@ namespace {
 struct UnitResponse {
   Points3 skin0, skin_per_n;
   double lift_per_n = 0;
+  PlanScorer::LinearSkin linear;  // the same, projected for the scorer
 };
 
 // Golden-section search of f over [lo, hi]; improves (*x, *value) if it finds a lower value.
@@ -131,6 +133,7 @@ PlacementSearchResult SearchBestPlacement(const PlannerClient& planner, const Av
   std::optional<Timings::Scope> timer(std::in_place, &out.timings_s, "search");
   PlanScoreOptions fast = score_options;
   fast.map_predicted_skin = false;
+  const PlanScorer scorer(planner.skin(), planner.reference_skin(), registration, average, fast);
   std::map<double, UnitResponse> responses;
   auto response = [&](double position) -> const UnitResponse& {
     auto it = responses.find(position);
@@ -146,18 +149,23 @@ PlacementSearchResult SearchBestPlacement(const PlannerClient& planner, const Av
     r.skin0 = planner.skin().vertices.positions;
     r.skin_per_n = unit.skin - r.skin0;
     r.lift_per_n = unit.figures.sternum_lift_mm;
+    r.linear = scorer.Linearise(r.skin0, r.skin_per_n);
     return responses.emplace(position, std::move(r)).first->second;
   };
-  const PlanScorer scorer(planner.skin(), planner.reference_skin(), registration, average, fast);
+  const bool central = options.objective != "rms";
+  std::atomic<int> evaluations{0};
+  // One candidate of a known response: thread-safe (the grid's rows are scored in parallel).
+  auto objective = [&](const UnitResponse& r, double force) {
+    evaluations.fetch_add(1, std::memory_order_relaxed);
+    return scorer.Rms(r.linear, force, central);
+  };
   auto evaluate = [&](double position, double force, PlanScore* keep) {
     const UnitResponse& r = response(position);
     std::optional<Timings::Scope> score_timer(std::in_place, &out.timings_s, "scoring");
-    PlanScore score = scorer.Score(r.skin0 + force * r.skin_per_n);
-    score_timer.reset();
-    ++out.evaluations;
-    const double value = options.objective == "rms" ? score.roi.rms : score.central_roi.rms;
-    if (keep != nullptr) *keep = std::move(score);
-    return value;
+    if (keep == nullptr) return objective(r, force);
+    evaluations.fetch_add(1, std::memory_order_relaxed);
+    *keep = scorer.Score(r.skin0 + force * r.skin_per_n);
+    return central ? keep->central_roi.rms : keep->roi.rms;
   };
   // Step 1: the grid.
   for (int i = 0; i < options.positions; ++i) {
@@ -175,16 +183,16 @@ PlacementSearchResult SearchBestPlacement(const PlannerClient& planner, const Av
   for (int j = 1; j <= options.forces; ++j) out.forces_n.push_back(out.force_limit_n * j / options.forces);
   out.objective_mm.resize(options.positions, options.forces);
   // The best force at one position: the best of the force grid (or of its cells within `window` of
-  // `near`), refined between its neighbours.
+  // `near`), refined between its neighbours. `score(force)` scores a candidate at that position.
   const double kUnset = std::numeric_limits<double>::infinity();
-  auto best_force = [&](double position, const double* grid_values, double* value, int near = -1,
-                        int window = 3) {
+  auto best_force_of = [&](const auto& score, const double* grid_values, double* value, int near = -1,
+                           int window = 3) {
     std::vector<double> values(out.forces_n.size(), kUnset);
     for (std::size_t j = 0; j < values.size(); ++j) {
       if (grid_values != nullptr) {
         values[j] = grid_values[j];
       } else if (near < 0 || std::abs(static_cast<int>(j) - near) <= window) {
-        values[j] = evaluate(position, out.forces_n[j], nullptr);
+        values[j] = score(out.forces_n[j]);
       }
     }
     const auto j = static_cast<std::size_t>(std::min_element(values.begin(), values.end()) - values.begin());
@@ -193,25 +201,42 @@ PlacementSearchResult SearchBestPlacement(const PlannerClient& planner, const Av
     double force = out.forces_n[j];
     *value = values[j];
     GoldenSection(
-        lo, hi, options.golden_iterations,
-        [&](double f) { return f > 0 ? evaluate(position, f, nullptr) : 1e300; }, &force, value);
+        lo, hi, options.golden_iterations, [&](double f) { return f > 0 ? score(f) : 1e300; }, &force, value);
     return force;
+  };
+  auto best_force = [&](double position, const double* grid_values, double* value, int near = -1,
+                        int window = 3) {
+    return best_force_of([&](double f) { return evaluate(position, f, nullptr); }, grid_values, value, near,
+                         window);
   };
   double best = std::numeric_limits<double>::infinity(), position = out.positions[0], force = out.forces_n[0];
   int bi = 0;
   auto force_index = [&](double f) {
     return static_cast<int>(std::lround(f / (out.forces_n[1] - out.forces_n[0]))) - 1;
   };
+  // The grid and each row's best force, rows in parallel (their responses are all known by now).
+  std::vector<double> row_value(static_cast<std::size_t>(options.positions)),
+      row_force(static_cast<std::size_t>(options.positions));
+  std::vector<const UnitResponse*> row_response;
+  for (double p : out.positions) row_response.push_back(&response(p));
+  {
+    auto grid_timer = out.timings_s.Time("scoring");
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int i = 0; i < options.positions; ++i) {
+      const UnitResponse& r = *row_response[static_cast<std::size_t>(i)];
+      auto score = [&](double f) { return objective(r, f); };
+      for (int j = 0; j < options.forces; ++j) out.objective_mm(i, j) = score(out.forces_n[j]);
+      const Eigen::VectorXd row = out.objective_mm.row(i).transpose();
+      row_force[static_cast<std::size_t>(i)] =
+          best_force_of(score, row.data(), &row_value[static_cast<std::size_t>(i)]);
+    }
+  }
   for (int i = 0; i < options.positions; ++i) {
-    for (int j = 0; j < options.forces; ++j)
-      out.objective_mm(i, j) = evaluate(out.positions[i], out.forces_n[j], nullptr);
-    double value = 0;
-    const double f = best_force(out.positions[i], out.objective_mm.row(i).eval().data(), &value);
-    if (value < best) {
-      best = value;
+    if (row_value[static_cast<std::size_t>(i)] < best) {
+      best = row_value[static_cast<std::size_t>(i)];
       bi = i;
       position = out.positions[i];
-      force = f;
+      force = row_force[static_cast<std::size_t>(i)];
     }
   }
   // Step 2: the position between the grid's neighbours of the best, each at its best force.
@@ -233,6 +258,7 @@ PlacementSearchResult SearchBestPlacement(const PlannerClient& planner, const Av
       &position, &best);
   out.best = {position, false, force};
   out.best_objective_mm = evaluate(position, force, &out.best_score);
+  out.evaluations = evaluations.load();
   // On an edge: the refinements move the best only to a strictly lower objective, so a best still on an
   // edge of the grid means the objective falls towards that edge.
   const double position_tolerance = 1e-9 * (options.position_to - options.position_from);

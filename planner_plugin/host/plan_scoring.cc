@@ -148,6 +148,43 @@ PlanScore PlanScorer::Score(const Points3& positions) const {
   return score;
 }
 
+double PlanScorer::Rms(const Points3& positions, bool central) const {
+  if (positions.rows() != moved_.num_vertices()) {
+    ThrowUsage("plan scoring: " + std::to_string(positions.rows()) + " skin vertices, the skin has " +
+               std::to_string(moved_.num_vertices()));
+  }
+  return RmsOf(probe_.Depth(ToAverage(registration_.T_target_source, positions), moved_.faces), central);
+}
+
+PlanScorer::LinearSkin PlanScorer::Linearise(const Points3& skin0, const Points3& skin_per_n) const {
+  if (skin0.rows() != moved_.num_vertices() || skin_per_n.rows() != moved_.num_vertices()) {
+    ThrowUsage("plan scoring: a linear skin needs " + std::to_string(moved_.num_vertices()) + " vertices");
+  }
+  // T (s0 + F g) = T s0 + F s R g: the response turns and scales, it does not translate.
+  const Similarity3& T = registration_.T_target_source;
+  const Eigen::Matrix3d sR = T.scale * T.rotation;
+  const Points3 turned = skin_per_n * sR.transpose();
+  return {probe_.Project(ToAverage(T, skin0)), probe_.Project(turned)};
+}
+
+double PlanScorer::Rms(const LinearSkin& skin, double force_n, bool central) const {
+  DepthProbe::Projected at;
+  at.uv = skin.base.uv + force_n * skin.per_newton.uv;
+  at.h = skin.base.h + force_n * skin.per_newton.h;
+  return RmsOf(probe_.Depth(at, moved_.faces), central);
+}
+
+double PlanScorer::RmsOf(Eigen::VectorXd difference, bool central) const {
+  if (options_.relative) difference -= reference_depth_;
+  // As StatsOf then SummarizeDistances: the finite values in the region, in order.
+  Eigen::Index kept = 0;
+  for (Eigen::Index i = 0; i < difference.size(); ++i) {
+    if (std::isfinite(difference(i)) && (!central || central_(i))) difference(kept++) = difference(i);
+  }
+  if (kept == 0) return 0.0;
+  return std::sqrt(difference.head(kept).squaredNorm() / static_cast<double>(kept));
+}
+
 PlanScore ScorePlan(const TriangleMesh& skin, const Points3& without_deformity,
                     const ChestRegistrationResult& registration, const AverageChest& average,
                     const PlanScoreOptions& options) {

@@ -93,6 +93,17 @@ class PlanScorer {
              const AverageChest& average, const PlanScoreOptions& options = {});
   /// The score of the skin with vertices `positions` (#skin vertices by 3, patient frame, mm).
   PlanScore Score(const Points3& positions) const;
+  /// Score(positions).roi.rms (or .central_roi.rms if `central`) alone, as a search needs it, mm.
+  double Rms(const Points3& positions, bool central) const;
+
+  /// A skin linear in the bar's force, skin0 + F skin_per_n (#skin vertices by 3 each, patient frame),
+  /// projected once for the depth queries (a search's candidates at one bar position).
+  struct LinearSkin {
+    DepthProbe::Projected base, per_newton;
+  };
+  LinearSkin Linearise(const Points3& skin0, const Points3& skin_per_n) const;
+  /// Rms() of skin0 + force skin_per_n: the same to round-off (1e-12 mm), without moving the skin.
+  double Rms(const LinearSkin& skin, double force_n, bool central) const;
 
  private:
   const AverageChest* average_;
@@ -103,6 +114,7 @@ class PlanScorer {
   DepthProbe probe_;                  // the average chest's vertices along anterior_
   Eigen::VectorXd reference_depth_;   // relative model: depth of the skin without the deformity
   Eigen::Matrix<bool, Eigen::Dynamic, 1> central_;
+  double RmsOf(Eigen::VectorXd difference, bool central) const;  // of a depth over the average chest
 };
 
 /// Scores `skin` registered by its own `landmarks` (and its anterior direction), with the modelled skin
