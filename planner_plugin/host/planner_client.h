@@ -56,6 +56,8 @@ class PlannerClient {
   PlannerClient& operator=(const PlannerClient&) = delete;
 
   const PectusPlannerPatient& patient() const { return patient_; }
+  /// The plugin's planner, for calls the client does not wrap (a host's own deformers, timed apart).
+  const PectusPlanner* handle() const { return planner_; }
   const PectusPlannerOptions& options() const { return options_; }
   const PectusPlannerMeasurements& measurements() const { return measurements_; }
   /// Undeformed bone surface; face scalars are not kept in TriangleMesh, so regions come separately.

@@ -291,7 +291,8 @@ double SessionDeformer::LiftForce(const BarLoad& bar, double lift_mm, const char
   }
   const double per_newton = basis_->LiftPerNewton(basis_->LevelZ(bar));
   if (!(per_newton > 0)) {
-    *why = "the bar is off the sternum (no lift there)";
+    *why = "a bar there does not lift the sternum at its deepest level (off the sternum, or so near the notch "
+           "that it tilts the sternum back)";
     return std::numeric_limits<double>::quiet_NaN();
   }
   return lift_mm / per_newton;

@@ -1,0 +1,209 @@
+// pectus surrogate: the planner's fast stand-ins for the finite element solve (issue 14).
+//   check  per patient, the exact response basis built through the plugin (interface version 2) against
+//          the direct FE solve: the dissertation's 24 load cases and random (position, force) pairs, every
+//          deformed bone vertex, skin vertex and skin landmark; the basis' size, rank and build time; the
+//          cost of one real-time deform call and of one force for a lift, timed here on one thread.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <random>
+#include <sstream>
+
+#include "apps/command.h"
+#include "planner_plugin/host/planner_client.h"
+#include "planner_plugin/host/planner_plugin_loader.h"
+#include "shape/core/error.h"
+#include "shape/core/log.h"
+#include "shape/io/patient_table_io.h"
+
+namespace pectus::cli {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace pectus::planner;
+using Clock = std::chrono::steady_clock;
+
+// The dissertation's load cases (§4.1.2): 3 bar positions (fractions of the sternal length) x 8 forces.
+constexpr double kDissertationPositions[] = {0.65, 0.75, 0.85};
+constexpr double kDissertationForces[] = {50, 70, 100, 200, 400, 800, 1500, 2000};
+
+// "57,1,10" or "all" against the table.
+std::vector<std::string> PatientList(const std::string& text, const fs::path& table) {
+  std::vector<std::string> ids;
+  if (text == "all") {
+    for (const PatientTableRow& row : ReadPatientTable(table)) ids.push_back(std::to_string(row.patient));
+    return ids;
+  }
+  std::stringstream in(text);
+  for (std::string id; std::getline(in, id, ',');) {
+    if (!id.empty()) ids.push_back(id);
+  }
+  if (ids.empty()) ThrowUsage("--patients '" + text + "' names no patient (ids separated by commas, or all)");
+  return ids;
+}
+
+double Median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  return values.empty() ? 0.0 : values[values.size() / 2];
+}
+
+class SurrogateCommand : public Command {
+ public:
+  std::string Name() const override { return "surrogate"; }
+  std::string Summary() const override {
+    return "The planner's real-time stand-ins for the FE solve: the exact response basis, checked";
+  }
+  std::string Example() const override {
+    return "  pectus surrogate check --patient-table nuss_ct_parameters.csv --patients 57,1,10,30,45 \\\n"
+           "      --random 1000 --report check.json\n"
+           "    (per patient: the basis against 24 + 1000 direct FE solves, its rank, size, build time and\n"
+           "     the time of one full-surface update; fails if any point differs by more than --limit-mm)\n"
+           "  pectus surrogate check --patient-table nuss_ct_parameters.csv --patients all --random 0";
+  }
+  void Configure(CLI::App* app) override {
+    app->require_subcommand(1);
+    check_ = app->add_subcommand("check", "The exact response basis against the direct FE solve, per patient");
+    check_->add_option("--patient-table", table_, "CSV of CT measurements (as `pectus plan`)")->required();
+    check_->add_option("--patients", patients_, "Patient ids separated by commas, or all")->default_val("57");
+    check_->add_option("--random", random_, "Random (position, force) pairs per patient besides the 24 cases")
+        ->default_val(100)
+        ->check(CLI::NonNegativeNumber);
+    check_->add_option("--seed", seed_, "Seed of the random pairs")->default_val(1400);
+    check_->add_option("--tolerance-mm", tolerance_mm_,
+                       "The basis' compression tolerance up to 2000 N, mm (the plugin's default: 0.001)")
+        ->default_val(0.001)
+        ->check(CLI::PositiveNumber);
+    check_->add_option("--limit-mm", limit_mm_,
+                       "Fail if any point of any case differs from the direct solve by more than this, mm")
+        ->default_val(0.01)
+        ->check(CLI::PositiveNumber);
+    check_->add_option("--evaluations", evaluations_, "Deform calls timed per patient")
+        ->default_val(2000)
+        ->check(CLI::PositiveNumber);
+    check_->add_option("--cell-mm", cell_mm_, "Mesh: cell length along the ribs, 2 to 20 mm (default 6)");
+    check_->add_option("--plugin", plugin_path_, "The planner plugin (default: beside pectus)");
+    check_->fallthrough();  // --report, --threads, --quiet belong to `surrogate`
+  }
+  std::vector<fs::path> Inputs() const override { return {table_}; }
+
+  void Run(Context* context) override {
+    const PlannerPlugin plugin = PlannerPlugin::Find(plugin_path_);
+    context->report["plugin"] = {{"path", plugin.path().string()},
+                                 {"description", plugin.description()},
+                                 {"interface_version", plugin.api().version}};
+    PectusPlannerOptions options = PluginDefaultOptions(plugin);
+    if (cell_mm_ > 0) options.rib_cell_length_mm = cell_mm_;
+    const std::vector<std::string> ids = PatientList(patients_, table_);
+    Progress progress("surrogate check (patients)", static_cast<std::int64_t>(ids.size()));
+    double worst = 0.0;
+    std::string worst_patient;
+    for (const std::string& id : ids) {
+      const nlohmann::json row = Check(plugin, options, id);
+      context->report["patients"].push_back(row);
+      if (row["max_difference_mm"].get<double>() >= worst) {
+        worst = row["max_difference_mm"].get<double>();
+        worst_patient = id;
+      }
+      progress.Advance();
+    }
+    context->report["max_difference_mm"] = worst;
+    context->report["limit_mm"] = limit_mm_;
+    char line[300];
+    std::snprintf(line, sizeof(line),
+                  "surrogate check: %zu patient(s), largest difference from the direct solve %.2e mm (patient "
+                  "%s; limit %.3g mm)",
+                  ids.size(), worst, worst_patient.c_str(), limit_mm_);
+    Info(line);
+    if (worst > limit_mm_) {
+      ThrowFailure(std::string(line) + ": the basis does not reproduce the FE solve; a smaller --tolerance-mm "
+                                       "keeps more modes");
+    }
+  }
+
+ private:
+  nlohmann::json Check(const PlannerPlugin& plugin, const PectusPlannerOptions& options, const std::string& id) {
+    PlannerClient planner(plugin, ReadPlannerPatient(plugin, table_, id), options);
+    PectusPlannerBasisOptions basis_options{tolerance_mm_, 2000.0};
+    auto start = Clock::now();
+    const PectusPlannerBasisSummary basis = planner.BuildBasis(&basis_options);
+    const double build_s = std::chrono::duration<double>(Clock::now() - start).count();
+    // The cases: the dissertation's 24, then random ones over the sternum's length and the forces used.
+    std::vector<BarPlacement> bars;
+    for (double p : kDissertationPositions) {
+      for (double f : kDissertationForces) bars.push_back({p, false, f});
+    }
+    std::mt19937 rng(seed_ + static_cast<unsigned>(std::hash<std::string>{}(id) % 100000));
+    std::uniform_real_distribution<double> position(0.05, 0.95), force(10.0, 2000.0);
+    for (int k = 0; k < random_; ++k) bars.push_back({position(rng), false, force(rng)});
+    double worst = 0.0, worst_lift = 0.0;
+    for (std::size_t first = 0; first < bars.size(); first += 64) {
+      const std::vector<BarPlacement> block(bars.begin() + static_cast<std::ptrdiff_t>(first),
+                                            bars.begin() + static_cast<std::ptrdiff_t>(std::min(first + 64, bars.size())));
+      const std::vector<PlannedCase> direct = planner.Solve(block);
+      const std::vector<PlannedCase> fast = planner.Deform(block);
+      for (std::size_t k = 0; k < block.size(); ++k) {
+        worst = std::max({worst, (direct[k].bone - fast[k].bone).cwiseAbs().maxCoeff(),
+                          (direct[k].skin - fast[k].skin).cwiseAbs().maxCoeff()});
+        for (std::size_t l = 0; l < direct[k].skin_landmarks.size(); ++l) {
+          worst = std::max(worst, (direct[k].skin_landmarks.items[l].position -
+                                   fast[k].skin_landmarks.items[l].position)
+                                      .cwiseAbs()
+                                      .maxCoeff());
+        }
+        worst_lift = std::max(worst_lift,
+                              std::abs(direct[k].figures.sternum_lift_mm - fast[k].figures.sternum_lift_mm));
+      }
+    }
+    // The real-time calls, timed one by one on this thread (the median of many; the first ones warm the
+    // caches).
+    const PectusPlannerInterface& api = plugin.api();
+    PectusPlannerDeformer* deformer = nullptr;
+    PectusPlannerStatus status{};
+    ThrowIfFailed(api.create_deformer(planner.handle(), &deformer, &status), status);
+    const std::unique_ptr<PectusPlannerDeformer, void (*)(PectusPlannerDeformer*)> own(deformer,
+                                                                                       api.destroy_deformer);
+    std::vector<double> bone(3 * static_cast<std::size_t>(planner.bone().num_vertices())),
+        skin(3 * static_cast<std::size_t>(planner.skin().num_vertices()));
+    std::vector<double> update_us, lift_us;
+    std::uniform_real_distribution<double> level(0.5, 0.95);  // where the bar goes (the search's range)
+    for (int k = 0; k < evaluations_; ++k) {
+      const PectusPlannerBar bar = {level(rng), 0, force(rng)};
+      auto t0 = Clock::now();
+      const std::int32_t code = api.deform(deformer, &bar, bone.data(), skin.data(), nullptr, nullptr, &status);
+      auto t1 = Clock::now();
+      ThrowIfFailed(code, status);
+      double f = 0.0;
+      auto t2 = Clock::now();
+      const std::int32_t lift_code = api.lift_force(deformer, &bar, 20.0, &f, &status);
+      auto t3 = Clock::now();
+      ThrowIfFailed(lift_code, status);
+      update_us.push_back(1e6 * std::chrono::duration<double>(t1 - t0).count());
+      lift_us.push_back(1e6 * std::chrono::duration<double>(t3 - t2).count());
+    }
+    return {{"patient", id},
+            {"cases", bars.size()},
+            {"max_difference_mm", worst},
+            {"max_lift_difference_mm", worst_lift},
+            {"rank", basis.rank},
+            {"contact_nodes", basis.contact_nodes},
+            {"points", basis.points},
+            {"megabytes", static_cast<double>(basis.bytes) / 1e6},
+            {"truncation_bound_mm", basis.truncation_bound_mm},
+            {"build_s", build_s},
+            {"update_median_us", Median(update_us)},
+            {"lift_force_median_us", Median(lift_us)}};
+  }
+
+  CLI::App* check_ = nullptr;
+  std::string table_, patients_ = "57", plugin_path_;
+  int random_ = 100, evaluations_ = 2000;
+  unsigned seed_ = 1400;
+  double tolerance_mm_ = 0.001, limit_mm_ = 0.01, cell_mm_ = 0;
+};
+
+PECTUS_REGISTER_COMMAND(SurrogateCommand, 125);
+
+}  // namespace
+}  // namespace pectus::cli
