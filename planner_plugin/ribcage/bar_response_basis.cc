@@ -206,9 +206,19 @@ BarResponseBasis::BarResponseBasis(const RibcageFem& fem, const std::vector<Node
   timings_s_.Add("solve_adjoint", Since(start));
   start = std::chrono::steady_clock::now();
 
+  mixing_ = std::move(mixing);
+  Pack(modes);
+  truncation_bound_mm_per_n_ = r < sv.size() ? sv[r] : 0.0;
+  timings_s_.Add("pack", Since(start));
+}
+
+template <typename Modes>
+void BarResponseBasis::Pack(const Modes& modes) {
   static_assert(kPanel == 8, "PanelsTimesVector sums 8 coordinates at a time");
   rows_ = modes.rows();
-  rank_ = r;
+  rank_ = modes.cols();
+  const Eigen::Index r = rank_;
+  const Eigen::MatrixXd& mixing = mixing_;
   const Eigen::Index panels = (rows_ + kPanel - 1) / kPanel;
   panels_.assign(static_cast<std::size_t>(panels * kPanel * r), 0.0f);
   for (Eigen::Index i = 0; i < rows_; ++i) {
@@ -248,8 +258,6 @@ BarResponseBasis::BarResponseBasis(const RibcageFem& fem, const std::vector<Node
       prefix_mixing_[k].col(q + 1) = prefix_mixing_[k].col(q) + (p.weight * factor[k]) * m;
     }
   }
-  truncation_bound_mm_per_n_ = r < sv.size() ? sv[r] : 0.0;
-  timings_s_.Add("pack", Since(start));
 }
 
 BarResponseWorkspace BarResponseBasis::MakeWorkspace() const {
@@ -331,12 +339,100 @@ double BarResponseBasis::LiftPerNewton(double level_z_mm) const noexcept {
 }
 
 std::size_t BarResponseBasis::bytes() const {
-  std::size_t numbers = panels_.size() / 2 + static_cast<std::size_t>(lift_.size() + z_.size());
+  std::size_t numbers =
+      panels_.size() / 2 + static_cast<std::size_t>(lift_.size() + z_.size() + mixing_.size());
   for (int k = 0; k < 3; ++k)
     numbers +=
         static_cast<std::size_t>(prefix_area_[k].size() + prefix_lift_[k].size() + prefix_mixing_[k].size());
   return sizeof(double) * numbers + sizeof(QuadraturePoint) * quadrature_.size() +
          sizeof(std::int32_t) * contact_nodes_.size();
+}
+
+BarResponseBasis::Stored BarResponseBasis::ToStored() const {
+  Stored out;
+  out.num_points = num_points_;
+  out.contact_width_mm = contact_width_mm_;
+  out.notch_z_mm = notch_z_mm_;
+  out.sternal_length_mm = sternal_length_mm_;
+  out.truncation_bound_mm_per_n = truncation_bound_mm_per_n_;
+  out.contact_nodes = contact_nodes_;
+  const auto Q = static_cast<Eigen::Index>(quadrature_.size());
+  out.quadrature_z.resize(Q);
+  out.quadrature_weight.resize(Q);
+  out.quadrature_contact.resize(Q, 6);
+  out.quadrature_N.resize(Q, 6);
+  for (Eigen::Index q = 0; q < Q; ++q) {
+    const QuadraturePoint& p = quadrature_[static_cast<std::size_t>(q)];
+    out.quadrature_z[q] = p.z;
+    out.quadrature_weight[q] = p.weight;
+    for (int a = 0; a < 6; ++a) {
+      out.quadrature_contact(q, a) = p.contact[a];
+      out.quadrature_N(q, a) = p.N[a];
+    }
+  }
+  out.modes.resize(rows_, rank_);
+  for (Eigen::Index i = 0; i < rows_; ++i) {
+    for (Eigen::Index j = 0; j < rank_; ++j)
+      out.modes(i, j) = panels_[static_cast<std::size_t>((i / kPanel) * kPanel * rank_ + j * kPanel + i % kPanel)];
+  }
+  out.mixing = mixing_;
+  out.lift = lift_;
+  out.singular_values = singular_values_;
+  return out;
+}
+
+BarResponseBasis::BarResponseBasis(Stored stored, const std::string& source) {
+  auto bad = [&source](const std::string& what) { ThrowBadInput(source, "response basis: " + what); };
+  const auto J = static_cast<Eigen::Index>(stored.contact_nodes.size());
+  const Eigen::Index Q = stored.quadrature_z.size(), r = stored.modes.cols();
+  if (stored.num_points <= 0 || stored.modes.rows() != 3 * stored.num_points)
+    bad("the modes have " + std::to_string(stored.modes.rows()) + " rows for " +
+        std::to_string(stored.num_points) + " points (3 per point)");
+  if (J == 0 || Q == 0) bad("no contact nodes or no quadrature points");
+  if (stored.quadrature_weight.size() != Q || stored.quadrature_contact.rows() != Q ||
+      stored.quadrature_contact.cols() != 6 || stored.quadrature_N.rows() != Q || stored.quadrature_N.cols() != 6)
+    bad("the quadrature's arrays differ in length (or are not 6 per point)");
+  if (stored.mixing.rows() != r || stored.mixing.cols() != J || stored.lift.size() != J)
+    bad("the mixing is not rank by #contact nodes, or the lift not one per contact node");
+  if (!(stored.contact_width_mm > 0 && std::isfinite(stored.contact_width_mm)) ||
+      !std::isfinite(stored.notch_z_mm) || !(stored.sternal_length_mm > 0 && std::isfinite(stored.sternal_length_mm)) ||
+      !(stored.truncation_bound_mm_per_n >= 0 && std::isfinite(stored.truncation_bound_mm_per_n)))
+    bad("the contact width, sternal length and truncation bound must be positive and finite");
+  if (!stored.modes.allFinite() || !stored.mixing.allFinite() || !stored.lift.allFinite() ||
+      !stored.quadrature_z.allFinite() || !stored.quadrature_weight.allFinite() || !stored.quadrature_N.allFinite() ||
+      !stored.singular_values.allFinite())
+    bad("holds a non-finite number");
+  if ((stored.quadrature_weight.array() < 0).any()) bad("a quadrature weight is negative");
+  for (Eigen::Index q = 0; q + 1 < Q; ++q) {
+    if (stored.quadrature_z[q + 1] < stored.quadrature_z[q]) bad("the quadrature points are not in ascending z");
+  }
+  if ((stored.quadrature_contact.array() < 0).any() || (stored.quadrature_contact.array() >= J).any())
+    bad("a quadrature point refers to a contact node beyond the " + std::to_string(J));
+  for (std::int32_t node : stored.contact_nodes) {
+    if (node < 0) bad("a contact node has a negative index");
+  }
+  num_points_ = stored.num_points;
+  contact_width_mm_ = stored.contact_width_mm;
+  notch_z_mm_ = stored.notch_z_mm;
+  sternal_length_mm_ = stored.sternal_length_mm;
+  truncation_bound_mm_per_n_ = stored.truncation_bound_mm_per_n;
+  contact_nodes_ = std::move(stored.contact_nodes);
+  quadrature_.resize(static_cast<std::size_t>(Q));
+  for (Eigen::Index q = 0; q < Q; ++q) {
+    QuadraturePoint& p = quadrature_[static_cast<std::size_t>(q)];
+    p.z = stored.quadrature_z[q];
+    p.weight = stored.quadrature_weight[q];
+    for (int a = 0; a < 6; ++a) {
+      p.contact[a] = stored.quadrature_contact(q, a);
+      p.N[a] = stored.quadrature_N(q, a);
+    }
+  }
+  mixing_ = std::move(stored.mixing);
+  lift_ = std::move(stored.lift);
+  singular_values_ = std::move(stored.singular_values);
+  const auto start = std::chrono::steady_clock::now();
+  Pack(stored.modes);
+  timings_s_.Add("pack", Since(start));
 }
 
 }  // namespace pectus::planner

@@ -56,6 +56,32 @@ struct BarResponseWorkspace {
 /// The exact, compressed response of one patient's chest to the bar.
 class BarResponseBasis {
  public:
+  /// What a basis is made of, to store it (io/fem_dataset_h5: /patients/<id>/response_basis) and make it
+  /// again without the finite element model: the modes, the mixing, the exact lift, the contact nodes and
+  /// the quadrature of the sternum's back. What evaluation derives from them (panels, prefix sums) is
+  /// recomputed on loading.
+  struct Stored {
+    Eigen::Index num_points = 0;          ///< output points (3 #points rows of `modes`)
+    double contact_width_mm = 0.0;        ///< the bar's contact width (RibcageFemOptions)
+    double notch_z_mm = 0.0;              ///< height of the sternal notch (bar positions are measured from it)
+    double sternal_length_mm = 0.0;       ///< for bar positions given as fractions
+    double truncation_bound_mm_per_n = 0.0;
+    std::vector<std::int32_t> contact_nodes;  ///< #contact nodes: mesh nodes of the sternum's back
+    Eigen::VectorXd quadrature_z;             ///< #quadrature points, ascending, mm
+    Eigen::VectorXd quadrature_weight;        ///< #quadrature points, area weights, mm^2
+    Eigen::MatrixXi quadrature_contact;       ///< #quadrature points by 6: indices into contact_nodes
+    Eigen::MatrixXd quadrature_N;             ///< #quadrature points by 6: shape function values
+    Eigen::MatrixXf modes;                    ///< 3 #points by rank: the orthonormal modes U_r
+    Eigen::MatrixXd mixing;                   ///< rank by #contact nodes: M = U_r' P K^-1 D
+    Eigen::VectorXd lift;                     ///< #contact nodes: sternal lift per newton at each, mm/N
+    Eigen::VectorXd singular_values;          ///< of the sampled responses, descending, mm/N
+  };
+  /// The basis as stored.
+  Stored ToStored() const;
+  /// A basis from stored arrays. Throws Error(kBadInput) naming `source` for anything inconsistent (a
+  /// shape that does not match, an index out of range, a non-finite or out-of-order value).
+  BarResponseBasis(Stored stored, const std::string& source);
+
   /// Builds the basis of the response at `points` (each a combination of nodes; their displacements are
   /// the output) and of the sternal lift (RibcageFem::SternumLift) to the bar on the sternum's posterior
   /// faces. Throws Error(kUsage) for invalid options or a tie to a node outside the mesh.
@@ -125,6 +151,10 @@ class BarResponseBasis {
   std::vector<float> panels_;
   Eigen::Index rows_ = 0, rank_ = 0;
   Eigen::VectorXd lift_;  // per contact node: sternal lift per newton (exact, uncompressed)
+  Eigen::MatrixXd mixing_;  // rank by #contact nodes (kept to store the basis)
+  // Packs the modes into panels_ and the prefix sums from quadrature_, mixing_ and lift_.
+  template <typename Modes>
+  void Pack(const Modes& modes);
   Eigen::VectorXd z_;     // the quadrature points' heights, ascending
   // Prefix sums over the quadrature points (index q + 1: points 0..q), plain, times cos, times sin.
   Eigen::VectorXd prefix_area_[3], prefix_lift_[3];
