@@ -226,11 +226,12 @@ typedef struct PectusPlannerInterface {
 
   /** The dissertation's dataset: every patient of `table_path` x 3 bar positions (0.65, 0.75, 0.85 of the
    *  sternal length) x 8 forces (50, 70, 100, 200, 400, 800, 1500, 2000 N), surface-node displacements
-   *  written as one HDF5 file at `output_path` (replaced only when complete). */
+   *  written as one HDF5 file at `output_path` (replaced only when complete). With `basis` (version 2;
+   *  NULL: none) each patient's exact response basis too, for load_basis(). */
   int32_t (*write_dataset)(const char* table_path, const char* output_path,
-                           const PectusPlannerOptions* options, PectusPlannerProgressFn progress,
-                           void* progress_user, PectusPlannerDatasetSummary* out,
-                           PectusPlannerStatus* status);
+                           const PectusPlannerOptions* options, const struct PectusPlannerBasisOptions* basis,
+                           PectusPlannerProgressFn progress, void* progress_user,
+                           PectusPlannerDatasetSummary* out, PectusPlannerStatus* status);
 
   /* ---- version 2: the exact response basis and the real-time deform call ---- */
 
@@ -239,6 +240,11 @@ typedef struct PectusPlannerInterface {
    *  before a rebuild must be destroyed first. `out` may be NULL. */
   int32_t (*build_basis)(PectusPlanner* planner, const PectusPlannerBasisOptions* options,
                          PectusPlannerBasisSummary* out, PectusPlannerStatus* status);
+  /** Takes the planner's patient's basis from a dataset written with bases (write_dataset) instead of
+   *  building it: milliseconds instead of seconds. BAD_INPUT, naming the file, if the file has none for
+   *  this patient or it was built for another planner (mesh, skin, contact width or materials differ). */
+  int32_t (*load_basis)(PectusPlanner* planner, const char* dataset_path, PectusPlannerBasisSummary* out,
+                        PectusPlannerStatus* status);
   /** A deformer for one thread: its buffers sized once here. Needs build_basis() first. It refers to
    *  the planner, which must outlive it. */
   int32_t (*create_deformer)(const PectusPlanner* planner, PectusPlannerDeformer** out,

@@ -78,6 +78,17 @@ PectusPlannerBasisSummary PlannerClient::BuildBasis(const PectusPlannerBasisOpti
   return summary;
 }
 
+PectusPlannerBasisSummary PlannerClient::LoadBasis(const std::filesystem::path& dataset) {
+  deformer_.reset();
+  PectusPlannerBasisSummary summary{};
+  PectusPlannerStatus status{};
+  ThrowIfFailed(api_->load_basis(planner_, dataset.c_str(), &summary, &status), status);
+  PectusPlannerDeformer* deformer = nullptr;
+  ThrowIfFailed(api_->create_deformer(planner_, &deformer, &status), status);
+  deformer_ = std::unique_ptr<PectusPlannerDeformer, DeformerDeleter>(deformer, DeformerDeleter{api_});
+  return summary;
+}
+
 std::vector<PlannedCase> PlannerClient::Deform(const std::vector<BarPlacement>& bars, bool with_bone) const {
   if (!deformer_) ThrowUsage("planner: no response basis; BuildBasis() first");
   const Eigen::Index nb = bone_.num_vertices(), ns = skin_.num_vertices();
@@ -174,7 +185,8 @@ PectusPlannerOptions PluginDefaultOptions(const PlannerPlugin& plugin) {
 
 PectusPlannerDatasetSummary WritePlannerDataset(
     const PlannerPlugin& plugin, const std::filesystem::path& table, const std::filesystem::path& output,
-    const PectusPlannerOptions& options, const std::function<void(std::int64_t, std::int64_t)>& progress) {
+    const PectusPlannerOptions& options, const std::function<void(std::int64_t, std::int64_t)>& progress,
+    const PectusPlannerBasisOptions* basis) {
   PectusPlannerDatasetSummary summary{};
   PectusPlannerStatus status{};
   // The callback crosses the C boundary: it must not throw.
@@ -186,7 +198,7 @@ PectusPlannerDatasetSummary WritePlannerDataset(
     }
   };
   ThrowIfFailed(
-      plugin.api().write_dataset(table.c_str(), output.c_str(), &options, trampoline,
+      plugin.api().write_dataset(table.c_str(), output.c_str(), &options, basis, trampoline,
                                  const_cast<std::function<void(std::int64_t, std::int64_t)>*>(&progress),
                                  &summary, &status),
       status);

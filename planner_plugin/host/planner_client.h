@@ -79,6 +79,9 @@ class PlannerClient {
   /// Builds the plugin's exact response basis (interface version 2; seconds): Deform() then answers any
   /// placement in a fraction of a millisecond, matching Solve() to 0.01 mm. `options` nullptr: defaults.
   PectusPlannerBasisSummary BuildBasis(const PectusPlannerBasisOptions* options = nullptr);
+  /// Takes the patient's basis from an FE dataset written with bases instead (milliseconds). Throws
+  /// Error(kBadInput) naming the file if it has none for this patient or one of another planner.
+  PectusPlannerBasisSummary LoadBasis(const std::filesystem::path& dataset);
   bool has_basis() const { return deformer_ != nullptr; }
   /// The placements from the basis (BuildBasis() first): deformed skin, skin landmarks, bone if
   /// `with_bone`, and of the figures only the sternal lift (the others 0). Throws Error(kUsage) for a
@@ -110,9 +113,11 @@ PectusPlannerPatient ReadPlannerPatient(const PlannerPlugin& plugin, const std::
 /// The plugin's defaults.
 PectusPlannerOptions PluginDefaultOptions(const PlannerPlugin& plugin);
 
-/// Writes the FE dataset of every patient of `table` through the plugin; `progress(done, total)`.
+/// Writes the FE dataset of every patient of `table` through the plugin; `progress(done, total)`. With
+/// `basis` (nullptr: none), every patient's exact response basis too.
 PectusPlannerDatasetSummary WritePlannerDataset(
     const PlannerPlugin& plugin, const std::filesystem::path& table, const std::filesystem::path& output,
-    const PectusPlannerOptions& options, const std::function<void(std::int64_t, std::int64_t)>& progress);
+    const PectusPlannerOptions& options, const std::function<void(std::int64_t, std::int64_t)>& progress,
+    const PectusPlannerBasisOptions* basis = nullptr);
 
 }  // namespace pectus::planner

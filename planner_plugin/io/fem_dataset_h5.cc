@@ -144,8 +144,60 @@ FemDatasetWriter::~FemDatasetWriter() {
   file_.reset();  // closed before output_ removes the staged file of an uncommitted dataset
 }
 
+double RestChecksum(const Eigen::VectorXd& rest_positions) {
+  double sum = 0.0;
+  for (Eigen::Index i = 0; i < rest_positions.size(); ++i) sum += rest_positions[i] * static_cast<double>(1 + i % 7);
+  return sum;
+}
+
+namespace {
+
+constexpr const char* kBasisScalars =
+    "num_points, contact_width_mm, notch_z_mm, sternal_length_mm, truncation_bound_mm_per_n, bone_vertices, "
+    "skin_vertices, skin_landmarks, mesh_nodes, rest_checksum_mm";
+
+void WriteResponseBasis(hid_t patient, const StoredResponseBasis& b, const std::filesystem::path& path) {
+  const BarResponseBasis::Stored& s = b.arrays;
+  const hid_t group = Group(patient, "response_basis", path);
+  WriteAttribute(group, "scalars_order", kBasisScalars, path);
+  const double scalars[10] = {static_cast<double>(s.num_points), s.contact_width_mm, s.notch_z_mm,
+                              s.sternal_length_mm, s.truncation_bound_mm_per_n, static_cast<double>(b.bone_vertices),
+                              static_cast<double>(b.skin_vertices), static_cast<double>(b.skin_landmarks),
+                              static_cast<double>(b.mesh_nodes), b.rest_checksum_mm};
+  WriteDataset(group, "scalars", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {10}, scalars, path);
+  using RowMajorF = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  using RowMajorD = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  using RowMajorI = Eigen::Matrix<std::int32_t, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  const RowMajorF modes = s.modes;
+  const RowMajorD mixing = s.mixing, N = s.quadrature_N;
+  const RowMajorI contact = s.quadrature_contact;
+  const auto dims = [](Eigen::Index rows, Eigen::Index cols) {
+    return std::vector<hsize_t>{static_cast<hsize_t>(rows), static_cast<hsize_t>(cols)};
+  };
+  WriteDataset(group, "modes", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, dims(modes.rows(), modes.cols()), modes.data(),
+               path);
+  WriteDataset(group, "mixing", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, dims(mixing.rows(), mixing.cols()),
+               mixing.data(), path);
+  WriteDataset(group, "lift", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {static_cast<hsize_t>(s.lift.size())},
+               s.lift.data(), path);
+  WriteDataset(group, "contact_nodes", H5T_STD_I32LE, H5T_NATIVE_INT32, {s.contact_nodes.size()},
+               s.contact_nodes.data(), path);
+  const auto Q = static_cast<hsize_t>(s.quadrature_z.size());
+  WriteDataset(group, "quadrature_z", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {Q}, s.quadrature_z.data(), path);
+  WriteDataset(group, "quadrature_weight", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {Q}, s.quadrature_weight.data(),
+               path);
+  WriteDataset(group, "quadrature_contact", H5T_STD_I32LE, H5T_NATIVE_INT32, {Q, 6}, contact.data(), path);
+  WriteDataset(group, "quadrature_N", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {Q, 6}, N.data(), path);
+  WriteDataset(group, "singular_values", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE,
+               {static_cast<hsize_t>(s.singular_values.size())}, s.singular_values.data(), path);
+  H5Gclose(group);
+}
+
+}  // namespace
+
 void FemDatasetWriter::AddPatient(const PatientRibcage& ribcage, const std::vector<BarResult>& results,
-                                  const std::vector<ForceToLift>& force_to_lift, double ct_haller_index) {
+                                  const std::vector<ForceToLift>& force_to_lift, double ct_haller_index,
+                                  const StoredResponseBasis* basis) {
   if (results.size() != loads_.size()) {
     ThrowFailure("FE dataset: patient " + ribcage.patient + " has " + std::to_string(results.size()) +
                  " results for " + std::to_string(loads_.size()) + " load cases");
@@ -191,6 +243,7 @@ void FemDatasetWriter::AddPatient(const PatientRibcage& ribcage, const std::vect
     std::snprintf(name, sizeof(name), "force_to_lift_n_at_%.2f", f.position.position);
     WriteAttribute(group, name, f.force_n, path_);
   }
+  if (basis != nullptr) WriteResponseBasis(group, *basis, path_);
   H5Gclose(group);
 }
 
@@ -266,6 +319,16 @@ class Reader {
     return values;
   }
 
+  // Whether `path` names something in the file (each of its parents checked first).
+  bool Exists(const std::string& path) const {
+    std::size_t at = 0;
+    while ((at = path.find('/', at + 1)) != std::string::npos) {
+      if (H5Lexists(file_, path.substr(0, at).c_str(), H5P_DEFAULT) <= 0) return false;
+    }
+    return H5Lexists(file_, path.c_str(), H5P_DEFAULT) > 0;
+  }
+  const std::string& name() const { return name_; }
+
   // The names of the members of group `path`.
   std::vector<std::string> Members(const std::string& path) const {
     if (H5Lexists(file_, path.c_str(), H5P_DEFAULT) <= 0) Bad("has no group /" + path);
@@ -288,6 +351,78 @@ class Reader {
   hid_t file_;
   std::string name_;
 };
+
+// Whole numbers of a dataset as int32 (indices), each checked.
+template <typename Out>
+void WholeNumbers(const Reader& r, const std::vector<double>& values, const std::string& path, Out* out) {
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    const double v = values[i];
+    if (v != std::floor(v) || std::abs(v) > 2e9) r.Bad("/" + path + " holds " + std::to_string(v) + ", not an index");
+    (*out)[static_cast<Eigen::Index>(i)] = static_cast<std::int32_t>(v);
+  }
+}
+
+// The response basis of patient group `group` ("patients/<id>/"), checked (BarResponseBasis's own
+// checks run on it too, by whoever makes the basis).
+StoredResponseBasis ReadResponseBasis(const Reader& r, const std::string& group, const std::string& source) {
+  const std::string g = group + "response_basis/";
+  StoredResponseBasis b;
+  BarResponseBasis::Stored& s = b.arrays;
+  const std::vector<double> scalars = r.Numbers(g + "scalars", {10});
+  for (int i : {0, 5, 6, 7, 8}) {
+    if (scalars[i] != std::floor(scalars[i]) || scalars[i] < 0 || scalars[i] > 1e9)
+      r.Bad("/" + g + "scalars holds a count that is not a whole number: " + std::to_string(scalars[i]));
+  }
+  s.num_points = static_cast<Eigen::Index>(scalars[0]);
+  s.contact_width_mm = scalars[1];
+  s.notch_z_mm = scalars[2];
+  s.sternal_length_mm = scalars[3];
+  s.truncation_bound_mm_per_n = scalars[4];
+  b.bone_vertices = static_cast<std::int64_t>(scalars[5]);
+  b.skin_vertices = static_cast<std::int64_t>(scalars[6]);
+  b.skin_landmarks = static_cast<std::int64_t>(scalars[7]);
+  b.mesh_nodes = static_cast<std::int64_t>(scalars[8]);
+  b.rest_checksum_mm = scalars[9];
+  if (b.bone_vertices + b.skin_vertices + b.skin_landmarks != s.num_points)
+    r.Bad("/" + g + "scalars: bone, skin and landmark points do not add up to num_points");
+  std::vector<hsize_t> shape;
+  const std::vector<double> modes = r.Numbers(g + "modes", {static_cast<hsize_t>(3 * s.num_points), 0}, &shape);
+  const auto rank = static_cast<Eigen::Index>(shape[1]);
+  s.modes = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+                modes.data(), 3 * s.num_points, rank)
+                .cast<float>();
+  const std::vector<double> nodes = r.Numbers(g + "contact_nodes", {0}, &shape);
+  const hsize_t J = shape[0];
+  s.contact_nodes.resize(J);
+  WholeNumbers(r, nodes, g + "contact_nodes", &s.contact_nodes);
+  const std::vector<double> mixing = r.Numbers(g + "mixing", {static_cast<hsize_t>(rank), J});
+  s.mixing = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+      mixing.data(), rank, static_cast<Eigen::Index>(J));
+  const std::vector<double> lift = r.Numbers(g + "lift", {J});
+  s.lift = Eigen::Map<const Eigen::VectorXd>(lift.data(), static_cast<Eigen::Index>(J));
+  const std::vector<double> z = r.Numbers(g + "quadrature_z", {0}, &shape);
+  const hsize_t Q = shape[0];
+  s.quadrature_z = Eigen::Map<const Eigen::VectorXd>(z.data(), static_cast<Eigen::Index>(Q));
+  const std::vector<double> weight = r.Numbers(g + "quadrature_weight", {Q});
+  s.quadrature_weight = Eigen::Map<const Eigen::VectorXd>(weight.data(), static_cast<Eigen::Index>(Q));
+  const std::vector<double> contact = r.Numbers(g + "quadrature_contact", {Q, 6});
+  Eigen::Matrix<std::int32_t, Eigen::Dynamic, 6, Eigen::RowMajor> c(static_cast<Eigen::Index>(Q), 6);
+  Eigen::Map<Eigen::Matrix<std::int32_t, Eigen::Dynamic, 1>> flat(c.data(), c.size());
+  WholeNumbers(r, contact, g + "quadrature_contact", &flat);
+  s.quadrature_contact = c;
+  const std::vector<double> N = r.Numbers(g + "quadrature_N", {Q, 6});
+  s.quadrature_N = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor>>(
+      N.data(), static_cast<Eigen::Index>(Q), 6);
+  const std::vector<double> sv = r.Numbers(g + "singular_values", {0}, &shape);
+  s.singular_values = Eigen::Map<const Eigen::VectorXd>(sv.data(), static_cast<Eigen::Index>(shape[0]));
+  // The basis' own checks (indices, order, shapes), naming the file.
+  try {
+    BarResponseBasis check(s, source);
+  } catch (const Error& e) {
+    r.Bad(std::string("/") + g + ": " + e.what());
+  }
+  return b;
+}
 
 // The dataset of an open file, checked against the layout of the header.
 FemDataset ReadOpenFemDataset(const Reader& r) {
@@ -343,6 +478,7 @@ FemDataset ReadOpenFemDataset(const Reader& r) {
           Eigen::Map<const Points3>(u.data() + k * n * 3, static_cast<Eigen::Index>(n), 3));
     const std::vector<double> lift = r.Numbers(group + "sternum_lift", {cases});
     p.sternum_lift_mm = Eigen::Map<const Eigen::VectorXd>(lift.data(), static_cast<Eigen::Index>(cases));
+    if (r.Exists(group + "response_basis")) p.basis = ReadResponseBasis(r, group, r.name());
     d.patients.push_back(std::move(p));
   }
   return d;
@@ -357,6 +493,20 @@ FemDataset ReadFemDataset(const std::filesystem::path& path) {
   const hid_t file = H5Fis_hdf5(path.c_str()) > 0 ? H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT) : -1;
   if (file < 0) ThrowBadInput(path.string(), "is not an HDF5 file");
   return ReadOpenFemDataset(Reader(file, path.string()));
+}
+
+StoredResponseBasis ReadStoredResponseBasis(const std::filesystem::path& path, const std::string& patient) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) ThrowBadInput(path.string(), "no such file");
+  const hid_t file = H5Fis_hdf5(path.c_str()) > 0 ? H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT) : -1;
+  if (file < 0) ThrowBadInput(path.string(), "is not an HDF5 file");
+  const Reader r(file, path.string());
+  if (patient.empty() || patient.find('/') != std::string::npos || !r.Exists("patients/" + patient))
+    r.Bad("has no patient '" + patient + "' (under /patients)");
+  if (!r.Exists("patients/" + patient + "/response_basis"))
+    r.Bad("has no response basis for patient " + patient + " (write the dataset with `pectus surrogate build`)");
+  return ReadResponseBasis(r, "patients/" + patient + "/", path.string());
 }
 
 FemDataset ParseFemDataset(std::string_view bytes, const std::string& name) {

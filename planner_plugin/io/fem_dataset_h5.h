@@ -12,6 +12,14 @@
 //   /patients/<id>/nodes          (#surface nodes x 3) float64, undeformed positions
 //   /patients/<id>/displacements  (24 x #surface nodes x 3) float32, one slab per load case
 //   /patients/<id>/sternum_lift   (24) float64, anterior lift of the sternum at the deepest level
+//   /patients/<id>/response_basis/  (optional; `pectus surrogate build`) the patient's exact response basis
+//                          (BarResponseBasis::Stored): modes (3P x r) float32, mixing (r x J), lift (J),
+//                          contact_nodes (J) int32, quadrature_z, quadrature_weight (Q), quadrature_contact
+//                          (Q x 6) int32, quadrature_N (Q x 6), singular_values, and scalars (10 float64):
+//                          num_points, contact_width_mm, notch_z_mm, sternal_length_mm,
+//                          truncation_bound_mm_per_n, then the points it answers for: bone_vertices,
+//                          skin_vertices, skin_landmarks (in that order), mesh_nodes and rest_checksum_mm of
+//                          the planner it was built in (the order is also the group's attribute)
 // The surface nodes are the corner nodes of the quadratic mesh that lie on its boundary; the topology
 // is the same for every patient (the generic mesh mapped), so a node index means the same anatomical
 // point in every patient.
@@ -19,16 +27,30 @@
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "planner_plugin/ribcage/bar_response_basis.h"
 #include "planner_plugin/ribcage/build_generic_ribcage.h"
 #include "planner_plugin/ribcage/ribcage_fem.h"
 #include "shape/core/atomic_file.h"
 #include "shape/core/geometry.h"
 
 namespace pectus::planner {
+
+/// A patient's exact response basis as the FE dataset keeps it: the arrays, and which output points they
+/// answer for (a planner's bone surface vertices, skin vertices and skin landmarks, in that order).
+struct StoredResponseBasis {
+  BarResponseBasis::Stored arrays;
+  std::int64_t bone_vertices = 0, skin_vertices = 0, skin_landmarks = 0;
+  std::int64_t mesh_nodes = 0;    ///< of the mesh it was built on
+  double rest_checksum_mm = 0.0;  ///< RestChecksum() of the points' rest positions: another mesh or skin differs
+};
+
+/// A fingerprint of rest positions (3 #points, row-major): sum of x_i (1 + i mod 7), mm.
+double RestChecksum(const Eigen::VectorXd& rest_positions);
 
 /// The FE dataset as read back (layout above): the load cases, the shared topology, every patient.
 struct FemDataset {
@@ -38,6 +60,7 @@ struct FemDataset {
     Points3 nodes_mm;                       ///< #surface nodes by 3, undeformed positions
     std::vector<Points3> displacements_mm;  ///< one #surface nodes by 3 block per load case
     Eigen::VectorXd sternum_lift_mm;        ///< one per load case
+    std::optional<StoredResponseBasis> basis;  ///< if the dataset was written with bases
   };
   Eigen::VectorXd position;     ///< #cases, bar position as a fraction of the sternal length (0-1)
   Eigen::VectorXd force_n;      ///< #cases, bar force, N
@@ -55,6 +78,10 @@ FemDataset ReadFemDataset(const std::filesystem::path& path);
 /// ReadFemDataset from a file held in memory (an HDF5 file image); `name` is the file named in errors.
 FemDataset ParseFemDataset(std::string_view bytes, const std::string& name);
 
+/// Only patient `patient`'s response basis from an FE dataset file (without reading the rest). Throws
+/// Error(kBadInput) naming the file if it has no such patient or no basis for it, or the basis is broken.
+StoredResponseBasis ReadStoredResponseBasis(const std::filesystem::path& path, const std::string& patient);
+
 /// Writes the dataset patient by patient; nothing is visible at `path` until Commit().
 class FemDatasetWriter {
  public:
@@ -71,7 +98,8 @@ class FemDatasetWriter {
   /// Adds one patient: `results` in the order of the constructor's `loads`; `force_to_lift` per
   /// position; `ct_haller_index` from the patient table (0 if unknown).
   void AddPatient(const PatientRibcage& ribcage, const std::vector<BarResult>& results,
-                  const std::vector<ForceToLift>& force_to_lift, double ct_haller_index);
+                  const std::vector<ForceToLift>& force_to_lift, double ct_haller_index,
+                  const StoredResponseBasis* basis = nullptr);
   /// Closes the file and moves it into place.
   void Commit();
   /// Number of surface nodes per patient.

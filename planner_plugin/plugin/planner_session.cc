@@ -119,8 +119,11 @@ BoneSurface MakeBoneSurface(const PatientRibcage& ribcage) {
 }
 
 PlannerSession::PlannerSession(const PatientMeasurements& patient, const PlannerSettings& settings)
-    : generic_(BuildGenericRibcage(settings.generic)),
-      ribcage_(MakePatientRibcage(generic_, patient, settings.patient)) {
+    : PlannerSession(BuildGenericRibcage(settings.generic), patient, settings) {}
+
+PlannerSession::PlannerSession(const GenericRibcage& generic, const PatientMeasurements& patient,
+                               const PlannerSettings& settings)
+    : generic_(generic), ribcage_(MakePatientRibcage(generic_, patient, settings.patient)) {
   if (!ribcage_.converged && ribcage_.residual_mm > 1.0) {
     ThrowFailure("the generated ribcage does not reproduce the CT measurements: " + ribcage_.message);
   }
@@ -218,6 +221,21 @@ void PlannerSession::Solve(const std::vector<BarLoad>& loads, double* bone_posit
   }
 }
 
+Eigen::VectorXd PlannerSession::RestPositions() const {
+  // The skin's ties carry displacements only (the skin lies over the bone, not on its nodes).
+  Eigen::VectorXd rest(3 * (num_bone_vertices() + num_skin_vertices() + num_skin_landmarks()));
+  Eigen::Index at = 0;
+  auto append = [&](const Eigen::Vector3d& p) {
+    rest.segment<3>(at) = p;
+    at += 3;
+  };
+  for (Eigen::Index i = 0; i < bone_.vertices.rows(); ++i) append(bone_.vertices.row(i).transpose());
+  const Points3& skin = skin_.mesh.vertices.positions;
+  for (Eigen::Index i = 0; i < skin.rows(); ++i) append(skin.row(i).transpose());
+  for (const Landmark& landmark : skin_landmarks_.items) append(landmark.position);
+  return rest;
+}
+
 std::vector<NodeTies> PlannerSession::OutputPoints() const {
   std::vector<NodeTies> points;
   points.reserve(bone_.mesh_nodes.size() + skin_.ties.size() + skin_.landmark_points.size());
@@ -237,20 +255,51 @@ std::vector<NodeTies> PlannerSession::OutputPoints() const {
 const BarResponseBasis& PlannerSession::BuildBasis(const BarResponseBasisOptions& options) {
   const std::vector<NodeTies> points = OutputPoints();
   auto basis = std::make_unique<BarResponseBasis>(*fem_, points, options);
-  // The undeformed outputs (the skin's ties carry displacements only: the skin lies over the bone).
-  Eigen::VectorXd rest(3 * static_cast<Eigen::Index>(points.size()));
-  Eigen::Index at = 0;
-  auto append = [&](const Eigen::Vector3d& p) {
-    rest.segment<3>(at) = p;
-    at += 3;
-  };
-  for (Eigen::Index i = 0; i < bone_.vertices.rows(); ++i) append(bone_.vertices.row(i).transpose());
-  const Points3& skin = skin_.mesh.vertices.positions;
-  for (Eigen::Index i = 0; i < skin.rows(); ++i) append(skin.row(i).transpose());
-  for (const Landmark& landmark : skin_landmarks_.items) append(landmark.position);
+  basis_ = std::move(basis);
+  rest_positions_ = RestPositions();
+  return *basis_;
+}
+
+StoredResponseBasis PlannerSession::StoreBasis() const {
+  if (!basis_) ThrowUsage("planner: no response basis to store; build it first");
+  StoredResponseBasis out;
+  out.arrays = basis_->ToStored();
+  out.bone_vertices = num_bone_vertices();
+  out.skin_vertices = num_skin_vertices();
+  out.skin_landmarks = num_skin_landmarks();
+  out.mesh_nodes = ribcage_.mesh.num_nodes();
+  out.rest_checksum_mm = RestChecksum(rest_positions_);
+  return out;
+}
+
+void PlannerSession::LoadBasis(const StoredResponseBasis& stored, const std::string& source) {
+  Eigen::VectorXd rest = RestPositions();
+  const double checksum = RestChecksum(rest);
+  if (stored.bone_vertices != num_bone_vertices() || stored.skin_vertices != num_skin_vertices() ||
+      stored.skin_landmarks != num_skin_landmarks() || stored.mesh_nodes != ribcage_.mesh.num_nodes() ||
+      std::abs(stored.rest_checksum_mm - checksum) > 1e-6 * (1.0 + std::abs(checksum)) ||
+      std::abs(stored.arrays.contact_width_mm - fem_->options().contact_width_mm) > 1e-12) {
+    ThrowBadInput(source, "the response basis of patient " + ribcage_.patient +
+                              " was built for another planner (mesh, skin or contact width differ: " +
+                              std::to_string(stored.mesh_nodes) + " nodes and " +
+                              std::to_string(stored.skin_vertices) + " skin vertices there, " +
+                              std::to_string(ribcage_.mesh.num_nodes()) + " and " +
+                              std::to_string(num_skin_vertices()) +
+                              " here); build it with the same options, or let the planner build its own");
+  }
+  auto basis = std::make_unique<BarResponseBasis>(stored.arrays, source);
+  // The stiffness: one direct solve's sternal lift against the basis' (other materials differ by percents).
+  const BarLoad probe{0.8, false, 1.0};
+  const double direct = fem_->ForceToLiftSternum({probe}).front().lift_per_newton_mm;
+  const double from_basis = basis->LiftPerNewton(basis->LevelZ(probe));
+  if (!(std::abs(direct - from_basis) <= 1e-6 * std::abs(direct))) {
+    ThrowBadInput(source, "the response basis of patient " + ribcage_.patient +
+                              " was built with other materials (its sternal lift per newton at 0.8 of the "
+                              "sternum is " + std::to_string(from_basis) + " mm, this planner's " +
+                              std::to_string(direct) + " mm)");
+  }
   basis_ = std::move(basis);
   rest_positions_ = std::move(rest);
-  return *basis_;
 }
 
 SessionDeformer::SessionDeformer(const PlannerSession& session) : session_(&session), basis_(session.basis()) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "planner_plugin/api/planner_api.h"
+#include "planner_plugin/io/fem_dataset_h5.h"
 #include "planner_plugin/ribcage/bar_response_basis.h"
 #include "planner_plugin/ribcage/build_generic_ribcage.h"
 #include "planner_plugin/ribcage/build_skin_surface.h"
@@ -55,6 +56,15 @@ class PlannerSession {
  public:
   /// Fits, meshes, factorises and builds the skin. Throws pectus::Error.
   PlannerSession(const PatientMeasurements& patient, const PlannerSettings& settings);
+  /// The same from a generic ribcage already built with settings.generic (a cohort's, built once).
+  PlannerSession(const GenericRibcage& generic, const PatientMeasurements& patient, const PlannerSettings& settings);
+
+  /// The basis as the FE dataset stores it: its arrays, which points it answers for, and this planner's
+  /// fingerprint (BuildBasis() first; throws Error(kUsage) otherwise).
+  StoredResponseBasis StoreBasis() const;
+  /// Takes a stored basis (ReadStoredResponseBasis) instead of building one. Throws Error(kBadInput)
+  /// naming `source` if it was built for another planner (other mesh, skin or options).
+  void LoadBasis(const StoredResponseBasis& stored, const std::string& source);
 
   /// The C measurements struct.
   PectusPlannerMeasurements Measurements() const;
@@ -98,6 +108,7 @@ class PlannerSession {
   Timings timings_s_;  // "assembly_and_factorisation", s
   std::unique_ptr<BarResponseBasis> basis_;
   Eigen::VectorXd rest_positions_;  // of OutputPoints(), with basis_
+  Eigen::VectorXd RestPositions() const;  // the undeformed OutputPoints(), 3 #points
 };
 
 /// One thread's real-time view of a session's basis (the object behind PectusPlannerDeformer): its

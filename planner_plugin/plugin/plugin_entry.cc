@@ -1,6 +1,7 @@
 // pectus planner plugin: the C entry points of planner_api.h. Every function runs its C++ body inside
 // Guard(), which turns any exception into a status code and a message: nothing is thrown across the
 // boundary and nothing aborts the host.
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -9,6 +10,7 @@
 
 #include "planner_plugin/api/planner_api.h"
 #include "planner_plugin/plugin/planner_session.h"
+#include "planner_plugin/io/fem_dataset_h5.h"
 #include "planner_plugin/plugin/run_fem_dataset.h"
 #include "shape/core/error.h"
 #include "shape/io/patient_table_io.h"
@@ -156,18 +158,39 @@ std::int32_t ForceToLift(const PectusPlanner* planner, const PectusPlannerBar* b
   });
 }
 
+pectus::planner::BarResponseBasisOptions BasisOptionsFrom(const PectusPlannerBasisOptions* options) {
+  pectus::planner::BarResponseBasisOptions o;
+  if (options != nullptr) {
+    if (options->tolerance_mm != 0) o.tolerance_mm = options->tolerance_mm;
+    if (options->max_force_n != 0) o.max_force_n = options->max_force_n;
+  }
+  return o;
+}
+
+PectusPlannerBasisSummary SummaryOf(const pectus::planner::BarResponseBasis& basis, double max_force_n,
+                                    double seconds) {
+  return {basis.rank(),
+          basis.num_contact_nodes(),
+          basis.num_points(),
+          static_cast<std::int64_t>(basis.bytes()),
+          basis.truncation_bound_mm_per_n() * max_force_n,
+          seconds};
+}
+
 std::int32_t WriteDataset(const char* table_path, const char* output_path,
-                          const PectusPlannerOptions* options, PectusPlannerProgressFn progress,
-                          void* progress_user, PectusPlannerDatasetSummary* out,
+                          const PectusPlannerOptions* options, const PectusPlannerBasisOptions* basis,
+                          PectusPlannerProgressFn progress, void* progress_user, PectusPlannerDatasetSummary* out,
                           PectusPlannerStatus* status) {
   return Guard(status, [&] {
     Require(table_path, "table_path");
     Require(output_path, "output_path");
-    const auto summary =
-        pectus::planner::RunFemDataset(table_path, output_path, pectus::planner::SettingsFrom(options),
-                                       [&](std::int64_t done, std::int64_t total) {
-                                         if (progress != nullptr) progress(progress_user, done, total);
-                                       });
+    const pectus::planner::BarResponseBasisOptions basis_options = BasisOptionsFrom(basis);
+    const auto summary = pectus::planner::RunFemDataset(
+        table_path, output_path, pectus::planner::SettingsFrom(options),
+        [&](std::int64_t done, std::int64_t total) {
+          if (progress != nullptr) progress(progress_user, done, total);
+        },
+        basis != nullptr ? &basis_options : nullptr);
     if (out != nullptr) {
       *out = {summary.patients, summary.load_cases, summary.results, summary.surface_nodes,
               summary.timings_s.Total()};
@@ -179,20 +202,24 @@ std::int32_t BuildBasis(PectusPlanner* planner, const PectusPlannerBasisOptions*
                         PectusPlannerBasisSummary* out, PectusPlannerStatus* status) {
   return Guard(status, [&] {
     Require(planner, "planner");
-    pectus::planner::BarResponseBasisOptions o;
-    if (options != nullptr) {
-      if (options->tolerance_mm != 0) o.tolerance_mm = options->tolerance_mm;
-      if (options->max_force_n != 0) o.max_force_n = options->max_force_n;
-    }
+    const pectus::planner::BarResponseBasisOptions o = BasisOptionsFrom(options);
     const auto& basis = planner->session.BuildBasis(o);
-    if (out != nullptr) {
-      *out = {basis.rank(),
-              basis.num_contact_nodes(),
-              basis.num_points(),
-              static_cast<std::int64_t>(basis.bytes()),
-              basis.truncation_bound_mm_per_n() * o.max_force_n,
-              basis.timings_s().Total()};
-    }
+    if (out != nullptr) *out = SummaryOf(basis, o.max_force_n, basis.timings_s().Total());
+  });
+}
+
+std::int32_t LoadBasis(PectusPlanner* planner, const char* dataset_path, PectusPlannerBasisSummary* out,
+                       PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(planner, "planner");
+    Require(dataset_path, "dataset_path");
+    const auto start = std::chrono::steady_clock::now();
+    planner->session.LoadBasis(
+        pectus::planner::ReadStoredResponseBasis(dataset_path, planner->session.ribcage().patient), dataset_path);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const pectus::planner::BarResponseBasis& basis = *planner->session.basis();
+    // The force the tolerance was stated for is not stored; the bound is given per 2000 N, the default.
+    if (out != nullptr) *out = SummaryOf(basis, 2000.0, seconds);
   });
 }
 
@@ -269,6 +296,7 @@ const PectusPlannerInterface kInterface = {
     ForceToLift,
     WriteDataset,
     BuildBasis,
+    LoadBasis,
     CreateDeformer,
     DestroyDeformer,
     Deform,

@@ -12,7 +12,8 @@ namespace pectus::planner {
 
 FemDatasetSummary RunFemDataset(const std::filesystem::path& table, const std::filesystem::path& output,
                                 const PlannerSettings& settings,
-                                const std::function<void(std::int64_t, std::int64_t)>& progress) {
+                                const std::function<void(std::int64_t, std::int64_t)>& progress,
+                                const BarResponseBasisOptions* basis_options) {
   FemDatasetSummary summary;
   std::vector<PatientTableRow> rows;
   GenericRibcage generic;
@@ -35,26 +36,27 @@ FemDatasetSummary RunFemDataset(const std::filesystem::path& table, const std::f
   const auto total = static_cast<std::int64_t>(rows.size());
   for (std::int64_t i = 0; i < total; ++i) {
     const PatientTableRow& row = rows[static_cast<std::size_t>(i)];
-    PatientRibcage ribcage;
+    std::optional<PlannerSession> session;
     {
       auto t = summary.timings_s.Time("patient_ribcages");
-      ribcage = MakePatientRibcage(generic, MeasurementsOf(row), settings.patient);
-    }
-    if (!ribcage.converged && ribcage.residual_mm > 1.0) {
-      ThrowFailure("the generated ribcage does not reproduce the CT measurements: " + ribcage.message,
-                   table.string());
+      session.emplace(generic, MeasurementsOf(row), settings);  // refuses a fit that misses the CT
     }
     std::vector<BarResult> results;
     std::vector<ForceToLift> lift;
     {
       auto t = summary.timings_s.Time("fem");
-      const RibcageFem fem(ribcage, settings.fem);
-      results = fem.Solve(loads);
-      lift = fem.ForceToLiftSternum(positions);
+      results = session->fem().Solve(loads);
+      lift = session->fem().ForceToLiftSternum(positions);
+    }
+    std::optional<StoredResponseBasis> basis;
+    if (basis_options != nullptr) {
+      auto t = summary.timings_s.Time("response_basis");
+      session->BuildBasis(*basis_options);
+      basis = session->StoreBasis();
     }
     {
       auto t = summary.timings_s.Time("write");
-      writer->AddPatient(ribcage, results, lift, row.haller_index);
+      writer->AddPatient(session->ribcage(), results, lift, row.haller_index, basis ? &*basis : nullptr);
     }
     if (progress) progress(i + 1, total);
   }

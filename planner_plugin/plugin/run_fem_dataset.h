@@ -16,17 +16,20 @@ namespace pectus::planner {
 struct FemDatasetSummary {
   std::int64_t patients = 0, load_cases = 0, results = 0, surface_nodes = 0;
   /// Wall time, s: "generic_ribcage" (reading the table, building the generic ribcage), "patient_ribcages"
-  /// (the fits), "fem" (assembly, factorisation and solves), "write" (the HDF5 file).
+  /// (the fits, meshes, factorisations and skins), "fem" (the solves), "response_basis" (if asked),
+  /// "write" (the HDF5 file).
   Timings timings_s;
   /// One line: "62 patients x 24 load cases = 1488 results, 4321 surface nodes, 95.3 s".
   std::string BriefReport() const;
 };
 
 /// Builds, solves and writes every patient of `table` (one generic ribcage, one factorisation per
-/// patient, DissertationLoadCases()). `progress(done, total)` is called after each patient. Nothing
-/// appears at `output` unless every patient succeeds. Throws pectus::Error naming the patient at fault.
+/// patient, DissertationLoadCases()), with each patient's exact response basis if `basis_options` is
+/// given. `progress(done, total)` is called after each patient. Nothing appears at `output` unless every
+/// patient succeeds. Throws pectus::Error naming the patient at fault.
 FemDatasetSummary RunFemDataset(const std::filesystem::path& table, const std::filesystem::path& output,
                                 const PlannerSettings& settings,
-                                const std::function<void(std::int64_t, std::int64_t)>& progress);
+                                const std::function<void(std::int64_t, std::int64_t)>& progress,
+                                const BarResponseBasisOptions* basis_options = nullptr);
 
 }  // namespace pectus::planner

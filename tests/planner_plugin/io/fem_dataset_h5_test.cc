@@ -12,7 +12,9 @@
 #include <utility>
 #include <vector>
 
+#include "planner_plugin/plugin/planner_session.h"
 #include "planner_plugin/plugin/run_fem_dataset.h"
+#include "shape/io/patient_table_io.h"
 #include "shape/core/error.h"
 #include "tests/support/bad_input.h"
 
@@ -106,6 +108,70 @@ TEST(FemDataset, EveryPatientTimesTwentyFourLoadCasesReadsBack) {
   EXPECT_EQ(p57.nodes_mm.rows(), static_cast<Eigen::Index>(n));
   EXPECT_EQ(p57.displacements_mm[23](5, 1), static_cast<double>(u[23 * n * 3 + 5 * 3 + 1]));
   EXPECT_EQ(p57.sternum_lift_mm[23], lift[23]);
+  fs::remove_all(dir);
+}
+
+// With bases: each patient's exact response basis stored and read back array for array; a planner of the
+// same patient and options takes it instead of building one and deforms as the direct solve does; a
+// planner of other materials, or a patient the file lacks, is refused naming the file.
+TEST(FemDataset, TheResponseBasisIsStoredAndTakenBackByTheSamePlannerOnly) {
+  const fs::path dir = fs::temp_directory_path() / ("pectus_fem_bases_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  {
+    std::ofstream table(dir / "one.csv");
+    table << "patient,haller_index,width_mm,sternal_length_mm,depth_mm,depression_mm\n"
+             "57,6.5,231,168,123,21\n";
+  }
+  PlannerSettings settings = SettingsFrom(nullptr);
+  settings.generic.rib_cell_length_mm = 10;
+  settings.generic.sternum_cells_along = 28;
+  settings.skin.rows = 16;
+  settings.skin.columns = 24;
+  const BarResponseBasisOptions basis_options;
+  const FemDatasetSummary s = RunFemDataset(dir / "one.csv", dir / "fem.h5", settings, nullptr, &basis_options);
+  EXPECT_GT(s.timings_s.Seconds("response_basis"), 0.0);
+  const FemDataset d = ReadFemDataset(dir / "fem.h5");
+  ASSERT_EQ(d.patients.size(), 1u);
+  ASSERT_TRUE(d.patients[0].basis.has_value());
+  const StoredResponseBasis stored = ReadStoredResponseBasis(dir / "fem.h5", "57");
+  EXPECT_EQ(stored.skin_vertices, 16 * 24);
+  EXPECT_EQ(stored.skin_landmarks, 5);
+  EXPECT_EQ(stored.arrays.modes, d.patients[0].basis->arrays.modes);
+
+  // The same planner takes it: what it gives equals the basis it builds itself, bit for bit, and the
+  // direct solve within 0.001 mm.
+  const PatientMeasurements patient = MeasurementsOf(ReadPatientTable(dir / "one.csv").front());
+  PlannerSession session(patient, settings);
+  session.LoadBasis(stored, (dir / "fem.h5").string());
+  EXPECT_EQ(session.basis()->ToStored().modes, stored.arrays.modes);
+  EXPECT_EQ(session.basis()->ToStored().mixing, stored.arrays.mixing);
+  SessionDeformer deformer(session);
+  const BarLoad bar{0.8, false, 400.0};
+  std::vector<double> bone(3 * static_cast<std::size_t>(session.num_bone_vertices()));
+  const char* why = "";
+  ASSERT_TRUE(deformer.Deform(bar, bone.data(), nullptr, nullptr, nullptr, &why)) << why;
+  const BarResult direct = session.fem().Solve({bar}).front();
+  const BoneSurface surface = MakeBoneSurface(session.ribcage());
+  double worst = 0.0;
+  for (Eigen::Index i = 0; i < surface.vertices.rows(); ++i) {
+    for (int c = 0; c < 3; ++c) {
+      worst = std::max(worst, std::abs(bone[3 * i + c] - surface.vertices(i, c) -
+                                       direct.displacement(surface.mesh_nodes[i], c)));
+    }
+  }
+  EXPECT_LT(worst, 1e-3);
+
+  // Other materials: refused.
+  PlannerSettings softer = settings;
+  softer.fem.materials.cartilage.youngs_modulus_mpa = 20.0;
+  PlannerSession other(patient, softer);
+  EXPECT_NE(BadInputMessage([&] { other.LoadBasis(stored, (dir / "fem.h5").string()); }, (dir / "fem.h5").string())
+                .find("other materials"),
+            std::string::npos);
+  // A patient the file lacks.
+  EXPECT_NE(BadInputMessage([&] { ReadStoredResponseBasis(dir / "fem.h5", "12"); }, (dir / "fem.h5").string())
+                .find("has no patient '12'"),
+            std::string::npos);
   fs::remove_all(dir);
 }
 

@@ -125,7 +125,7 @@ TEST_F(PluginEntry, FailuresComeBackAsStatusesNamingWhatIsWrong) {
   std::memset(unterminated.id, 'x', sizeof(unterminated.id));
   EXPECT_EQ(api_->create(&unterminated, nullptr, &planner, &status), PECTUS_PLANNER_BAD_INPUT);
   // A dataset that cannot be written is a failure, and nothing is left behind.
-  EXPECT_EQ(api_->write_dataset("/nonexistent/table.csv", "/tmp/pectus_never.h5", nullptr, nullptr, nullptr,
+  EXPECT_EQ(api_->write_dataset("/nonexistent/table.csv", "/tmp/pectus_never.h5", nullptr, nullptr, nullptr, nullptr,
                                 nullptr, &status),
             PECTUS_PLANNER_BAD_INPUT);
   EXPECT_FALSE(std::filesystem::exists("/tmp/pectus_never.h5"));
