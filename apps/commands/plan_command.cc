@@ -88,6 +88,9 @@ class PlanCommand : public Command {
            "    (scenario B is 20 mm nearer the notch unless --compare-position is given; the best placement "
            "is\n"
            "     searched unless --no-search; open plan57/report.html)\n"
+           "  pectus plan --patient-table nuss_ct_parameters.csv --patient 57 --model average.h5 --out plan57/ \\\n"
+           "      --basis bases.h5\n"
+           "    (the search on the patient's stored response basis: `pectus surrogate build`)\n"
            "  pectus plan --patient-table nuss_ct_parameters.csv --dataset fem_dataset.h5 --report d.json\n"
            "    (all patients x 3 bar positions x 8 forces, the dissertation's FE dataset; docs/planner.md)";
   }
@@ -114,6 +117,9 @@ class PlanCommand : public Command {
                     "Scenario B's bar position (default: 20 mm nearer the notch)");
     app->add_option("--out", out_, "Folder for the plan: meshes (PLY), pictures (PNG), report.html");
     app->add_flag("!--no-search", search_, "Skip the search for the best bar position and force");
+    app->add_option("--basis", basis_,
+                    "Take the patient's response basis from this FE dataset (`pectus surrogate build`) "
+                    "instead of building it");
     app->add_flag("--search-direct", search_direct_,
                   "Search with a direct FE solve per bar position instead of the exact response basis "
                   "(the same scores to 0.001 mm; the basis takes seconds to build, then answers any "
@@ -149,6 +155,7 @@ class PlanCommand : public Command {
   std::vector<fs::path> Inputs() const override {
     std::vector<fs::path> in{table_};
     if (!model_.empty()) in.emplace_back(model_);
+    if (!basis_.empty()) in.emplace_back(basis_);
     if (!model_landmarks_.empty()) in.emplace_back(model_landmarks_);
     return in;
   }
@@ -199,6 +206,7 @@ class PlanCommand : public Command {
   bool search_ = true;
   PlacementSearchOptions search_options_;
   bool search_direct_ = false;
+  std::string basis_;
   PectusPlannerOptions options_{};
 };
 
@@ -228,13 +236,14 @@ void PlanCommand::Plan(const PlannerPlugin& plugin, Context* context) {
   if (search_ && !search_direct_) {
     // The exact response basis, for the search: every position it tries costs a product, not a solve.
     auto t = report.Stage("response_basis");
-    const PectusPlannerBasisSummary basis = planner->BuildBasis();
+    const PectusPlannerBasisSummary basis = basis_.empty() ? planner->BuildBasis() : planner->LoadBasis(basis_);
     report["response_basis"] = {{"rank", basis.rank},
                                 {"contact_nodes", basis.contact_nodes},
                                 {"points", basis.points},
                                 {"megabytes", static_cast<double>(basis.bytes) / 1e6},
                                 {"truncation_bound_mm", basis.truncation_bound_mm},
-                                {"seconds", basis.seconds}};
+                                {"seconds", basis.seconds},
+                                {"from", basis_.empty() ? "built" : basis_}};
   }
   report["patient"] = patient.id;
   const PectusPlannerOptions& o = planner->options();

@@ -1,4 +1,6 @@
 // pectus surrogate: the planner's fast stand-ins for the finite element solve (issue 14).
+//   build  every patient of a table: the FE dataset (24 load cases) with each patient's exact response
+//          basis, for `pectus plan --basis` and the trainer (load in milliseconds instead of seconds).
 //   check  per patient, the exact response basis built through the plugin (interface version 2) against
 //          the direct FE solve: the dissertation's 24 load cases and random (position, force) pairs, every
 //          deformed bone vertex, skin vertex and skin landmark; the basis' size, rank and build time; the
@@ -53,10 +55,13 @@ class SurrogateCommand : public Command {
  public:
   std::string Name() const override { return "surrogate"; }
   std::string Summary() const override {
-    return "The planner's real-time stand-ins for the FE solve: the exact response basis, checked";
+    return "The planner's real-time stand-ins for the FE solve: exact response bases, built and checked";
   }
   std::string Example() const override {
-    return "  pectus surrogate check --patient-table nuss_ct_parameters.csv --patients 57,1,10,30,45 \\\n"
+    return "  pectus surrogate build --patient-table nuss_ct_parameters.csv -o bases.h5\n"
+           "    (every patient's FE dataset and exact response basis, about 8 MB and 10 s each; then\n"
+           "     pectus plan ... --basis bases.h5 takes the patient's basis instead of building it)\n"
+           "  pectus surrogate check --patient-table nuss_ct_parameters.csv --patients 57,1,10,30,45 \\\n"
            "      --random 1000 --report check.json\n"
            "    (per patient: the basis against 24 + 1000 direct FE solves, its rank, size, build time and\n"
            "     the time of one full-surface update; fails if any point differs by more than --limit-mm)\n"
@@ -64,6 +69,17 @@ class SurrogateCommand : public Command {
   }
   void Configure(CLI::App* app) override {
     app->require_subcommand(1);
+    build_ = app->add_subcommand("build", "The FE dataset of a patient table with every patient's response basis");
+    build_->add_option("--patient-table", table_, "CSV of CT measurements (as `pectus plan`)")->required();
+    build_->add_option("-o,--output", output_, "The dataset with bases (.h5), replaced only when complete")
+        ->required();
+    build_->add_option("--tolerance-mm", tolerance_mm_,
+                       "The bases' compression tolerance up to 2000 N, mm (default 0.001)")
+        ->default_val(0.001)
+        ->check(CLI::PositiveNumber);
+    build_->add_option("--cell-mm", cell_mm_, "Mesh: cell length along the ribs, 2 to 20 mm (default 6)");
+    build_->add_option("--plugin", plugin_path_, "The planner plugin (default: beside pectus)");
+    build_->fallthrough();
     check_ = app->add_subcommand("check", "The exact response basis against the direct FE solve, per patient");
     check_->add_option("--patient-table", table_, "CSV of CT measurements (as `pectus plan`)")->required();
     check_->add_option("--patients", patients_, "Patient ids separated by commas, or all")->default_val("57");
@@ -95,6 +111,10 @@ class SurrogateCommand : public Command {
                                  {"interface_version", plugin.api().version}};
     PectusPlannerOptions options = PluginDefaultOptions(plugin);
     if (cell_mm_ > 0) options.rib_cell_length_mm = cell_mm_;
+    if (build_->parsed()) {
+      Build(plugin, options, context);
+      return;
+    }
     const std::vector<std::string> ids = PatientList(patients_, table_);
     Progress progress("surrogate check (patients)", static_cast<std::int64_t>(ids.size()));
     double worst = 0.0;
@@ -123,6 +143,28 @@ class SurrogateCommand : public Command {
   }
 
  private:
+  void Build(const PlannerPlugin& plugin, const PectusPlannerOptions& options, Context* context) {
+    auto t = context->report.Stage("build");
+    const fs::path staged = StageOutput(context, *this, output_);
+    const PectusPlannerBasisOptions basis{tolerance_mm_, 2000.0};
+    std::unique_ptr<Progress> progress;
+    const PectusPlannerDatasetSummary s = WritePlannerDataset(
+        plugin, table_, staged, options,
+        [&](std::int64_t, std::int64_t total) {
+          if (!progress) progress = std::make_unique<Progress>("FE dataset and bases (patients)", total);
+          progress->Advance();
+        },
+        &basis);
+    progress.reset();
+    std::error_code error;
+    const auto bytes = fs::file_size(staged, error);
+    context->report["dataset"] = {{"path", output_},         {"patients", s.patients},
+                                  {"load_cases", s.load_cases}, {"results", s.results},
+                                  {"seconds", s.seconds},       {"megabytes", error ? 0.0 : bytes / 1e6}};
+    Info("FE dataset with response bases: " + std::to_string(s.patients) + " patients in " + output_ +
+         " (for `pectus plan --basis`)");
+  }
+
   nlohmann::json Check(const PlannerPlugin& plugin, const PectusPlannerOptions& options, const std::string& id) {
     PlannerClient planner(plugin, ReadPlannerPatient(plugin, table_, id), options);
     PectusPlannerBasisOptions basis_options{tolerance_mm_, 2000.0};
@@ -196,8 +238,9 @@ class SurrogateCommand : public Command {
             {"lift_force_median_us", Median(lift_us)}};
   }
 
+  CLI::App* build_ = nullptr;
   CLI::App* check_ = nullptr;
-  std::string table_, patients_ = "57", plugin_path_;
+  std::string table_, patients_ = "57", plugin_path_, output_;
   int random_ = 100, evaluations_ = 2000;
   unsigned seed_ = 1400;
   double tolerance_mm_ = 0.001, limit_mm_ = 0.01, cell_mm_ = 0;

@@ -9,6 +9,9 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "shape/model/shape_model.h"
+#include "shape/model/statismo_io.h"
+#include "tests/planner_plugin/host/analytic_chest.h"
 #include "tests/support/cli_run.h"
 #include "tests/support/require_shared_data.h"
 
@@ -49,6 +52,59 @@ TEST(SurrogateCommand, CheckHoldsTheBasisToTheDirectSolveAndFailsALimitItCannotM
   const auto unknown = Pectus("surrogate check --patient-table '" + kTable + "' --patients 999");
   EXPECT_NE(unknown.code, 0) << unknown.output;
   EXPECT_NE(unknown.output.find("999"), std::string::npos) << unknown.output;
+  fs::remove_all(dir);
+}
+
+// `surrogate build` writes the FE dataset with every patient's basis; `plan --basis` takes the patient's
+// basis from it (the search then gives the scores it gives with a basis of its own), and refuses a basis
+// built for another mesh, naming the file.
+TEST(SurrogateCommand, BuildStoresTheBasesAndPlanTakesThePatientsOwn) {
+  PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
+  const fs::path dir = fs::temp_directory_path() / ("pectus_surrogate_build_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "one.csv") << "patient,haller_index,width_mm,sternal_length_mm,depth_mm,depression_mm\n"
+                                    "57,6.5,231,168,123,21\n";
+  const std::string table = "'" + (dir / "one.csv").string() + "'", bases = "'" + (dir / "bases.h5").string() + "'";
+  const auto build = Pectus("surrogate build --patient-table " + table + " -o " + bases +
+                            " --cell-mm 10 --threads 1 --report '" + (dir / "b.json").string() + "'");
+  ASSERT_EQ(build.code, 0) << build.output;
+  std::ifstream in(dir / "b.json");
+  const nlohmann::json b = nlohmann::json::parse(in);
+  EXPECT_EQ(b["dataset"]["patients"].get<int>(), 1);
+  EXPECT_GT(b["dataset"]["megabytes"].get<double>(), 0.5);
+  // The average chest for the plan: the analytic grid.
+  const TriangleMesh grid = planner::testing::AnalyticChestGrid(31, 41);
+  Eigen::MatrixXd shapes(2, 3 * grid.num_vertices());
+  Points3 a = grid.vertices.positions, c = grid.vertices.positions;
+  a.col(2).array() += 0.5;
+  c.col(2).array() -= 0.5;
+  shapes.row(0) = Eigen::Map<const Eigen::VectorXd>(a.data(), a.size()).transpose();
+  shapes.row(1) = Eigen::Map<const Eigen::VectorXd>(c.data(), c.size()).transpose();
+  ShapeModel model = BuildShapeModel(shapes);
+  model.faces = grid.faces;
+  WriteStatismoModel(dir / "average.h5", model, nlohmann::json::object());
+  const std::string plan = "plan --patient-table " + table + " --patient 57 --model '" + (dir / "average.h5").string() +
+                           "' --bar-position 0.85 --force 300 --search-positions 3 --search-forces 4 "
+                           "--search-refinements 2 --threads 1";
+  const auto own = Pectus(plan + " --cell-mm 10 --out '" + (dir / "own").string() + "' --report '" +
+                          (dir / "own.json").string() + "'");
+  ASSERT_EQ(own.code, 0) << own.output;
+  const auto stored = Pectus(plan + " --cell-mm 10 --basis " + bases + " --out '" + (dir / "stored").string() +
+                             "' --report '" + (dir / "stored.json").string() + "'");
+  ASSERT_EQ(stored.code, 0) << stored.output;
+  std::ifstream own_in(dir / "own.json"), stored_in(dir / "stored.json");
+  const nlohmann::json o = nlohmann::json::parse(own_in), t = nlohmann::json::parse(stored_in);
+  EXPECT_EQ(o["response_basis"]["from"], "built");
+  EXPECT_NE(t["response_basis"]["from"].get<std::string>().find("bases.h5"), std::string::npos);
+  EXPECT_NEAR(t["search"]["best"]["objective_mm"].get<double>(), o["search"]["best"]["objective_mm"].get<double>(),
+              0.01);
+  EXPECT_NEAR(t["search"]["best"]["position"].get<double>(), o["search"]["best"]["position"].get<double>(), 1e-3);
+  // A planner of another mesh (12 mm cells) refuses the 10 mm basis, naming the file.
+  const auto other = Pectus(plan + " --cell-mm 12 --basis " + bases + " --out '" + (dir / "other").string() + "'");
+  EXPECT_EQ(other.code, 3) << other.output;
+  EXPECT_NE(other.output.find("bases.h5"), std::string::npos) << other.output;
+  EXPECT_NE(other.output.find("another planner"), std::string::npos) << other.output;
+  EXPECT_FALSE(fs::exists(dir / "other"));
   fs::remove_all(dir);
 }
 
