@@ -40,6 +40,11 @@ DepthProbe::DepthProbe(const Points3& points, const Eigen::Vector3d& direction)
     order_[static_cast<std::size_t>(fill[static_cast<std::size_t>(bin[static_cast<std::size_t>(k)])]++)] =
         static_cast<std::int32_t>(k);
   }
+  binned_uv_.resize(2 * order_.size());
+  for (std::size_t s = 0; s < order_.size(); ++s) {
+    binned_uv_[2 * s] = q_(order_[s], 0);
+    binned_uv_[2 * s + 1] = q_(order_[s], 1);
+  }
 }
 
 Eigen::VectorXd DepthProbe::Depth(const TriangleMesh& surface) const {
@@ -91,11 +96,12 @@ Eigen::VectorXd DepthProbe::Depth(const Projected& projected, const Faces3& face
     for (int i = u_first; i <= u_last; ++i) {
       const auto row = static_cast<std::size_t>(i) * nv_;
       for (std::int32_t s = start_[row + v_first]; s < start_[row + v_last + 1]; ++s) {
-        const std::int32_t k = order_[static_cast<std::size_t>(s)];
-        const double qu = q_(k, 0), qv = q_(k, 1);
+        const double qu = binned_uv_[2 * static_cast<std::size_t>(s)],
+                     qv = binned_uv_[2 * static_cast<std::size_t>(s) + 1];
         // Within the face's box (widened by the barycentric tolerance's reach) and the surface's.
         if (qu < fmin.x() - reach || qu > fmax.x() + reach || qv < fmin.y() - reach || qv > fmax.y() + reach) continue;
         if (qu < box_lo.x() || qu > box_hi.x() || qv < box_lo.y() || qv > box_hi.y()) continue;
+        const std::int32_t k = order_[static_cast<std::size_t>(s)];
         const double du = qu - a0.x(), dv = qv - a0.y();
         const double l1 = (du * e2.y() - dv * e2.x()) / det, l2 = (e1.x() * dv - e1.y() * du) / det;
         if (l1 < -kEps || l2 < -kEps || l1 + l2 > 1 + kEps) continue;

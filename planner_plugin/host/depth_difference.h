@@ -46,6 +46,7 @@ class DepthProbe {
   Eigen::Vector2d lo_ = Eigen::Vector2d::Zero(), hi_ = Eigen::Vector2d::Zero(), scale_ = Eigen::Vector2d::Zero();
   int nu_ = 0, nv_ = 0;
   std::vector<std::int32_t> start_, order_;
+  std::vector<double> binned_uv_;  // (u, v) of order_[s] at 2 s, 2 s + 1: the bins' points side by side
 };
 
 /// DepthProbe(points, direction).Depth(surface): for one surface.
