@@ -383,16 +383,21 @@ StoredResponseBasis ReadResponseBasis(const Reader& r, const std::string& group,
   b.skin_landmarks = static_cast<std::int64_t>(scalars[7]);
   b.mesh_nodes = static_cast<std::int64_t>(scalars[8]);
   b.rest_checksum_mm = scalars[9];
-  if (b.bone_vertices + b.skin_vertices + b.skin_landmarks != s.num_points)
-    r.Bad("/" + g + "scalars: bone, skin and landmark points do not add up to num_points");
+  if (b.bone_vertices + b.skin_vertices + b.skin_landmarks != s.num_points || s.num_points == 0)
+    r.Bad("/" + g + "scalars: bone, skin and landmark points do not add up to num_points (> 0)");
+  // Every extent read below must be positive: an expected extent of 0 would mean "any" to Numbers().
+  auto positive = [&](hsize_t extent, const std::string& what) {
+    if (extent == 0) r.Bad("/" + g + what + " is empty");
+    return extent;
+  };
   std::vector<hsize_t> shape;
   const std::vector<double> modes = r.Numbers(g + "modes", {static_cast<hsize_t>(3 * s.num_points), 0}, &shape);
-  const auto rank = static_cast<Eigen::Index>(shape[1]);
+  const auto rank = static_cast<Eigen::Index>(positive(shape[1], "modes"));
   s.modes = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
                 modes.data(), 3 * s.num_points, rank)
                 .cast<float>();
   const std::vector<double> nodes = r.Numbers(g + "contact_nodes", {0}, &shape);
-  const hsize_t J = shape[0];
+  const hsize_t J = positive(shape[0], "contact_nodes");
   s.contact_nodes.resize(J);
   WholeNumbers(r, nodes, g + "contact_nodes", &s.contact_nodes);
   const std::vector<double> mixing = r.Numbers(g + "mixing", {static_cast<hsize_t>(rank), J});
@@ -401,7 +406,7 @@ StoredResponseBasis ReadResponseBasis(const Reader& r, const std::string& group,
   const std::vector<double> lift = r.Numbers(g + "lift", {J});
   s.lift = Eigen::Map<const Eigen::VectorXd>(lift.data(), static_cast<Eigen::Index>(J));
   const std::vector<double> z = r.Numbers(g + "quadrature_z", {0}, &shape);
-  const hsize_t Q = shape[0];
+  const hsize_t Q = positive(shape[0], "quadrature_z");
   s.quadrature_z = Eigen::Map<const Eigen::VectorXd>(z.data(), static_cast<Eigen::Index>(Q));
   const std::vector<double> weight = r.Numbers(g + "quadrature_weight", {Q});
   s.quadrature_weight = Eigen::Map<const Eigen::VectorXd>(weight.data(), static_cast<Eigen::Index>(Q));
