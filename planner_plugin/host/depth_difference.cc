@@ -82,13 +82,12 @@ Eigen::VectorXd DepthProbe::Depth(const Projected& projected, const Faces3& face
   // face's stays.
   for (Eigen::Index f = 0; f < faces.rows(); ++f) {
     const int i0 = faces(f, 0), i1 = faces(f, 1), i2 = faces(f, 2);
-    const Eigen::Vector2d a0 = uv.row(i0).transpose(), e1 = uv.row(i1).transpose() - a0,
-                          e2 = uv.row(i2).transpose() - a0;
+    const Eigen::Vector2d a0 = uv.row(i0).transpose(), a1 = uv.row(i1).transpose(), a2 = uv.row(i2).transpose();
+    const Eigen::Vector2d fmin = a0.cwiseMin(a1).cwiseMin(a2), fmax = a0.cwiseMax(a1).cwiseMax(a2);
+    if (fmax.x() < lo_.x() || fmin.x() > hi_.x() || fmax.y() < lo_.y() || fmin.y() > hi_.y()) continue;  // no point
+    const Eigen::Vector2d e1 = a1 - a0, e2 = a2 - a0;
     const double det = e1.x() * e2.y() - e1.y() * e2.x();
     if (std::abs(det) < 1e-15) continue;  // seen edge-on
-    const Eigen::Vector2d fmin = a0.cwiseMin(uv.row(i1).transpose()).cwiseMin(uv.row(i2).transpose());
-    const Eigen::Vector2d fmax = a0.cwiseMax(uv.row(i1).transpose()).cwiseMax(uv.row(i2).transpose());
-    if (fmax.x() < lo_.x() || fmin.x() > hi_.x() || fmax.y() < lo_.y() || fmin.y() > hi_.y()) continue;  // no point
     // A point the barycentric test below accepts (weights >= -kEps) lies within 3 kEps extents of the box.
     const double reach = 3 * kEps * (fmax - fmin).maxCoeff();
     const int u_first = clamp_u(fmin.x()), u_last = clamp_u(fmax.x());
