@@ -17,11 +17,11 @@ DepthProbe::DepthProbe(const Points3& points, const Eigen::Vector3d& direction)
     h_(k) = p.dot(a_);
   }
   if (n == 0) return;
-  // Bins of about two points each over the points' box (at most 4 #points + 16 bins).
+  // Bins of about one point each over the points' box (measured: fewer tests per face than two).
   lo_ = q_.colwise().minCoeff().transpose();
   hi_ = q_.colwise().maxCoeff().transpose();
   const Eigen::Vector2d extent = (hi_ - lo_).cwiseMax(1e-9);
-  const double cell = std::max(std::sqrt(2.0 * extent.prod() / static_cast<double>(n)), 1e-6);
+  const double cell = std::max(std::sqrt(1.0 * extent.prod() / static_cast<double>(n)), 1e-6);
   nu_ = std::min(static_cast<int>(extent.x() / cell) + 1, 2 * static_cast<int>(n) + 4);
   nv_ = std::min(static_cast<int>(extent.y() / cell) + 1, 2 * static_cast<int>(n) + 4);
   scale_ = Eigen::Vector2d(nu_ / extent.x(), nv_ / extent.y());
