@@ -54,6 +54,17 @@ void EmulatorTrainingSet::CheckShapes(const std::string& what) const {
       fail("the bone responses are not n by 3 #bone vertices alike");
   if (skin_anchor_generic_mm.rows() != n || skin_anchor_generic_mm.cols() != m)
     fail("skin_anchor_generic_mm is not n by 3 #skin vertices");
+  const auto nbn = static_cast<Eigen::Index>(boundary_nodes.size());
+  if (nbn > 0) {
+    if (static_cast<Eigen::Index>(boundary.size()) != q) fail("not one boundary response per position");
+    for (const Eigen::MatrixXd& b : boundary)
+      if (b.rows() != n || b.cols() != 3 * nbn) fail("a boundary response is not n by 3 #boundary nodes");
+    if (static_cast<Eigen::Index>(skin_ties.size()) != n) fail("not one set of skin ties per patient");
+    for (const auto& t : skin_ties)
+      if (t.rows() != num_skin_vertices() || t.cols() != nbn) fail("skin ties are not #skin vertices by #boundary nodes");
+  } else if (!boundary.empty() || !skin_ties.empty()) {
+    fail("boundary responses or skin ties without boundary nodes");
+  }
 }
 
 EmulatorTrainingSet BuildEmulatorTrainingSet(const std::vector<PatientTableRow>& rows,
@@ -115,6 +126,36 @@ EmulatorTrainingSet BuildEmulatorTrainingSet(const std::vector<PatientTableRow>&
       for (const auto& [node, w] : skin.ties[j]) anchor.row(static_cast<Eigen::Index>(j)) += w * generic_nodes.row(node);
     }
     set.skin_anchor_generic_mm.row(i) = Eigen::Map<const Eigen::RowVectorXd>(anchor.data(), m);
+    if (options.boundary_nodes) {
+      // The boundary nodes (the same in every patient: one generic topology) and the skin's ties to them.
+      const std::vector<std::int32_t> nodes = ExtractBoundary(ribcage.mesh).nodes;
+      if (i == 0) {
+        set.boundary_nodes = nodes;
+        set.boundary.assign(static_cast<std::size_t>(q), Eigen::MatrixXd(n, 3 * static_cast<Eigen::Index>(nodes.size())));
+      } else if (nodes != set.boundary_nodes) {
+        ThrowFailure("emulator training set: patient " + measurements.patient +
+                     ": the mesh's boundary nodes differ from the first patient's");
+      }
+      std::vector<std::int32_t> index(static_cast<std::size_t>(ribcage.mesh.num_nodes()), -1);
+      for (std::size_t b = 0; b < nodes.size(); ++b) index[static_cast<std::size_t>(nodes[b])] = static_cast<std::int32_t>(b);
+      std::vector<Eigen::Triplet<double>> entries;
+      for (std::size_t j = 0; j < skin.ties.size(); ++j) {
+        for (const auto& [node, w] : skin.ties[j]) {
+          if (index[static_cast<std::size_t>(node)] < 0)
+            ThrowFailure("emulator training set: patient " + measurements.patient + ": a skin tie to an inner node");
+          entries.emplace_back(static_cast<int>(j), index[static_cast<std::size_t>(node)], w);
+        }
+      }
+      Eigen::SparseMatrix<double, Eigen::RowMajor> ties(skin.mesh.num_vertices(), static_cast<Eigen::Index>(nodes.size()));
+      ties.setFromTriplets(entries.begin(), entries.end());
+      set.skin_ties.push_back(std::move(ties));
+      for (Eigen::Index k = 0; k < q; ++k) {
+        const Points3& u = solved[static_cast<std::size_t>(k)].displacement;
+        Eigen::MatrixXd& out = set.boundary[static_cast<std::size_t>(k)];
+        for (std::size_t b = 0; b < nodes.size(); ++b)
+          out.block(i, 3 * static_cast<Eigen::Index>(b), 1, 3) = u.row(nodes[b]);
+      }
+    }
     BoneSurface bone;
     if (options.bone_surface) bone = MakeBoneSurface(ribcage);
     const auto nb = static_cast<Eigen::Index>(bone.mesh_nodes.size());
@@ -139,7 +180,7 @@ EmulatorTrainingSet BuildEmulatorTrainingSet(const std::vector<PatientTableRow>&
 
 namespace {
 
-constexpr char kMagic[17] = "pectus-emulator1";
+constexpr char kMagic[17] = "pectus-emulator2";
 
 class Writer {
  public:
@@ -207,8 +248,9 @@ void SaveEmulatorTrainingSet(const EmulatorTrainingSet& set, const std::filesyst
   Writer w(path);
   w.Bytes(kMagic, 16);
   const Eigen::Index nb = set.bone.empty() ? 0 : set.bone.front().cols() / 3;
+  const auto nbn = static_cast<Eigen::Index>(set.boundary_nodes.size());
   for (Eigen::Index v : {set.num_patients(), set.num_positions(), set.ct_inputs.cols(), set.model_inputs.cols(),
-                         static_cast<Eigen::Index>(set.skin_rows), static_cast<Eigen::Index>(set.skin_columns), nb})
+                         static_cast<Eigen::Index>(set.skin_rows), static_cast<Eigen::Index>(set.skin_columns), nb, nbn})
     w.Int(v);
   for (const std::string& id : set.patients) {
     w.Int(static_cast<std::int64_t>(id.size()));
@@ -221,6 +263,19 @@ void SaveEmulatorTrainingSet(const EmulatorTrainingSet& set, const std::filesyst
   for (const Eigen::MatrixXd& s : set.skin) w.RowMajor(s);
   for (const Eigen::MatrixXd& b : set.bone) w.RowMajor(b);
   w.RowMajor(set.skin_anchor_generic_mm);
+  for (std::int32_t node : set.boundary_nodes) w.Int(node);
+  for (const Eigen::MatrixXd& b : set.boundary) w.RowMajor(b);
+  for (const auto& ties : set.skin_ties) {
+    w.Int(ties.nonZeros());
+    for (Eigen::Index r = 0; r < ties.outerSize(); ++r) {
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(ties, r); it; ++it) {
+        w.Int(r);
+        w.Int(it.col());
+        const double value = it.value();
+        w.Doubles(&value, 1);
+      }
+    }
+  }
   w.Int(w.doubles());
 }
 
@@ -229,12 +284,12 @@ EmulatorTrainingSet LoadEmulatorTrainingSet(const std::filesystem::path& path) {
   char magic[16];
   r.Bytes(magic, 16);
   if (std::memcmp(magic, kMagic, 16) != 0)
-    ThrowBadInput(path.string(), "not an emulator training set (expected the magic 'pectus-emulator1')");
+    ThrowBadInput(path.string(), "not an emulator training set of this version (expected the magic 'pectus-emulator2')");
   EmulatorTrainingSet set;
   const Eigen::Index n = r.Int(100000), q = r.Int(1000), pc = r.Int(1000), pm = r.Int(1000);
   set.skin_rows = static_cast<int>(r.Int(100000));
   set.skin_columns = static_cast<int>(r.Int(100000));
-  const Eigen::Index nb = r.Int(100000000);
+  const Eigen::Index nb = r.Int(100000000), nbn = r.Int(100000000);
   for (Eigen::Index i = 0; i < n; ++i) {
     std::string id(static_cast<std::size_t>(r.Int(4096)), '\0');
     r.Bytes(id.data(), id.size());
@@ -250,6 +305,22 @@ EmulatorTrainingSet LoadEmulatorTrainingSet(const std::filesystem::path& path) {
   if (nb > 0)
     for (Eigen::Index k = 0; k < q; ++k) set.bone.push_back(r.RowMajor(n, 3 * nb));
   set.skin_anchor_generic_mm = r.RowMajor(n, m);
+  for (Eigen::Index b = 0; b < nbn; ++b) set.boundary_nodes.push_back(static_cast<std::int32_t>(r.Int(2000000000)));
+  for (Eigen::Index k = 0; k < q && nbn > 0; ++k) set.boundary.push_back(r.RowMajor(n, 3 * nbn));
+  for (Eigen::Index i = 0; i < n && nbn > 0; ++i) {
+    const std::int64_t entries = r.Int(1000000000);
+    std::vector<Eigen::Triplet<double>> triplets;
+    triplets.reserve(static_cast<std::size_t>(entries));
+    for (std::int64_t e = 0; e < entries; ++e) {
+      const Eigen::Index row = r.Int(set.num_skin_vertices() - 1), col = r.Int(nbn - 1);
+      double value = 0.0;
+      r.Doubles(&value, 1);
+      triplets.emplace_back(static_cast<int>(row), static_cast<int>(col), value);
+    }
+    Eigen::SparseMatrix<double, Eigen::RowMajor> ties(set.num_skin_vertices(), nbn);
+    ties.setFromTriplets(triplets.begin(), triplets.end());
+    set.skin_ties.push_back(std::move(ties));
+  }
   std::int64_t count = 0;
   r.Bytes(&count, sizeof count);
   if (count != r.doubles() || !r.AtEnd())

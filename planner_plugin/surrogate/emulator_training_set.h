@@ -10,6 +10,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -29,6 +30,10 @@ struct EmulatorTrainingSetOptions {
   /// Also keep the bone-surface vertices' responses (MakeBoneSurface; about 3x the skin's size). Default
   /// false.
   bool bone_surface = false;
+  /// Also keep the responses of every boundary node of the mesh (corner and mid-edge: the nodes the skin
+  /// is tied to, the same nodes in every patient) and each patient's skin ties to them, so that a
+  /// prediction of the nodes gives the skin through the patient's own ties. Default true.
+  bool boundary_nodes = true;
   /// Mesh, fit, materials and skin settings (the plugin's defaults).
   PlannerSettings settings;
   /// False, with the reason, for a position out of (0, 1) or invalid settings.
@@ -53,6 +58,14 @@ struct EmulatorTrainingSet {
   std::vector<Eigen::MatrixXd> skin;
   /// Per position, n by 3 #bone-surface vertices, mm/N (empty when not asked for).
   std::vector<Eigen::MatrixXd> bone;
+  /// The mesh's boundary nodes (ExtractBoundary(); the same in every patient), empty when not asked for.
+  std::vector<std::int32_t> boundary_nodes;
+  /// Per position, n by 3 #boundary nodes, mm/N (empty when not asked for).
+  std::vector<Eigen::MatrixXd> boundary;
+  /// Per patient, #skin vertices by #boundary nodes: the skin's ties (SkinSurface::ties; rows sum to 1), so
+  /// that a skin vertex's displacement is its row times the boundary nodes' (x, y, z each). Empty when not
+  /// asked for.
+  std::vector<Eigen::SparseMatrix<double, Eigen::RowMajor>> skin_ties;
   /// n by 3 #skin vertices: the skin vertex's ties evaluated on the generic ribcage's nodes (mm): the
   /// same anatomical point in every patient iff these agree across patients.
   Eigen::MatrixXd skin_anchor_generic_mm;
@@ -76,11 +89,14 @@ EmulatorTrainingSet BuildEmulatorTrainingSet(const std::vector<PatientTableRow>&
                                              const EmulatorTrainingSetOptions& options = {},
                                              const std::function<void(std::int64_t, std::int64_t)>& progress = {});
 
-/// Writes `set` to `path` as a little-endian binary file: the 16-byte magic "pectus-emulator1", then the
-/// counts (int64: n, q, p_ct, p_model, skin rows, skin columns, bone vertices), the patient ids (int64
-/// length + bytes each), then float64 arrays in order: positions, ct_inputs, model_inputs, lift_per_newton
-/// (row-major), the skin per position, the bone per position, skin_anchor_generic_mm (row-major), and last
-/// an int64 count of every float64 written (a truncated file fails). Throws Error(kFailure) naming the file.
+/// Writes `set` to `path` as a little-endian binary file: the 16-byte magic "pectus-emulator2", then the
+/// counts (int64: n, q, p_ct, p_model, skin rows, skin columns, bone vertices, boundary nodes), the patient
+/// ids (int64 length + bytes each), then float64 arrays in order: positions, ct_inputs, model_inputs,
+/// lift_per_newton (row-major), the skin per position, the bone per position, skin_anchor_generic_mm
+/// (row-major); then, with boundary nodes, the boundary nodes (int64 each), the boundary per position
+/// (float64, row-major) and per patient the ties (int64 count of entries, then per entry int64 skin vertex,
+/// int64 boundary index, float64 weight); and last an int64 count of every float64 written (a truncated
+/// file fails). Throws Error(kFailure) naming the file.
 void SaveEmulatorTrainingSet(const EmulatorTrainingSet& set, const std::filesystem::path& path);
 
 /// Reads a file written by SaveEmulatorTrainingSet. Throws Error(kBadInput) naming the file if it is

@@ -7,8 +7,14 @@
 //
 //   emulator_benchmark [--table CSV] [--cache FILE] [--patients N] [--inputs map-log|ct|ct-log|ct-log+map-log]
 //                      [--scale norm|lift|none] [--explained 0.9999] [--components 20] [--kernel matern|se]
-//                      [--mean linear|constant] [--ann-components 10] [--ann-iterations 5000]
-//                      [--ann-rate 0.01] [--no-ann] [--ann-split-only]
+//                      [--mean linear|constant] [--ann-components 10] [--ann-iterations 1000]
+//                      [--ann-rate 0.01] [--no-ann] [--ann-split-only] [--target nodes|skin]
+//
+// What the emulator learns (--target): "nodes" (default) the responses of the mesh's boundary nodes (the
+// same nodes in every patient), the skin then through the held-out patient's own ties (known from the
+// fitted ribcage, without FE), its standard deviation the ties' weighted sum of the nodes' (as if their
+// errors were fully correlated: the nodes of one skin vertex are neighbours); "skin" the skin grid's
+// vertices directly (vertex (row, column) in every patient).
 //
 // Inputs (the emulator's and the baselines'): "ct" the CT measurements in true size (width, depth, sternal
 // length, depression, mm; torsion, degrees; the CT Haller index); "ct-log" the same with the logarithms
@@ -18,7 +24,7 @@
 // epochs), its test figures; (b) leave one patient out; inputs the same columns plus the bar position
 // (fraction) and force (N); outputs the first 10 principal-component scores of the displacement (of the
 // training patients' per-newton responses, times the force) and the sternal lift; OpenCV scales inputs
-// and outputs; symmetric sigmoid; BACKPROP, weight-gradient scale 0.01, momentum 0.1, 5000 epochs.
+// and outputs; symmetric sigmoid; BACKPROP, weight-gradient scale 0.01, momentum 0.1, 1000 epochs.
 //
 // Metrics (the skin grid's vertices; u the displacement of a load case, mm):
 //  - per case: the per-vertex Euclidean error e_v = |u_pred,v - u_fe,v|, its RMS over the vertices and its
@@ -240,15 +246,16 @@ nlohmann::json CorrespondenceCheck(const EmulatorTrainingSet& set) {
 
 int main(int argc, char** argv) {
   std::string table, cache, inputs_kind = "map-log";
-  int patients = 0, ann_components = 10, ann_iterations = 5000;
+  int patients = 0, ann_components = 10, ann_iterations = 1000;
   bool ann = true, split_only = false;
+  std::string target = "nodes";
   double ann_rate = 0.01;
   ResponseEmulatorOptions options;
   const char* usage =
       "usage: emulator_benchmark [--table CSV] [--cache FILE] [--patients N] "
       "[--inputs map-log|ct|ct-log|ct-log+map-log] [--scale norm|lift|none] [--explained 0.9999] [--components 20] "
       "[--kernel matern|se] [--mean linear|constant] [--ann-components 10] "
-      "[--ann-iterations 5000] [--ann-rate 0.01] [--no-ann] [--ann-split-only]\n";
+      "[--ann-iterations 1000] [--ann-rate 0.01] [--no-ann] [--ann-split-only] [--target nodes|skin]\n";
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
@@ -273,6 +280,7 @@ int main(int argc, char** argv) {
       else if (a == "--no-ann") ann = false;
       else if (a == "--ann-rate") ann_rate = std::stod(next());
       else if (a == "--ann-split-only") split_only = true;
+      else if (a == "--target") target = next();
       else {
         std::cerr << usage;
         return 2;
@@ -311,6 +319,26 @@ int main(int argc, char** argv) {
     report["training_set"] = {{"from_cache", cached}, {"seconds", Seconds(start)}, {"patients", rows.size()},
                               {"skin_vertices", set.num_skin_vertices()}, {"positions", set.positions}};
     report["correspondence"] = CorrespondenceCheck(set);
+    if (target != "nodes" && target != "skin") throw std::runtime_error("--target is nodes or skin");
+    if (target == "nodes" && set.boundary_nodes.empty())
+      throw std::runtime_error("the training set holds no boundary nodes (--target skin, or rebuild the cache)");
+    using Rows3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+    const auto nbn = static_cast<Eigen::Index>(set.boundary_nodes.size());
+    // Skin coordinates (3 #skin vertices) of boundary-node values (3 #boundary nodes) through patient i's ties.
+    auto to_skin = [&](Eigen::Index i, const Eigen::VectorXd& nodes) -> Eigen::VectorXd {
+      const Rows3 skin = set.skin_ties[static_cast<std::size_t>(i)] * Eigen::Map<const Rows3>(nodes.data(), nbn, 3);
+      return Eigen::Map<const Eigen::VectorXd>(skin.data(), skin.size());
+    };
+    if (nbn > 0) {
+      double worst = 0.0;
+      for (Eigen::Index i = 0; i < set.num_patients(); ++i)
+        for (Eigen::Index p = 0; p < set.num_positions(); ++p)
+          worst = std::max(worst, (to_skin(i, set.boundary[p].row(i).transpose()) - set.skin[p].row(i).transpose())
+                                      .cwiseAbs()
+                                      .maxCoeff());
+      report["training_set"]["boundary_nodes"] = nbn;
+      report["training_set"]["skin_from_ties_max_difference_mm_per_n"] = worst;
+    }
 
     const auto n = static_cast<Eigen::Index>(rows.size());
     const Eigen::Index q = set.num_positions(), m = 3 * set.num_skin_vertices();
@@ -359,14 +387,23 @@ int main(int argc, char** argv) {
         std::vector<Eigen::Index> train;
         for (Eigen::Index i = 0; i < n; ++i)
           if (i != out) train.push_back(i);
-        std::vector<Eigen::MatrixXd> responses;
-        for (Eigen::Index p = 0; p < q; ++p) responses.push_back(Rows(set.skin[p].topRows(n), train));
+        std::vector<Eigen::MatrixXd> responses, learnt;
+        for (Eigen::Index p = 0; p < q; ++p) {
+          responses.push_back(Rows(set.skin[p].topRows(n), train));
+          learnt.push_back(target == "nodes" ? Rows(set.boundary[p].topRows(n), train) : responses.back());
+        }
         const Eigen::MatrixXd x = Rows(inputs, train), lift = Rows(set.lift_per_newton.topRows(n), train);
         const auto fold_start = Clock::now();
-        const ResponseEmulator model(x, lift, responses, options);
+        const ResponseEmulator model(x, lift, learnt, options);
         fit_s[o] = Seconds(fold_start);
         fold_components[o] = model.summary().components;
-        const ResponseEmulatorPrediction prediction = model.Predict(inputs.row(out).transpose());
+        ResponseEmulatorPrediction prediction = model.Predict(inputs.row(out).transpose());
+        if (target == "nodes") {
+          for (Eigen::Index p = 0; p < q; ++p) {
+            prediction.response[p] = to_skin(out, prediction.response[p]);
+            prediction.response_sd[p] = to_skin(out, prediction.response_sd[p]);
+          }
+        }
         // The nearest patient in standardised parameters.
         const Eigen::RowVectorXd mu = x.colwise().mean();
         const Eigen::RowVectorXd sd =
@@ -433,7 +470,7 @@ int main(int argc, char** argv) {
       per_patient.push_back(fold_json[o]);
     }
     const double explained_ann = Mean(fold_explained_ann);
-    report["emulator_options"] = {{"kernel", options.gp.kernel == GpKernel::kMatern52 ? "matern52" : "squared_exponential"},
+    report["emulator_options"] = {{"target", target},{"kernel", options.gp.kernel == GpKernel::kMatern52 ? "matern52" : "squared_exponential"},
                                   {"linear_mean", options.gp.linear_mean},
                                   {"explained_fraction", options.explained_fraction},
                                   {"max_components", options.max_components},

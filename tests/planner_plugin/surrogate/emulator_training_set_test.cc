@@ -16,7 +16,7 @@ class EmulatorTrainingSetTest : public testing_support::ScratchDirTest {
  protected:
   EmulatorTrainingSetTest() : ScratchDirTest("pectus_emulator_training_set_") {}
 
-  // 3 patients, 2 positions, a 2 x 3 skin grid, 4 bone vertices, random values.
+  // 3 patients, 2 positions, a 2 x 3 skin grid, 4 bone vertices, 4 boundary nodes, random values.
   static EmulatorTrainingSet Small() {
     EmulatorTrainingSet set;
     set.patients = {"1", "22", "333"};
@@ -29,6 +29,16 @@ class EmulatorTrainingSetTest : public testing_support::ScratchDirTest {
     set.skin = {Eigen::MatrixXd::Random(3, 18), Eigen::MatrixXd::Random(3, 18)};
     set.bone = {Eigen::MatrixXd::Random(3, 12), Eigen::MatrixXd::Random(3, 12)};
     set.skin_anchor_generic_mm = Eigen::MatrixXd::Random(3, 18);
+    set.boundary_nodes = {5, 7, 11, 13};
+    set.boundary = {Eigen::MatrixXd::Random(3, 12), Eigen::MatrixXd::Random(3, 12)};
+    for (int i = 0; i < 3; ++i) {
+      Eigen::SparseMatrix<double, Eigen::RowMajor> ties(6, 4);
+      for (int j = 0; j < 6; ++j) {
+        ties.insert(j, (i + j) % 4) = 0.25 * (i + 1);
+        ties.insert(j, (i + j + 1) % 4) = 1.0 - 0.25 * (i + 1);
+      }
+      set.skin_ties.push_back(ties);
+    }
     return set;
   }
 };
@@ -51,6 +61,11 @@ TEST_F(EmulatorTrainingSetTest, SaveThenLoadGivesTheSameSet) {
     EXPECT_EQ(back.bone[k], set.bone[k]);
   }
   EXPECT_EQ(back.skin_anchor_generic_mm, set.skin_anchor_generic_mm);
+  EXPECT_EQ(back.boundary_nodes, set.boundary_nodes);
+  ASSERT_EQ(back.boundary.size(), 2u);
+  for (int k = 0; k < 2; ++k) EXPECT_EQ(back.boundary[k], set.boundary[k]);
+  ASSERT_EQ(back.skin_ties.size(), 3u);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(Eigen::MatrixXd(back.skin_ties[i]), Eigen::MatrixXd(set.skin_ties[i]));
 }
 
 TEST_F(EmulatorTrainingSetTest, DamagedFilesFailNamingTheFile) {

@@ -55,7 +55,10 @@ Family MakeFamily(int n, unsigned seed, double noise_sd) {
 
 TEST(ResponseEmulatorTest, ReproducesALowRankFieldFamily) {
   const Family train = MakeFamily(40, 1, 0.0), test = MakeFamily(20, 2, 0.0);
-  const ResponseEmulator emulator(train.x, train.lift, train.responses);
+  // The family is the lift times a rank-3 shape: divided by the lift, exactly 3 components.
+  ResponseEmulatorOptions options;
+  options.scale = ResponseScale::kLift;
+  const ResponseEmulator emulator(train.x, train.lift, train.responses, options);
   ASSERT_EQ(emulator.summary().components.size(), 2u);
   EXPECT_EQ(emulator.summary().components[0], 3) << emulator.summary().message;
   EXPECT_EQ(emulator.summary().components[1], 3);
