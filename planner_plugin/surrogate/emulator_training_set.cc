@@ -60,9 +60,12 @@ void EmulatorTrainingSet::CheckShapes(const std::string& what) const {
     for (const Eigen::MatrixXd& b : boundary)
       if (b.rows() != n || b.cols() != 3 * nbn) fail("a boundary response is not n by 3 #boundary nodes");
     if (static_cast<Eigen::Index>(skin_ties.size()) != n) fail("not one set of skin ties per patient");
+    if (static_cast<Eigen::Index>(lift_ties.size()) != n) fail("not one set of lift ties per patient");
+    for (const auto& t : lift_ties)
+      if (t.rows() != 1 || t.cols() != 3 * nbn) fail("lift ties are not 1 by 3 #boundary nodes");
     for (const auto& t : skin_ties)
       if (t.rows() != num_skin_vertices() || t.cols() != nbn) fail("skin ties are not #skin vertices by #boundary nodes");
-  } else if (!boundary.empty() || !skin_ties.empty()) {
+  } else if (!boundary.empty() || !skin_ties.empty() || !lift_ties.empty()) {
     fail("boundary responses or skin ties without boundary nodes");
   }
 }
@@ -111,10 +114,12 @@ EmulatorTrainingSet BuildEmulatorTrainingSet(const std::vector<PatientTableRow>&
         ribcage.measured.sternum_to_spine_mm;
     // The bar at each position with 1 N: displacements per newton.
     std::vector<BarResult> solved;
+    std::vector<std::pair<std::int32_t, double>> lift_ties;
     {
       auto t = set.timings_s.Time("fem");
       const RibcageFem fem(ribcage, options.settings.fem);
       solved = fem.Solve(loads);
+      lift_ties = fem.SternumLiftTies();
     }
     auto t = set.timings_s.Time("skin");
     const SkinSurface skin = BuildSkinSurface(ribcage, options.settings.skin);
@@ -149,6 +154,15 @@ EmulatorTrainingSet BuildEmulatorTrainingSet(const std::vector<PatientTableRow>&
       Eigen::SparseMatrix<double, Eigen::RowMajor> ties(skin.mesh.num_vertices(), static_cast<Eigen::Index>(nodes.size()));
       ties.setFromTriplets(entries.begin(), entries.end());
       set.skin_ties.push_back(std::move(ties));
+      Eigen::SparseMatrix<double, Eigen::RowMajor> lift(1, 3 * static_cast<Eigen::Index>(nodes.size()));
+      std::vector<Eigen::Triplet<double>> lift_entries;
+      for (const auto& [node, w] : lift_ties) {
+        if (index[static_cast<std::size_t>(node)] < 0)
+          ThrowFailure("emulator training set: patient " + measurements.patient + ": a sternal-lift tie to an inner node");
+        lift_entries.emplace_back(0, 3 * index[static_cast<std::size_t>(node)] + 1, w);
+      }
+      lift.setFromTriplets(lift_entries.begin(), lift_entries.end());
+      set.lift_ties.push_back(std::move(lift));
       for (Eigen::Index k = 0; k < q; ++k) {
         const Points3& u = solved[static_cast<std::size_t>(k)].displacement;
         Eigen::MatrixXd& out = set.boundary[static_cast<std::size_t>(k)];
@@ -180,7 +194,7 @@ EmulatorTrainingSet BuildEmulatorTrainingSet(const std::vector<PatientTableRow>&
 
 namespace {
 
-constexpr char kMagic[17] = "pectus-emulator2";
+constexpr char kMagic[17] = "pectus-emulator3";
 
 class Writer {
  public:
@@ -276,6 +290,14 @@ void SaveEmulatorTrainingSet(const EmulatorTrainingSet& set, const std::filesyst
       }
     }
   }
+  for (const auto& ties : set.lift_ties) {
+    w.Int(ties.nonZeros());
+    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(ties, 0); it; ++it) {
+      w.Int(it.col());
+      const double value = it.value();
+      w.Doubles(&value, 1);
+    }
+  }
   w.Int(w.doubles());
 }
 
@@ -284,7 +306,7 @@ EmulatorTrainingSet LoadEmulatorTrainingSet(const std::filesystem::path& path) {
   char magic[16];
   r.Bytes(magic, 16);
   if (std::memcmp(magic, kMagic, 16) != 0)
-    ThrowBadInput(path.string(), "not an emulator training set of this version (expected the magic 'pectus-emulator2')");
+    ThrowBadInput(path.string(), "not an emulator training set of this version (expected the magic 'pectus-emulator3')");
   EmulatorTrainingSet set;
   const Eigen::Index n = r.Int(100000), q = r.Int(1000), pc = r.Int(1000), pm = r.Int(1000);
   set.skin_rows = static_cast<int>(r.Int(100000));
@@ -320,6 +342,19 @@ EmulatorTrainingSet LoadEmulatorTrainingSet(const std::filesystem::path& path) {
     Eigen::SparseMatrix<double, Eigen::RowMajor> ties(set.num_skin_vertices(), nbn);
     ties.setFromTriplets(triplets.begin(), triplets.end());
     set.skin_ties.push_back(std::move(ties));
+  }
+  for (Eigen::Index i = 0; i < n && nbn > 0; ++i) {
+    const std::int64_t entries = r.Int(1000000);
+    std::vector<Eigen::Triplet<double>> triplets;
+    for (std::int64_t e = 0; e < entries; ++e) {
+      const Eigen::Index col = r.Int(3 * nbn - 1);
+      double value = 0.0;
+      r.Doubles(&value, 1);
+      triplets.emplace_back(0, static_cast<int>(col), value);
+    }
+    Eigen::SparseMatrix<double, Eigen::RowMajor> ties(1, 3 * nbn);
+    ties.setFromTriplets(triplets.begin(), triplets.end());
+    set.lift_ties.push_back(std::move(ties));
   }
   std::int64_t count = 0;
   r.Bytes(&count, sizeof count);

@@ -66,6 +66,10 @@ struct EmulatorTrainingSet {
   /// that a skin vertex's displacement is its row times the boundary nodes' (x, y, z each). Empty when not
   /// asked for.
   std::vector<Eigen::SparseMatrix<double, Eigen::RowMajor>> skin_ties;
+  /// Per patient, 1 by 3 #boundary nodes: the sternal lift as a linear functional of the boundary nodes'
+  /// displacements (RibcageFem::SternumLiftTies(), on the y coordinates), known from the fitted ribcage
+  /// alone: lift = this row times a boundary response. Empty when not asked for.
+  std::vector<Eigen::SparseMatrix<double, Eigen::RowMajor>> lift_ties;
   /// n by 3 #skin vertices: the skin vertex's ties evaluated on the generic ribcage's nodes (mm): the
   /// same anatomical point in every patient iff these agree across patients.
   Eigen::MatrixXd skin_anchor_generic_mm;
@@ -89,13 +93,14 @@ EmulatorTrainingSet BuildEmulatorTrainingSet(const std::vector<PatientTableRow>&
                                              const EmulatorTrainingSetOptions& options = {},
                                              const std::function<void(std::int64_t, std::int64_t)>& progress = {});
 
-/// Writes `set` to `path` as a little-endian binary file: the 16-byte magic "pectus-emulator2", then the
+/// Writes `set` to `path` as a little-endian binary file: the 16-byte magic "pectus-emulator3", then the
 /// counts (int64: n, q, p_ct, p_model, skin rows, skin columns, bone vertices, boundary nodes), the patient
 /// ids (int64 length + bytes each), then float64 arrays in order: positions, ct_inputs, model_inputs,
 /// lift_per_newton (row-major), the skin per position, the bone per position, skin_anchor_generic_mm
 /// (row-major); then, with boundary nodes, the boundary nodes (int64 each), the boundary per position
-/// (float64, row-major) and per patient the ties (int64 count of entries, then per entry int64 skin vertex,
-/// int64 boundary index, float64 weight); and last an int64 count of every float64 written (a truncated
+/// (float64, row-major), per patient the skin ties (int64 count of entries, then per entry int64 skin
+/// vertex, int64 boundary index, float64 weight) and per patient the lift ties (int64 count, then per entry
+/// int64 coordinate index, float64 weight); and last an int64 count of every float64 written (a truncated
 /// file fails). Throws Error(kFailure) naming the file.
 void SaveEmulatorTrainingSet(const EmulatorTrainingSet& set, const std::filesystem::path& path);
 

@@ -14,7 +14,9 @@
 // same nodes in every patient), the skin then through the held-out patient's own ties (known from the
 // fitted ribcage, without FE), its standard deviation the ties' weighted sum of the nodes' (as if their
 // errors were fully correlated: the nodes of one skin vertex are neighbours); "skin" the skin grid's
-// vertices directly (vertex (row, column) in every patient).
+// vertices directly (vertex (row, column) in every patient). With "nodes" the sternal lift too is the
+// held-out patient's own linear functional of the nodes (RibcageFem::SternumLiftTies, from the fit alone);
+// with "skin" it is the emulator's log-lift process.
 //
 // Inputs (the emulator's and the baselines'): "ct" the CT measurements in true size (width, depth, sternal
 // length, depression, mm; torsion, degrees; the CT Haller index); "ct-log" the same with the logarithms
@@ -336,6 +338,12 @@ int main(int argc, char** argv) {
           worst = std::max(worst, (to_skin(i, set.boundary[p].row(i).transpose()) - set.skin[p].row(i).transpose())
                                       .cwiseAbs()
                                       .maxCoeff());
+      double worst_lift = 0.0;
+      for (Eigen::Index i = 0; i < set.num_patients(); ++i)
+        for (Eigen::Index p = 0; p < set.num_positions(); ++p)
+          worst_lift = std::max(worst_lift, std::abs((set.lift_ties[static_cast<std::size_t>(i)] *
+                                                      set.boundary[p].row(i).transpose())(0) - set.lift_per_newton(i, p)));
+      report["training_set"]["lift_from_ties_max_difference_mm_per_n"] = worst_lift;
       report["training_set"]["boundary_nodes"] = nbn;
       report["training_set"]["skin_from_ties_max_difference_mm_per_n"] = worst;
     }
@@ -400,6 +408,10 @@ int main(int argc, char** argv) {
         ResponseEmulatorPrediction prediction = model.Predict(inputs.row(out).transpose());
         if (target == "nodes") {
           for (Eigen::Index p = 0; p < q; ++p) {
+            // The lift through the patient's own lift ties (its sd: the ties' weighted sum of the nodes').
+            const auto& lift_ties = set.lift_ties[static_cast<std::size_t>(out)];
+            prediction.lift_per_newton(p) = (lift_ties * prediction.response[p])(0);
+            prediction.lift_sd(p) = (lift_ties.cwiseAbs() * prediction.response_sd[p])(0);
             prediction.response[p] = to_skin(out, prediction.response[p]);
             prediction.response_sd[p] = to_skin(out, prediction.response_sd[p]);
           }

@@ -38,6 +38,10 @@ class EmulatorTrainingSetTest : public testing_support::ScratchDirTest {
         ties.insert(j, (i + j + 1) % 4) = 1.0 - 0.25 * (i + 1);
       }
       set.skin_ties.push_back(ties);
+      Eigen::SparseMatrix<double, Eigen::RowMajor> lift(1, 12);
+      lift.insert(0, 3 * i + 1) = 0.5;
+      lift.insert(0, 3 * i + 4) = 0.5;
+      set.lift_ties.push_back(lift);
     }
     return set;
   }
@@ -65,7 +69,11 @@ TEST_F(EmulatorTrainingSetTest, SaveThenLoadGivesTheSameSet) {
   ASSERT_EQ(back.boundary.size(), 2u);
   for (int k = 0; k < 2; ++k) EXPECT_EQ(back.boundary[k], set.boundary[k]);
   ASSERT_EQ(back.skin_ties.size(), 3u);
-  for (int i = 0; i < 3; ++i) EXPECT_EQ(Eigen::MatrixXd(back.skin_ties[i]), Eigen::MatrixXd(set.skin_ties[i]));
+  ASSERT_EQ(back.lift_ties.size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(Eigen::MatrixXd(back.skin_ties[i]), Eigen::MatrixXd(set.skin_ties[i]));
+    EXPECT_EQ(Eigen::MatrixXd(back.lift_ties[i]), Eigen::MatrixXd(set.lift_ties[i]));
+  }
 }
 
 TEST_F(EmulatorTrainingSetTest, DamagedFilesFailNamingTheFile) {
