@@ -7,6 +7,7 @@
 #include "planner_plugin/fem/tet_mesh.h"
 #include "planner_plugin/ribcage/build_skin_surface.h"
 #include "planner_plugin/ribcage/ribcage_fem.h"
+#include "planner_plugin/surrogate/emulator_patient_ties.h"
 #include "shape/core/error.h"
 
 namespace pectus::planner {
@@ -114,12 +115,10 @@ EmulatorTrainingSet BuildEmulatorTrainingSet(const std::vector<PatientTableRow>&
         ribcage.measured.sternum_to_spine_mm;
     // The bar at each position with 1 N: displacements per newton.
     std::vector<BarResult> solved;
-    std::vector<std::pair<std::int32_t, double>> lift_ties;
     {
       auto t = set.timings_s.Time("fem");
       const RibcageFem fem(ribcage, options.settings.fem);
       solved = fem.Solve(loads);
-      lift_ties = fem.SternumLiftTies();
     }
     auto t = set.timings_s.Time("skin");
     const SkinSurface skin = BuildSkinSurface(ribcage, options.settings.skin);
@@ -141,28 +140,9 @@ EmulatorTrainingSet BuildEmulatorTrainingSet(const std::vector<PatientTableRow>&
         ThrowFailure("emulator training set: patient " + measurements.patient +
                      ": the mesh's boundary nodes differ from the first patient's");
       }
-      std::vector<std::int32_t> index(static_cast<std::size_t>(ribcage.mesh.num_nodes()), -1);
-      for (std::size_t b = 0; b < nodes.size(); ++b) index[static_cast<std::size_t>(nodes[b])] = static_cast<std::int32_t>(b);
-      std::vector<Eigen::Triplet<double>> entries;
-      for (std::size_t j = 0; j < skin.ties.size(); ++j) {
-        for (const auto& [node, w] : skin.ties[j]) {
-          if (index[static_cast<std::size_t>(node)] < 0)
-            ThrowFailure("emulator training set: patient " + measurements.patient + ": a skin tie to an inner node");
-          entries.emplace_back(static_cast<int>(j), index[static_cast<std::size_t>(node)], w);
-        }
-      }
-      Eigen::SparseMatrix<double, Eigen::RowMajor> ties(skin.mesh.num_vertices(), static_cast<Eigen::Index>(nodes.size()));
-      ties.setFromTriplets(entries.begin(), entries.end());
-      set.skin_ties.push_back(std::move(ties));
-      Eigen::SparseMatrix<double, Eigen::RowMajor> lift(1, 3 * static_cast<Eigen::Index>(nodes.size()));
-      std::vector<Eigen::Triplet<double>> lift_entries;
-      for (const auto& [node, w] : lift_ties) {
-        if (index[static_cast<std::size_t>(node)] < 0)
-          ThrowFailure("emulator training set: patient " + measurements.patient + ": a sternal-lift tie to an inner node");
-        lift_entries.emplace_back(0, 3 * index[static_cast<std::size_t>(node)] + 1, w);
-      }
-      lift.setFromTriplets(lift_entries.begin(), lift_entries.end());
-      set.lift_ties.push_back(std::move(lift));
+      EmulatorPatientTies ties = MakeEmulatorPatientTies(ribcage, skin, nodes);
+      set.skin_ties.push_back(std::move(ties.skin));
+      set.lift_ties.push_back(std::move(ties.lift));
       for (Eigen::Index k = 0; k < q; ++k) {
         const Points3& u = solved[static_cast<std::size_t>(k)].displacement;
         Eigen::MatrixXd& out = set.boundary[static_cast<std::size_t>(k)];

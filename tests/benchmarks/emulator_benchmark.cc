@@ -15,7 +15,8 @@
 // fitted ribcage, without FE), its standard deviation the ties' weighted sum of the nodes' (as if their
 // errors were fully correlated: the nodes of one skin vertex are neighbours); "skin" the skin grid's
 // vertices directly (vertex (row, column) in every patient). With "nodes" the sternal lift too is the
-// held-out patient's own linear functional of the nodes (RibcageFem::SternumLiftTies, from the fit alone);
+// held-out patient's own linear functional of the nodes (ThroughTies, emulator_patient_ties.h: the ties
+// come from the fitted ribcage alone);
 // with "skin" it is the emulator's log-lift process.
 //
 // Inputs (the emulator's and the baselines'): "ct" the CT measurements in true size (width, depth, sternal
@@ -55,6 +56,7 @@
 #include <vector>
 
 #include "planner_plugin/ribcage/ribcage_fem.h"
+#include "planner_plugin/surrogate/emulator_patient_ties.h"
 #include "planner_plugin/surrogate/emulator_training_set.h"
 #include "planner_plugin/surrogate/response_emulator.h"
 #include "shape/core/error.h"
@@ -406,16 +408,8 @@ int main(int argc, char** argv) {
         fit_s[o] = Seconds(fold_start);
         fold_components[o] = model.summary().components;
         ResponseEmulatorPrediction prediction = model.Predict(inputs.row(out).transpose());
-        if (target == "nodes") {
-          for (Eigen::Index p = 0; p < q; ++p) {
-            // The lift through the patient's own lift ties (its sd: the ties' weighted sum of the nodes').
-            const auto& lift_ties = set.lift_ties[static_cast<std::size_t>(out)];
-            prediction.lift_per_newton(p) = (lift_ties * prediction.response[p])(0);
-            prediction.lift_sd(p) = (lift_ties.cwiseAbs() * prediction.response_sd[p])(0);
-            prediction.response[p] = to_skin(out, prediction.response[p]);
-            prediction.response_sd[p] = to_skin(out, prediction.response_sd[p]);
-          }
-        }
+        // The skin and the lift through the held-out patient's own ties (known from its fitted ribcage).
+        if (target == "nodes") prediction = ThroughTies(prediction, {set.skin_ties[o], set.lift_ties[o]});
         // The nearest patient in standardised parameters.
         const Eigen::RowVectorXd mu = x.colwise().mean();
         const Eigen::RowVectorXd sd =
