@@ -6,7 +6,7 @@
 // patient by patient; the nearest patient; the mean response. Prints JSON.
 //
 //   emulator_benchmark [--table CSV] [--cache FILE] [--patients N] [--inputs map-log|ct|ct-log|ct-log+map-log]
-//                      [--scale norm|lift|none] [--explained 0.9999] [--components 20] [--kernel matern|se]
+//                      [--scale lift|norm|none] [--explained 0.9999] [--components 20] [--kernel matern|se]
 //                      [--mean linear|constant] [--ann-components 10] [--ann-iterations 1000]
 //                      [--ann-rate 0.01] [--no-ann] [--ann-split-only] [--target nodes|skin]
 //
@@ -257,7 +257,7 @@ int main(int argc, char** argv) {
   ResponseEmulatorOptions options;
   const char* usage =
       "usage: emulator_benchmark [--table CSV] [--cache FILE] [--patients N] "
-      "[--inputs map-log|ct|ct-log|ct-log+map-log] [--scale norm|lift|none] [--explained 0.9999] [--components 20] "
+      "[--inputs map-log|ct|ct-log|ct-log+map-log] [--scale lift|norm|none] [--explained 0.9999] [--components 20] "
       "[--kernel matern|se] [--mean linear|constant] [--ann-components 10] "
       "[--ann-iterations 1000] [--ann-rate 0.01] [--no-ann] [--ann-split-only] [--target nodes|skin]\n";
   try {
@@ -275,6 +275,7 @@ int main(int argc, char** argv) {
       else if (a == "--components") options.max_components = std::stoi(next());
       else if (a == "--scale") {
         const std::string v = next();
+        if (v != "lift" && v != "norm" && v != "none") throw std::runtime_error("--scale is lift, norm or none");
         options.scale = v == "lift" ? ResponseScale::kLift : v == "none" ? ResponseScale::kNone : ResponseScale::kNorm;
       }
       else if (a == "--kernel") options.gp.kernel = next() == "se" ? GpKernel::kSquaredExponential : GpKernel::kMatern52;
