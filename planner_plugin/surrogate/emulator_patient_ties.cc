@@ -26,7 +26,8 @@ EmulatorPatientTies MakeEmulatorPatientTies(const PatientRibcage& ribcage, const
   EmulatorPatientTies out;
   std::vector<Eigen::Triplet<double>> entries;
   for (std::size_t j = 0; j < skin.ties.size(); ++j)
-    for (const auto& [node, w] : skin.ties[j]) entries.emplace_back(static_cast<int>(j), boundary_index(node, "a skin vertex"), w);
+    for (const auto& [node, w] : skin.ties[j])
+      entries.emplace_back(static_cast<int>(j), boundary_index(node, "a skin vertex"), w);
   out.skin.resize(static_cast<Eigen::Index>(skin.ties.size()), nb);
   out.skin.setFromTriplets(entries.begin(), entries.end());
   entries.clear();
@@ -38,15 +39,18 @@ EmulatorPatientTies MakeEmulatorPatientTies(const PatientRibcage& ribcage, const
   return out;
 }
 
-ResponseEmulatorPrediction ThroughTies(const ResponseEmulatorPrediction& nodes, const EmulatorPatientTies& ties) {
+ResponseEmulatorPrediction ThroughTies(const ResponseEmulatorPrediction& nodes,
+                                       const EmulatorPatientTies& ties) {
   using Rows3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
   const Eigen::Index nb = ties.skin.cols();
   ResponseEmulatorPrediction out;
   const auto q = static_cast<Eigen::Index>(nodes.response.size());
   out.lift_per_newton.resize(q);
   out.lift_sd.resize(q);
-  const Eigen::SparseMatrix<double, Eigen::RowMajor> abs_skin = ties.skin.cwiseAbs(), abs_lift = ties.lift.cwiseAbs();
-  auto carry = [&](const Eigen::SparseMatrix<double, Eigen::RowMajor>& t, const Eigen::VectorXd& v) -> Eigen::VectorXd {
+  const Eigen::SparseMatrix<double, Eigen::RowMajor> abs_skin = ties.skin.cwiseAbs(),
+                                                     abs_lift = ties.lift.cwiseAbs();
+  auto carry = [&](const Eigen::SparseMatrix<double, Eigen::RowMajor>& t,
+                   const Eigen::VectorXd& v) -> Eigen::VectorXd {
     const Rows3 r = t * Eigen::Map<const Rows3>(v.data(), nb, 3);
     return Eigen::Map<const Eigen::VectorXd>(r.data(), r.size());
   };

@@ -38,6 +38,7 @@ EmulatorPatientTies MakeEmulatorPatientTies(const PatientRibcage& ribcage, const
 /// ties' weighted sums of the nodes' (|w| sd), as if the errors of a vertex's nodes were fully correlated
 /// (they are neighbours): an upper bound of the carried deviation. Throws Error(kUsage) for a prediction
 /// of another size.
-ResponseEmulatorPrediction ThroughTies(const ResponseEmulatorPrediction& nodes, const EmulatorPatientTies& ties);
+ResponseEmulatorPrediction ThroughTies(const ResponseEmulatorPrediction& nodes,
+                                       const EmulatorPatientTies& ties);
 
 }  // namespace pectus::planner

@@ -12,11 +12,11 @@
 
 namespace pectus::planner {
 
-const std::vector<std::string> kCtInputNames = {"width_mm", "depth_mm", "sternal_length_mm",
+const std::vector<std::string> kCtInputNames = {"width_mm",      "depth_mm",    "sternal_length_mm",
                                                 "depression_mm", "torsion_deg", "ct_haller_index"};
-const std::vector<std::string> kModelInputNames = {"scale_x", "scale_y", "scale_z", "map_depression_mm",
-                                                   "map_torsion_deg", "spine_shift_mm", "inner_width_mm",
-                                                   "sternum_to_spine_mm"};
+const std::vector<std::string> kModelInputNames = {
+    "scale_x",         "scale_y",        "scale_z",        "map_depression_mm",
+    "map_torsion_deg", "spine_shift_mm", "inner_width_mm", "sternum_to_spine_mm"};
 
 bool EmulatorTrainingSetOptions::IsValid(std::string* why) const {
   if (positions.empty()) {
@@ -30,8 +30,8 @@ bool EmulatorTrainingSetOptions::IsValid(std::string* why) const {
     }
   }
   std::string reason;
-  if (!settings.generic.IsValid(&reason) || !settings.fem.IsValid(&reason) || !settings.skin.IsValid(&reason) ||
-      !settings.patient.IsValid(&reason)) {
+  if (!settings.generic.IsValid(&reason) || !settings.fem.IsValid(&reason) ||
+      !settings.skin.IsValid(&reason) || !settings.patient.IsValid(&reason)) {
     if (why) *why = "planner settings: " + reason;
     return false;
   }
@@ -49,7 +49,8 @@ void EmulatorTrainingSet::CheckShapes(const std::string& what) const {
   if (static_cast<Eigen::Index>(skin.size()) != q) fail("not one skin response per position");
   for (const Eigen::MatrixXd& s : skin)
     if (s.rows() != n || s.cols() != m) fail("a skin response is not n by 3 #skin vertices");
-  if (!bone.empty() && static_cast<Eigen::Index>(bone.size()) != q) fail("not one bone response per position");
+  if (!bone.empty() && static_cast<Eigen::Index>(bone.size()) != q)
+    fail("not one bone response per position");
   for (const Eigen::MatrixXd& b : bone)
     if (b.rows() != n || b.cols() != bone.front().cols() || b.cols() % 3 != 0)
       fail("the bone responses are not n by 3 #bone vertices alike");
@@ -65,15 +66,16 @@ void EmulatorTrainingSet::CheckShapes(const std::string& what) const {
     for (const auto& t : lift_ties)
       if (t.rows() != 1 || t.cols() != 3 * nbn) fail("lift ties are not 1 by 3 #boundary nodes");
     for (const auto& t : skin_ties)
-      if (t.rows() != num_skin_vertices() || t.cols() != nbn) fail("skin ties are not #skin vertices by #boundary nodes");
+      if (t.rows() != num_skin_vertices() || t.cols() != nbn)
+        fail("skin ties are not #skin vertices by #boundary nodes");
   } else if (!boundary.empty() || !skin_ties.empty() || !lift_ties.empty()) {
     fail("boundary responses or skin ties without boundary nodes");
   }
 }
 
-EmulatorTrainingSet BuildEmulatorTrainingSet(const std::vector<PatientTableRow>& rows,
-                                             const EmulatorTrainingSetOptions& options,
-                                             const std::function<void(std::int64_t, std::int64_t)>& progress) {
+EmulatorTrainingSet BuildEmulatorTrainingSet(
+    const std::vector<PatientTableRow>& rows, const EmulatorTrainingSetOptions& options,
+    const std::function<void(std::int64_t, std::int64_t)>& progress) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage("emulator training set: " + why);
   const auto n = static_cast<Eigen::Index>(rows.size());
@@ -111,8 +113,8 @@ EmulatorTrainingSet BuildEmulatorTrainingSet(const std::vector<PatientTableRow>&
         measurements.TrueDepression(), measurements.torsion_deg, row.haller_index;
     const PatientMapParameters& p = ribcage.parameters;
     set.model_inputs.row(i) << p.scale.x(), p.scale.y(), p.scale.z(), p.depression_mm,
-        p.torsion_rad * 180.0 / 3.14159265358979323846, ribcage.spine_shift_mm, ribcage.measured.inner_width_mm,
-        ribcage.measured.sternum_to_spine_mm;
+        p.torsion_rad * 180.0 / 3.14159265358979323846, ribcage.spine_shift_mm,
+        ribcage.measured.inner_width_mm, ribcage.measured.sternum_to_spine_mm;
     // The bar at each position with 1 N: displacements per newton.
     std::vector<BarResult> solved;
     {
@@ -127,7 +129,8 @@ EmulatorTrainingSet BuildEmulatorTrainingSet(const std::vector<PatientTableRow>&
                    std::to_string(skin.mesh.num_vertices()) + " vertices, not rows x columns");
     Points3 anchor = Points3::Zero(skin.mesh.num_vertices(), 3);
     for (std::size_t j = 0; j < skin.ties.size(); ++j) {
-      for (const auto& [node, w] : skin.ties[j]) anchor.row(static_cast<Eigen::Index>(j)) += w * generic_nodes.row(node);
+      for (const auto& [node, w] : skin.ties[j])
+        anchor.row(static_cast<Eigen::Index>(j)) += w * generic_nodes.row(node);
     }
     set.skin_anchor_generic_mm.row(i) = Eigen::Map<const Eigen::RowVectorXd>(anchor.data(), m);
     if (options.boundary_nodes) {
@@ -135,7 +138,8 @@ EmulatorTrainingSet BuildEmulatorTrainingSet(const std::vector<PatientTableRow>&
       const std::vector<std::int32_t> nodes = ExtractBoundary(ribcage.mesh).nodes;
       if (i == 0) {
         set.boundary_nodes = nodes;
-        set.boundary.assign(static_cast<std::size_t>(q), Eigen::MatrixXd(n, 3 * static_cast<Eigen::Index>(nodes.size())));
+        set.boundary.assign(static_cast<std::size_t>(q),
+                            Eigen::MatrixXd(n, 3 * static_cast<Eigen::Index>(nodes.size())));
       } else if (nodes != set.boundary_nodes) {
         ThrowFailure("emulator training set: patient " + measurements.patient +
                      ": the mesh's boundary nodes differ from the first patient's");
@@ -153,7 +157,8 @@ EmulatorTrainingSet BuildEmulatorTrainingSet(const std::vector<PatientTableRow>&
     BoneSurface bone;
     if (options.bone_surface) bone = MakeBoneSurface(ribcage);
     const auto nb = static_cast<Eigen::Index>(bone.mesh_nodes.size());
-    if (options.bone_surface && i == 0) set.bone.assign(static_cast<std::size_t>(q), Eigen::MatrixXd(n, 3 * nb));
+    if (options.bone_surface && i == 0)
+      set.bone.assign(static_cast<std::size_t>(q), Eigen::MatrixXd(n, 3 * nb));
     for (Eigen::Index k = 0; k < q; ++k) {
       const BarResult& r = solved[static_cast<std::size_t>(k)];
       set.lift_per_newton(i, k) = r.sternum_lift_mm;  // 1 N
@@ -164,7 +169,8 @@ EmulatorTrainingSet BuildEmulatorTrainingSet(const std::vector<PatientTableRow>&
           ThrowFailure("emulator training set: patient " + measurements.patient +
                        ": the bone surface has another vertex count than the first patient's");
         for (Eigen::Index v = 0; v < nb; ++v)
-          set.bone[static_cast<std::size_t>(k)].block(i, 3 * v, 1, 3) = r.displacement.row(bone.mesh_nodes[v]);
+          set.bone[static_cast<std::size_t>(k)].block(i, 3 * v, 1, 3) =
+              r.displacement.row(bone.mesh_nodes[v]);
       }
     }
     if (progress) progress(i + 1, n);
@@ -214,7 +220,9 @@ class Reader {
   std::int64_t Int(std::int64_t most) {
     std::int64_t v = 0;
     Bytes(&v, sizeof v);
-    if (v < 0 || v > most) ThrowBadInput(path_.string(), "the emulator training set has a count out of range: " + std::to_string(v));
+    if (v < 0 || v > most)
+      ThrowBadInput(path_.string(),
+                    "the emulator training set has a count out of range: " + std::to_string(v));
     return v;
   }
   void Doubles(double* data, Eigen::Index count) {
@@ -243,8 +251,9 @@ void SaveEmulatorTrainingSet(const EmulatorTrainingSet& set, const std::filesyst
   w.Bytes(kMagic, 16);
   const Eigen::Index nb = set.bone.empty() ? 0 : set.bone.front().cols() / 3;
   const auto nbn = static_cast<Eigen::Index>(set.boundary_nodes.size());
-  for (Eigen::Index v : {set.num_patients(), set.num_positions(), set.ct_inputs.cols(), set.model_inputs.cols(),
-                         static_cast<Eigen::Index>(set.skin_rows), static_cast<Eigen::Index>(set.skin_columns), nb, nbn})
+  for (Eigen::Index v :
+       {set.num_patients(), set.num_positions(), set.ct_inputs.cols(), set.model_inputs.cols(),
+        static_cast<Eigen::Index>(set.skin_rows), static_cast<Eigen::Index>(set.skin_columns), nb, nbn})
     w.Int(v);
   for (const std::string& id : set.patients) {
     w.Int(static_cast<std::int64_t>(id.size()));
@@ -286,7 +295,8 @@ EmulatorTrainingSet LoadEmulatorTrainingSet(const std::filesystem::path& path) {
   char magic[16];
   r.Bytes(magic, 16);
   if (std::memcmp(magic, kMagic, 16) != 0)
-    ThrowBadInput(path.string(), "not an emulator training set of this version (expected the magic 'pectus-emulator3')");
+    ThrowBadInput(path.string(),
+                  "not an emulator training set of this version (expected the magic 'pectus-emulator3')");
   EmulatorTrainingSet set;
   const Eigen::Index n = r.Int(100000), q = r.Int(1000), pc = r.Int(1000), pm = r.Int(1000);
   set.skin_rows = static_cast<int>(r.Int(100000));
@@ -307,7 +317,8 @@ EmulatorTrainingSet LoadEmulatorTrainingSet(const std::filesystem::path& path) {
   if (nb > 0)
     for (Eigen::Index k = 0; k < q; ++k) set.bone.push_back(r.RowMajor(n, 3 * nb));
   set.skin_anchor_generic_mm = r.RowMajor(n, m);
-  for (Eigen::Index b = 0; b < nbn; ++b) set.boundary_nodes.push_back(static_cast<std::int32_t>(r.Int(2000000000)));
+  for (Eigen::Index b = 0; b < nbn; ++b)
+    set.boundary_nodes.push_back(static_cast<std::int32_t>(r.Int(2000000000)));
   for (Eigen::Index k = 0; k < q && nbn > 0; ++k) set.boundary.push_back(r.RowMajor(n, 3 * nbn));
   for (Eigen::Index i = 0; i < n && nbn > 0; ++i) {
     const std::int64_t entries = r.Int(1000000000);

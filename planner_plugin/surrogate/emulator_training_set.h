@@ -89,9 +89,9 @@ extern const std::vector<std::string> kModelInputNames;
 /// Builds the training set from every row of `rows` (one generic ribcage, one factorisation per patient).
 /// `progress(done, total)` is called after each patient. Throws Error(kUsage) for invalid options and
 /// pectus::Error naming the patient whose ribcage cannot be fitted or solved.
-EmulatorTrainingSet BuildEmulatorTrainingSet(const std::vector<PatientTableRow>& rows,
-                                             const EmulatorTrainingSetOptions& options = {},
-                                             const std::function<void(std::int64_t, std::int64_t)>& progress = {});
+EmulatorTrainingSet BuildEmulatorTrainingSet(
+    const std::vector<PatientTableRow>& rows, const EmulatorTrainingSetOptions& options = {},
+    const std::function<void(std::int64_t, std::int64_t)>& progress = {});
 
 /// Writes `set` to `path` as a little-endian binary file: the 16-byte magic "pectus-emulator3", then the
 /// counts (int64: n, q, p_ct, p_model, skin rows, skin columns, bone vertices, boundary nodes), the patient

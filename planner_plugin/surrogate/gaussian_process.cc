@@ -20,7 +20,8 @@ bool GaussianProcessOptions::IsValid(std::string* why) const {
   };
   if (!(min_length_scale > 0.0 && max_length_scale > min_length_scale && std::isfinite(max_length_scale)))
     return fail("Gaussian process: length-scale bounds must satisfy 0 < min < max < inf");
-  if (!(min_noise_fraction > 0.0 && max_noise_fraction >= min_noise_fraction && std::isfinite(max_noise_fraction)))
+  if (!(min_noise_fraction > 0.0 && max_noise_fraction >= min_noise_fraction &&
+        std::isfinite(max_noise_fraction)))
     return fail("Gaussian process: noise bounds must satisfy 0 < min <= max < inf");
   if (starts < 1) return fail("Gaussian process: starts must be >= 1");
   if (max_iterations < 1) return fail("Gaussian process: max_iterations must be >= 1");
@@ -104,7 +105,8 @@ class Objective {
       w.noalias() -= alpha * alpha.transpose();
       gradient->resize(p_ + 2);
       for (Eigen::Index d = 0; d < p_; ++d)
-        (*gradient)(d) = 0.5 * (w.array() * g.array() * d2_[static_cast<std::size_t>(d)].array()).sum() * inv_l2(d);
+        (*gradient)(d) =
+            0.5 * (w.array() * g.array() * d2_[static_cast<std::size_t>(d)].array()).sum() * inv_l2(d);
       Eigen::MatrixXd kf = k;
       kf.diagonal().array() -= sn2;
       (*gradient)(p_) = 0.5 * (w.array() * kf.array()).sum();
@@ -212,19 +214,21 @@ GaussianProcess::GaussianProcess(const Eigen::MatrixXd& x, const Eigen::VectorXd
   x_scale_.resize(p);
   std::vector<Eigen::Index> used;
   for (Eigen::Index d = 0; d < p; ++d) {
-    const double sd = n > 1 ? std::sqrt((x.col(d).array() - x_mean_(d)).square().sum() / static_cast<double>(n - 1)) : 0.0;
+    const double sd =
+        n > 1 ? std::sqrt((x.col(d).array() - x_mean_(d)).square().sum() / static_cast<double>(n - 1)) : 0.0;
     x_scale_(d) = sd > 1e-12 * (1.0 + std::abs(x_mean_(d))) ? sd : 0.0;
     if (x_scale_(d) > 0.0) used.push_back(d);
   }
   const auto pu = static_cast<Eigen::Index>(used.size());
   const Eigen::Index terms = options.linear_mean ? pu + 1 : 1;
   if (n < terms + 2)
-    ThrowUsage("Gaussian process: " + std::to_string(n) + " points are too few for " +
-               std::to_string(terms) + " mean terms (at least " + std::to_string(terms + 2) + " needed)");
+    ThrowUsage("Gaussian process: " + std::to_string(n) + " points are too few for " + std::to_string(terms) +
+               " mean terms (at least " + std::to_string(terms + 2) + " needed)");
   xs_.resize(n, pu);
   for (Eigen::Index j = 0; j < pu; ++j)
-    xs_.col(j) = (x.col(used[static_cast<std::size_t>(j)]).array() - x_mean_(used[static_cast<std::size_t>(j)])) /
-                 x_scale_(used[static_cast<std::size_t>(j)]);
+    xs_.col(j) =
+        (x.col(used[static_cast<std::size_t>(j)]).array() - x_mean_(used[static_cast<std::size_t>(j)])) /
+        x_scale_(used[static_cast<std::size_t>(j)]);
   y_mean_ = y.mean();
   const double y_sd = std::sqrt((y.array() - y_mean_).square().sum() / static_cast<double>(n - 1));
   y_scale_ = y_sd > 1e-300 ? y_sd : 1.0;
@@ -243,7 +247,8 @@ GaussianProcess::GaussianProcess(const Eigen::MatrixXd& x, const Eigen::VectorXd
     Eigen::VectorXd theta(pu + 2);
     theta.head(pu).setConstant(std::log(typical * start_l[s % 4] * (1.0 + s / 4)));
     theta(pu) = 0.0;
-    theta(pu + 1) = std::log(std::clamp(start_noise[s % 4], options.min_noise_fraction, options.max_noise_fraction));
+    theta(pu + 1) =
+        std::log(std::clamp(start_noise[s % 4], options.min_noise_fraction, options.max_noise_fraction));
     const Minimum m = Bfgs(objective, theta, options_);
     iterations += m.iterations;
     if (m.value < best.value) best = m;
@@ -259,7 +264,8 @@ GaussianProcess::GaussianProcess(const Eigen::MatrixXd& x, const Eigen::VectorXd
     for (Eigen::Index i = 0; i < n; ++i) k(i, j) = signal_var_ * Correlation(xs_.row(i), xs_.row(j), log_l_);
   k.diagonal().array() += noise_var_;
   const Eigen::LLT<Eigen::MatrixXd> llt(k);
-  if (llt.info() != Eigen::Success) ThrowFailure("Gaussian process: the fitted kernel matrix is not positive definite");
+  if (llt.info() != Eigen::Success)
+    ThrowFailure("Gaussian process: the fitted kernel matrix is not positive definite");
   k_inverse_ = llt.solve(Eigen::MatrixXd::Identity(n, n));
   kinv_h_ = k_inverse_ * h_;
   hkh_inverse_ = (h_.transpose() * kinv_h_).inverse();
@@ -270,11 +276,13 @@ GaussianProcess::GaussianProcess(const Eigen::MatrixXd& x, const Eigen::VectorXd
   summary_.iterations = iterations;
   summary_.log_marginal_likelihood = -best.value;
   summary_.length_scales = Eigen::VectorXd::Constant(p, std::numeric_limits<double>::infinity());
-  for (Eigen::Index j = 0; j < pu; ++j) summary_.length_scales(used[static_cast<std::size_t>(j)]) = std::exp(log_l_(j));
+  for (Eigen::Index j = 0; j < pu; ++j)
+    summary_.length_scales(used[static_cast<std::size_t>(j)]) = std::exp(log_l_(j));
   summary_.signal_sd = std::sqrt(signal_var_) * y_scale_;
   summary_.noise_sd = std::sqrt(noise_var_) * y_scale_;
   char text[200];
-  std::snprintf(text, sizeof(text), "%s after %d iterations, log marginal likelihood %.4g, signal sd %.3g, noise sd %.3g",
+  std::snprintf(text, sizeof(text),
+                "%s after %d iterations, log marginal likelihood %.4g, signal sd %.3g, noise sd %.3g",
                 best.converged ? "converged" : "not converged", iterations, summary_.log_marginal_likelihood,
                 summary_.signal_sd, summary_.noise_sd);
   summary_.message = text;

@@ -41,8 +41,8 @@ struct GaussianProcessOptions {
 
 /// What the fit found.
 struct GaussianProcessSummary {
-  bool converged = false;  ///< the best run met the gradient tolerance
-  int iterations = 0;      ///< of all runs
+  bool converged = false;                ///< the best run met the gradient tolerance
+  int iterations = 0;                    ///< of all runs
   double log_marginal_likelihood = 0.0;  ///< of the standardised outputs, at the optimum
   Eigen::VectorXd length_scales;         ///< per input, in its standard deviations (huge for a constant one)
   double signal_sd = 0.0;                ///< the kernel's standard deviation, output units
@@ -56,11 +56,13 @@ class GaussianProcess {
   /// Fits `y` (n) on `x` (n by p). Throws Error(kUsage) for invalid options, fewer than 3 points (or, for
   /// a linear mean, fewer than p + 3), mismatched shapes or non-finite values, and Error(kFailure) if no
   /// kernel matrix can be factorised.
-  GaussianProcess(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, const GaussianProcessOptions& options = {});
+  GaussianProcess(const Eigen::MatrixXd& x, const Eigen::VectorXd& y,
+                  const GaussianProcessOptions& options = {});
 
   /// The predicted mean at `x` (p), and (optional) the standard deviation of the latent function there
   /// (`latent_sd`) and of a new observation (`observation_sd`: the latent's variance plus the noise's).
-  double Predict(const Eigen::VectorXd& x, double* latent_sd = nullptr, double* observation_sd = nullptr) const;
+  double Predict(const Eigen::VectorXd& x, double* latent_sd = nullptr,
+                 double* observation_sd = nullptr) const;
 
   const GaussianProcessSummary& summary() const { return summary_; }
   Eigen::Index num_inputs() const { return x_mean_.size(); }
@@ -71,15 +73,15 @@ class GaussianProcess {
   GaussianProcessOptions options_;
   Eigen::VectorXd x_mean_, x_scale_;  // per input; scale 0 for a constant input (left out)
   double y_mean_ = 0.0, y_scale_ = 1.0;
-  Eigen::MatrixXd xs_;            // n by p standardised inputs
-  Eigen::MatrixXd h_;             // n by #mean terms
-  Eigen::VectorXd log_l_;         // per input
+  Eigen::MatrixXd xs_;                          // n by p standardised inputs
+  Eigen::MatrixXd h_;                           // n by #mean terms
+  Eigen::VectorXd log_l_;                       // per input
   double signal_var_ = 1.0, noise_var_ = 1e-4;  // standardised output units
-  Eigen::VectorXd alpha_;         // K^-1 (y - H beta)
-  Eigen::VectorXd beta_;          // the mean's coefficients
-  Eigen::MatrixXd k_inverse_;     // K^-1 (n by n)
-  Eigen::MatrixXd hkh_inverse_;   // (H' K^-1 H)^-1
-  Eigen::MatrixXd kinv_h_;        // K^-1 H
+  Eigen::VectorXd alpha_;                       // K^-1 (y - H beta)
+  Eigen::VectorXd beta_;                        // the mean's coefficients
+  Eigen::MatrixXd k_inverse_;                   // K^-1 (n by n)
+  Eigen::MatrixXd hkh_inverse_;                 // (H' K^-1 H)^-1
+  Eigen::MatrixXd kinv_h_;                      // K^-1 H
   GaussianProcessSummary summary_;
 };
 

@@ -29,10 +29,10 @@ bool ResponseEmulatorOptions::IsValid(std::string* why) const {
 struct ResponseEmulator::Position {
   std::unique_ptr<GaussianProcess> log_lift;
   std::unique_ptr<GaussianProcess> log_norm;  // kNorm only
-  std::vector<GaussianProcess> scores;  // per component
-  Eigen::VectorXd mean;                 // m: the mean shape
-  Eigen::MatrixXd modes;                // m by K, orthonormal columns
-  Eigen::VectorXd residual_var;         // m: the leave-one-out projection residual's variance
+  std::vector<GaussianProcess> scores;        // per component
+  Eigen::VectorXd mean;                       // m: the mean shape
+  Eigen::MatrixXd modes;                      // m by K, orthonormal columns
+  Eigen::VectorXd residual_var;               // m: the leave-one-out projection residual's variance
 };
 
 namespace {
@@ -62,7 +62,8 @@ Eigen::VectorXd LeaveOneOutResidualVariance(const Eigen::MatrixXd& s, const Eige
     Eigen::MatrixXd vectors;
     Descending(centering * g_oo * centering, &values, &vectors);
     // b = Xo (s_i - mean of the others), c = W L^-1 W' b over the kept components.
-    const Eigen::VectorXd b = centering * (g_oi - g_oo * Eigen::VectorXd::Constant(no, 1.0 / static_cast<double>(no)));
+    const Eigen::VectorXd b =
+        centering * (g_oi - g_oo * Eigen::VectorXd::Constant(no, 1.0 / static_cast<double>(no)));
     Eigen::VectorXd c = Eigen::VectorXd::Zero(no);
     for (int j = 0; j < k && j < no; ++j) {
       if (values(j) <= 1e-12 * values(0)) break;
@@ -105,8 +106,8 @@ ResponseEmulator::ResponseEmulator(const Eigen::MatrixXd& inputs, const Eigen::M
   for (std::size_t k = 0; k < responses.size(); ++k) {
     if (responses[k].rows() != n || responses[k].cols() != num_outputs_ || num_outputs_ < 1)
       ThrowUsage("response emulator: the responses at position " + std::to_string(k) + " are " +
-                 std::to_string(responses[k].rows()) + " by " + std::to_string(responses[k].cols()) + ", not " +
-                 std::to_string(n) + " by " + std::to_string(num_outputs_));
+                 std::to_string(responses[k].rows()) + " by " + std::to_string(responses[k].cols()) +
+                 ", not " + std::to_string(n) + " by " + std::to_string(num_outputs_));
     if (!responses[k].allFinite())
       ThrowUsage("response emulator: a response at position " + std::to_string(k) + " is not finite");
   }
@@ -115,7 +116,8 @@ ResponseEmulator::ResponseEmulator(const Eigen::MatrixXd& inputs, const Eigen::M
   for (Eigen::Index k = 0; k < q; ++k) {
     auto p = std::make_unique<Position>();
     // The log sternal lift per newton.
-    p->log_lift = std::make_unique<GaussianProcess>(inputs, lift_per_newton.col(k).array().log().matrix(), options.gp);
+    p->log_lift =
+        std::make_unique<GaussianProcess>(inputs, lift_per_newton.col(k).array().log().matrix(), options.gp);
     // The shapes: responses divided by their scale.
     Eigen::MatrixXd s = responses[static_cast<std::size_t>(k)];
     if (options.scale == ResponseScale::kLift) s = lift_per_newton.col(k).cwiseInverse().asDiagonal() * s;
@@ -156,8 +158,9 @@ ResponseEmulator::ResponseEmulator(const Eigen::MatrixXd& inputs, const Eigen::M
   std::string components;
   for (int c : summary_.components) components += (components.empty() ? "" : ", ") + std::to_string(c);
   char text[160];
-  std::snprintf(text, sizeof(text), "%lld patients, %lld positions, components per position: ",
-                static_cast<long long>(n), static_cast<long long>(q));
+  std::snprintf(text, sizeof(text),
+                "%lld patients, %lld positions, components per position: ", static_cast<long long>(n),
+                static_cast<long long>(q));
   summary_.message = text + components;
 }
 
@@ -166,8 +169,8 @@ ResponseEmulator::ResponseEmulator(ResponseEmulator&&) noexcept = default;
 
 ResponseEmulatorPrediction ResponseEmulator::Predict(const Eigen::VectorXd& x) const {
   if (x.size() != num_inputs_)
-    ThrowUsage("response emulator: a patient of " + std::to_string(x.size()) + " parameters, the emulator has " +
-               std::to_string(num_inputs_));
+    ThrowUsage("response emulator: a patient of " + std::to_string(x.size()) +
+               " parameters, the emulator has " + std::to_string(num_inputs_));
   const auto q = static_cast<Eigen::Index>(positions_.size());
   ResponseEmulatorPrediction out;
   out.lift_per_newton.resize(q);
@@ -196,10 +199,10 @@ ResponseEmulatorPrediction ResponseEmulator::Predict(const Eigen::VectorXd& x) c
       scale_var = scale * scale * std::expm1(sd * sd);
     }
     // u = c s: var = c^2 var(s) + s^2 var(c) + var(c) var(s) (independent factors).
-    out.response_sd.push_back(
-        (scale * scale * shape_var.array() + scale_var * shape.array().square() + scale_var * shape_var.array())
-            .sqrt()
-            .matrix());
+    out.response_sd.push_back((scale * scale * shape_var.array() + scale_var * shape.array().square() +
+                               scale_var * shape_var.array())
+                                  .sqrt()
+                                  .matrix());
     out.response.push_back(scale * shape);
   }
   return out;

@@ -22,9 +22,9 @@ namespace pectus::planner {
 /// What each position's response is divided by before its principal components are taken (its scale is
 /// then learnt by its own process, in log).
 enum class ResponseScale {
-  kNone,   ///< the per-newton response itself
-  kLift,   ///< the sternal lift per newton (default: the issue's suggestion)
-  kNorm,   ///< the response's Euclidean norm over all its coordinates
+  kNone,  ///< the per-newton response itself
+  kLift,  ///< the sternal lift per newton (default: the issue's suggestion)
+  kNorm,  ///< the response's Euclidean norm over all its coordinates
 };
 
 /// How the emulator is fitted.
@@ -48,17 +48,17 @@ struct ResponseEmulatorOptions {
 
 /// The prediction for one patient: per bar position, per newton of bar force.
 struct ResponseEmulatorPrediction {
-  Eigen::VectorXd lift_per_newton;  ///< q sternal lifts per newton (median of the log-normal), mm/N
-  Eigen::VectorXd lift_sd;          ///< q standard deviations of the lift, mm/N
+  Eigen::VectorXd lift_per_newton;           ///< q sternal lifts per newton (median of the log-normal), mm/N
+  Eigen::VectorXd lift_sd;                   ///< q standard deviations of the lift, mm/N
   std::vector<Eigen::VectorXd> response;     ///< per position, m output coordinates, mm/N
   std::vector<Eigen::VectorXd> response_sd;  ///< per position, m standard deviations, mm/N
 };
 
 /// What the fit kept, per position.
 struct ResponseEmulatorSummary {
-  std::vector<int> components;                 ///< per position: principal components kept
-  std::vector<double> explained;               ///< per position: their fraction of the shapes' variance
-  std::vector<double> residual_rms;            ///< per position: RMS of the leave-one-out projection residual
+  std::vector<int> components;       ///< per position: principal components kept
+  std::vector<double> explained;     ///< per position: their fraction of the shapes' variance
+  std::vector<double> residual_rms;  ///< per position: RMS of the leave-one-out projection residual
   std::vector<GaussianProcessSummary> lift_gp;   ///< per position: the log-lift process
   std::vector<GaussianProcessSummary> scale_gp;  ///< per position: the log-norm process (kNorm only)
   double fit_seconds = 0.0;
@@ -68,13 +68,14 @@ struct ResponseEmulatorSummary {
 /// The emulator, fitted to n patients.
 class ResponseEmulator {
  public:
-  /// Fits the emulator. `inputs`: n by p patient parameters (any units: standardised inside); `lift_per_newton`:
-  /// n by q sternal lifts per newton (mm/N, > 0); `responses`: q matrices, n by m per-newton responses
-  /// (mm/N; a row is one patient's output coordinates, the same m at every position). Throws Error(kUsage)
-  /// for invalid options, fewer than options.min_patients patients, shapes that disagree, non-finite
-  /// values or a lift that is not positive.
+  /// Fits the emulator. `inputs`: n by p patient parameters (any units: standardised inside);
+  /// `lift_per_newton`: n by q sternal lifts per newton (mm/N, > 0); `responses`: q matrices, n by m
+  /// per-newton responses (mm/N; a row is one patient's output coordinates, the same m at every position).
+  /// Throws Error(kUsage) for invalid options, fewer than options.min_patients patients, shapes that
+  /// disagree, non-finite values or a lift that is not positive.
   ResponseEmulator(const Eigen::MatrixXd& inputs, const Eigen::MatrixXd& lift_per_newton,
-                   const std::vector<Eigen::MatrixXd>& responses, const ResponseEmulatorOptions& options = {});
+                   const std::vector<Eigen::MatrixXd>& responses,
+                   const ResponseEmulatorOptions& options = {});
   ~ResponseEmulator();
   ResponseEmulator(ResponseEmulator&&) noexcept;
 

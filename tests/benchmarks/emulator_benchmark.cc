@@ -5,7 +5,8 @@
 // backpropagation) trained on a random 70/15/15 split of the 1488 results as the dissertation did and
 // patient by patient; the nearest patient; the mean response. Prints JSON.
 //
-//   emulator_benchmark [--table CSV] [--cache FILE] [--patients N] [--inputs map-log|ct|ct-log|ct-log+map-log]
+//   emulator_benchmark [--table CSV] [--cache FILE] [--patients N] [--inputs
+//   map-log|ct|ct-log|ct-log+map-log]
 //                      [--scale lift|norm|none] [--explained 0.9999] [--components 20] [--kernel matern|se]
 //                      [--mean linear|constant] [--ann-components 10] [--ann-iterations 1000]
 //                      [--ann-rate 0.01] [--no-ann] [--ann-split-only] [--target nodes|skin]
@@ -40,7 +41,6 @@
 #include <omp.h>
 
 #include <Eigen/Eigenvalues>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -68,7 +68,9 @@ namespace {
 using namespace pectus::planner;
 using Clock = std::chrono::steady_clock;
 
-double Seconds(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+double Seconds(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
 
 double Quantile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
@@ -86,9 +88,9 @@ double Max(const std::vector<double>& v) { return v.empty() ? 0.0 : *std::max_el
 // The figures of one method over its test cases.
 struct Figures {
   std::vector<double> rms_40, p95_40, lift_error_40;  // cases with FE lift <= 40 mm
-  std::vector<double> relative_l2, lift_error;          // all cases
-  std::vector<int> patient_of_40;                       // per <= 40 mm case, the patient index
-  double within_2sd = 0, coordinates = 0;               // coverage (methods with a predicted sd)
+  std::vector<double> relative_l2, lift_error;        // all cases
+  std::vector<int> patient_of_40;                     // per <= 40 mm case, the patient index
+  double within_2sd = 0, coordinates = 0;             // coverage (methods with a predicted sd)
 
   // One case: predicted and FE displacements (3 #vertices, mm), the predicted sd (or empty), the lifts.
   void Add(const Eigen::VectorXd& predicted, const Eigen::VectorXd& fe, const Eigen::VectorXd& sd,
@@ -128,28 +130,44 @@ struct Figures {
   nlohmann::json Json() const {
     auto fraction = [](const std::vector<double>& v, double limit) {
       return v.empty() ? 0.0
-                       : static_cast<double>(std::count_if(v.begin(), v.end(), [&](double x) { return x <= limit; })) /
+                       : static_cast<double>(
+                             std::count_if(v.begin(), v.end(), [&](double x) { return x <= limit; })) /
                              static_cast<double>(v.size());
     };
     nlohmann::json j = {
         {"cases", relative_l2.size()},
         {"cases_lift_le_40mm", rms_40.size()},
-        {"skin_rms_mm_lift_le_40", {{"mean", Mean(rms_40)}, {"p95", Quantile(rms_40, 0.95)}, {"max", Max(rms_40)},
-                                    {"fraction_le_1mm", fraction(rms_40, 1.0)}}},
-        {"skin_p95_mm_lift_le_40", {{"mean", Mean(p95_40)}, {"p95", Quantile(p95_40, 0.95)}, {"max", Max(p95_40)},
-                                    {"fraction_le_2mm", fraction(p95_40, 2.0)}}},
-        {"relative_l2_all", {{"mean", Mean(relative_l2)}, {"p95", Quantile(relative_l2, 0.95)},
-                             {"max", Max(relative_l2)}, {"fraction_le_5pc", fraction(relative_l2, 0.05)}}},
-        {"lift_error_mm_lift_le_40", {{"mean", Mean(lift_error_40)}, {"p95", Quantile(lift_error_40, 0.95)},
-                                      {"max", Max(lift_error_40)}, {"fraction_le_1mm", fraction(lift_error_40, 1.0)}}},
-        {"lift_error_mm_all", {{"mean", Mean(lift_error)}, {"p95", Quantile(lift_error, 0.95)}, {"max", Max(lift_error)}}}};
+        {"skin_rms_mm_lift_le_40",
+         {{"mean", Mean(rms_40)},
+          {"p95", Quantile(rms_40, 0.95)},
+          {"max", Max(rms_40)},
+          {"fraction_le_1mm", fraction(rms_40, 1.0)}}},
+        {"skin_p95_mm_lift_le_40",
+         {{"mean", Mean(p95_40)},
+          {"p95", Quantile(p95_40, 0.95)},
+          {"max", Max(p95_40)},
+          {"fraction_le_2mm", fraction(p95_40, 2.0)}}},
+        {"relative_l2_all",
+         {{"mean", Mean(relative_l2)},
+          {"p95", Quantile(relative_l2, 0.95)},
+          {"max", Max(relative_l2)},
+          {"fraction_le_5pc", fraction(relative_l2, 0.05)}}},
+        {"lift_error_mm_lift_le_40",
+         {{"mean", Mean(lift_error_40)},
+          {"p95", Quantile(lift_error_40, 0.95)},
+          {"max", Max(lift_error_40)},
+          {"fraction_le_1mm", fraction(lift_error_40, 1.0)}}},
+        {"lift_error_mm_all",
+         {{"mean", Mean(lift_error)}, {"p95", Quantile(lift_error, 0.95)}, {"max", Max(lift_error)}}}};
     if (coordinates > 0) j["coverage_2sd"] = within_2sd / coordinates;
     return j;
   }
 };
 
 // Rows `keep` of a.
-Eigen::MatrixXd Rows(const Eigen::MatrixXd& a, const std::vector<Eigen::Index>& keep) { return a(keep, Eigen::all); }
+Eigen::MatrixXd Rows(const Eigen::MatrixXd& a, const std::vector<Eigen::Index>& keep) {
+  return a(keep, Eigen::all);
+}
 
 // The dissertation's network: inputs (patient parameters, position, force), outputs the first `k`
 // principal-component scores of the displacement plus the sternal lift, one hidden layer of 20, BACKPROP.
@@ -157,15 +175,17 @@ class AnnBaseline {
  public:
   // `cases`: (patient, position index, force) triples to train on; `basis_patients`: whose per-newton
   // responses define the components.
-  AnnBaseline(const EmulatorTrainingSet& set, const Eigen::MatrixXd& inputs, const std::vector<double>& forces,
-              const std::vector<std::array<int, 2>>& cases, const std::vector<Eigen::Index>& basis_patients, int k,
-              int iterations, double rate, unsigned seed)
+  AnnBaseline(const EmulatorTrainingSet& set, const Eigen::MatrixXd& inputs,
+              const std::vector<double>& forces, const std::vector<std::array<int, 2>>& cases,
+              const std::vector<Eigen::Index>& basis_patients, int k, int iterations, double rate,
+              unsigned seed)
       : set_(set), inputs_(inputs), forces_(forces) {
     const Eigen::Index q = set.num_positions(), m = 3 * set.num_skin_vertices();
     // Components of the per-newton responses (patient x position rows): u = F (mean + V t).
     Eigen::MatrixXd g(static_cast<Eigen::Index>(basis_patients.size()) * q, m);
     for (std::size_t i = 0; i < basis_patients.size(); ++i)
-      for (Eigen::Index p = 0; p < q; ++p) g.row(static_cast<Eigen::Index>(i) * q + p) = set.skin[p].row(basis_patients[i]);
+      for (Eigen::Index p = 0; p < q; ++p)
+        g.row(static_cast<Eigen::Index>(i) * q + p) = set.skin[p].row(basis_patients[i]);
     mean_ = g.colwise().mean().transpose();
     const Eigen::MatrixXd c = g.rowwise() - mean_.transpose();
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(c * c.transpose());
@@ -196,7 +216,8 @@ class AnnBaseline {
     ann_->setLayerSizes(layers);
     ann_->setActivationFunction(cv::ml::ANN_MLP::SIGMOID_SYM, 1.0, 1.0);
     ann_->setTrainMethod(cv::ml::ANN_MLP::BACKPROP, rate, 0.1);
-    ann_->setTermCriteria(cv::TermCriteria(cv::TermCriteria::MAX_ITER + cv::TermCriteria::EPS, iterations, 1e-9));
+    ann_->setTermCriteria(
+        cv::TermCriteria(cv::TermCriteria::MAX_ITER + cv::TermCriteria::EPS, iterations, 1e-9));
     ann_->train(cv::ml::TrainData::create(x, cv::ml::ROW_SAMPLE, y));
   }
 
@@ -235,14 +256,19 @@ nlohmann::json CorrespondenceCheck(const EmulatorTrainingSet& set) {
   const Eigen::RowVectorXd mean = set.skin_anchor_generic_mm.colwise().mean();
   for (Eigen::Index v = 0; v < nv; ++v) {
     double s2 = 0.0;
-    for (Eigen::Index i = 0; i < n; ++i) s2 += (set.skin_anchor_generic_mm.block(i, 3 * v, 1, 3) - mean.segment(3 * v, 3)).squaredNorm();
+    for (Eigen::Index i = 0; i < n; ++i)
+      s2 += (set.skin_anchor_generic_mm.block(i, 3 * v, 1, 3) - mean.segment(3 * v, 3)).squaredNorm();
     spread.push_back(std::sqrt(s2 / static_cast<double>(n)));
-    if ((v + 1) % set.skin_columns != 0) spacing.push_back((mean.segment(3 * v + 3, 3) - mean.segment(3 * v, 3)).norm());
-    if (v + set.skin_columns < nv) spacing.push_back((mean.segment(3 * (v + set.skin_columns), 3) - mean.segment(3 * v, 3)).norm());
+    if ((v + 1) % set.skin_columns != 0)
+      spacing.push_back((mean.segment(3 * v + 3, 3) - mean.segment(3 * v, 3)).norm());
+    if (v + set.skin_columns < nv)
+      spacing.push_back((mean.segment(3 * (v + set.skin_columns), 3) - mean.segment(3 * v, 3)).norm());
   }
-  return {{"what", "per skin vertex, the RMS over patients of the distance of its ties' point on the generic ribcage "
-                   "from their mean (mm), against the spacing of neighbouring vertices there"},
-          {"spread_mm", {{"median", Quantile(spread, 0.5)}, {"p95", Quantile(spread, 0.95)}, {"max", Max(spread)}}},
+  return {{"what",
+           "per skin vertex, the RMS over patients of the distance of its ties' point on the generic ribcage "
+           "from their mean (mm), against the spacing of neighbouring vertices there"},
+          {"spread_mm",
+           {{"median", Quantile(spread, 0.5)}, {"p95", Quantile(spread, 0.95)}, {"max", Max(spread)}}},
           {"grid_spacing_mm_median", Quantile(spacing, 0.5)}};
 }
 
@@ -257,7 +283,8 @@ int main(int argc, char** argv) {
   ResponseEmulatorOptions options;
   const char* usage =
       "usage: emulator_benchmark [--table CSV] [--cache FILE] [--patients N] "
-      "[--inputs map-log|ct|ct-log|ct-log+map-log] [--scale lift|norm|none] [--explained 0.9999] [--components 20] "
+      "[--inputs map-log|ct|ct-log|ct-log+map-log] [--scale lift|norm|none] [--explained 0.9999] "
+      "[--components 20] "
       "[--kernel matern|se] [--mean linear|constant] [--ann-components 10] "
       "[--ann-iterations 1000] [--ann-rate 0.01] [--no-ann] [--ann-split-only] [--target nodes|skin]\n";
   try {
@@ -267,31 +294,48 @@ int main(int argc, char** argv) {
         if (i + 1 >= argc) throw std::runtime_error(a + " needs a value");
         return argv[++i];
       };
-      if (a == "--table") table = next();
-      else if (a == "--cache") cache = next();
-      else if (a == "--patients") patients = std::stoi(next());
-      else if (a == "--inputs") inputs_kind = next();
-      else if (a == "--explained") options.explained_fraction = std::stod(next());
-      else if (a == "--components") options.max_components = std::stoi(next());
+      if (a == "--table")
+        table = next();
+      else if (a == "--cache")
+        cache = next();
+      else if (a == "--patients")
+        patients = std::stoi(next());
+      else if (a == "--inputs")
+        inputs_kind = next();
+      else if (a == "--explained")
+        options.explained_fraction = std::stod(next());
+      else if (a == "--components")
+        options.max_components = std::stoi(next());
       else if (a == "--scale") {
         const std::string v = next();
-        if (v != "lift" && v != "norm" && v != "none") throw std::runtime_error("--scale is lift, norm or none");
-        options.scale = v == "lift" ? ResponseScale::kLift : v == "none" ? ResponseScale::kNone : ResponseScale::kNorm;
-      }
-      else if (a == "--kernel") options.gp.kernel = next() == "se" ? GpKernel::kSquaredExponential : GpKernel::kMatern52;
-      else if (a == "--mean") options.gp.linear_mean = next() == "linear";
-      else if (a == "--ann-components") ann_components = std::stoi(next());
-      else if (a == "--ann-iterations") ann_iterations = std::stoi(next());
-      else if (a == "--no-ann") ann = false;
-      else if (a == "--ann-rate") ann_rate = std::stod(next());
-      else if (a == "--ann-split-only") split_only = true;
-      else if (a == "--target") target = next();
+        if (v != "lift" && v != "norm" && v != "none")
+          throw std::runtime_error("--scale is lift, norm or none");
+        options.scale = v == "lift"   ? ResponseScale::kLift
+                        : v == "none" ? ResponseScale::kNone
+                                      : ResponseScale::kNorm;
+      } else if (a == "--kernel")
+        options.gp.kernel = next() == "se" ? GpKernel::kSquaredExponential : GpKernel::kMatern52;
+      else if (a == "--mean")
+        options.gp.linear_mean = next() == "linear";
+      else if (a == "--ann-components")
+        ann_components = std::stoi(next());
+      else if (a == "--ann-iterations")
+        ann_iterations = std::stoi(next());
+      else if (a == "--no-ann")
+        ann = false;
+      else if (a == "--ann-rate")
+        ann_rate = std::stod(next());
+      else if (a == "--ann-split-only")
+        split_only = true;
+      else if (a == "--target")
+        target = next();
       else {
         std::cerr << usage;
         return 2;
       }
     }
-    if (inputs_kind != "ct" && inputs_kind != "ct-log" && inputs_kind != "map-log" && inputs_kind != "ct-log+map-log")
+    if (inputs_kind != "ct" && inputs_kind != "ct-log" && inputs_kind != "map-log" &&
+        inputs_kind != "ct-log+map-log")
       throw std::runtime_error("--inputs is ct, ct-log, map-log or ct-log+map-log");
     if (table.empty()) table = pectus::testing_support::SharedPath(pectus::testing_support::kPatientTable);
     nlohmann::json report;
@@ -299,9 +343,11 @@ int main(int argc, char** argv) {
     report["command"] = std::string(argv[0]);
     for (int i = 1; i < argc; ++i) report["command"] = report["command"].get<std::string>() + " " + argv[i];
     report["threads"] = omp_get_max_threads();
-    report["ann"] = {{"hidden", 20}, {"components", ann_components}, {"epochs", ann_iterations}, {"rate", ann_rate}};
+    report["ann"] = {
+        {"hidden", 20}, {"components", ann_components}, {"epochs", ann_iterations}, {"rate", ann_rate}};
     std::vector<pectus::PatientTableRow> rows = pectus::ReadPatientTable(table);
-    if (patients > 0 && patients < static_cast<int>(rows.size())) rows.resize(static_cast<std::size_t>(patients));
+    if (patients > 0 && patients < static_cast<int>(rows.size()))
+      rows.resize(static_cast<std::size_t>(patients));
 
     // The training set: from the cache when it holds these patients, else solved (and cached).
     auto start = Clock::now();
@@ -310,42 +356,54 @@ int main(int argc, char** argv) {
     if (!cache.empty() && std::filesystem::exists(cache)) {
       set = LoadEmulatorTrainingSet(cache);
       cached = set.num_patients() >= static_cast<Eigen::Index>(rows.size());
-      for (std::size_t i = 0; cached && i < rows.size(); ++i) cached = set.patients[i] == std::to_string(rows[i].patient);
-      if (!cached) std::fprintf(stderr, "emulator_benchmark: %s holds other patients; solving again\n", cache.c_str());
+      for (std::size_t i = 0; cached && i < rows.size(); ++i)
+        cached = set.patients[i] == std::to_string(rows[i].patient);
+      if (!cached)
+        std::fprintf(stderr, "emulator_benchmark: %s holds other patients; solving again\n", cache.c_str());
     }
     if (!cached) {
       set = BuildEmulatorTrainingSet(rows, {}, [](std::int64_t done, std::int64_t total) {
-        std::fprintf(stderr, "emulator_benchmark: FE %lld / %lld\n", static_cast<long long>(done), static_cast<long long>(total));
+        std::fprintf(stderr, "emulator_benchmark: FE %lld / %lld\n", static_cast<long long>(done),
+                     static_cast<long long>(total));
       });
       if (!cache.empty()) SaveEmulatorTrainingSet(set, cache);
-      report["training_set_timings_s"] = {{"fit", set.timings_s.Seconds("fit")}, {"fem", set.timings_s.Seconds("fem")},
+      report["training_set_timings_s"] = {{"fit", set.timings_s.Seconds("fit")},
+                                          {"fem", set.timings_s.Seconds("fem")},
                                           {"skin", set.timings_s.Seconds("skin")}};
     }
-    report["training_set"] = {{"from_cache", cached}, {"seconds", Seconds(start)}, {"patients", rows.size()},
-                              {"skin_vertices", set.num_skin_vertices()}, {"positions", set.positions}};
+    report["training_set"] = {{"from_cache", cached},
+                              {"seconds", Seconds(start)},
+                              {"patients", rows.size()},
+                              {"skin_vertices", set.num_skin_vertices()},
+                              {"positions", set.positions}};
     report["correspondence"] = CorrespondenceCheck(set);
     if (target != "nodes" && target != "skin") throw std::runtime_error("--target is nodes or skin");
     if (target == "nodes" && set.boundary_nodes.empty())
-      throw std::runtime_error("the training set holds no boundary nodes (--target skin, or rebuild the cache)");
+      throw std::runtime_error(
+          "the training set holds no boundary nodes (--target skin, or rebuild the cache)");
     using Rows3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
     const auto nbn = static_cast<Eigen::Index>(set.boundary_nodes.size());
-    // Skin coordinates (3 #skin vertices) of boundary-node values (3 #boundary nodes) through patient i's ties.
+    // Skin coordinates (3 #skin vertices) of boundary-node values (3 #boundary nodes) through patient i's
+    // ties.
     auto to_skin = [&](Eigen::Index i, const Eigen::VectorXd& nodes) -> Eigen::VectorXd {
-      const Rows3 skin = set.skin_ties[static_cast<std::size_t>(i)] * Eigen::Map<const Rows3>(nodes.data(), nbn, 3);
+      const Rows3 skin =
+          set.skin_ties[static_cast<std::size_t>(i)] * Eigen::Map<const Rows3>(nodes.data(), nbn, 3);
       return Eigen::Map<const Eigen::VectorXd>(skin.data(), skin.size());
     };
     if (nbn > 0) {
       double worst = 0.0;
       for (Eigen::Index i = 0; i < set.num_patients(); ++i)
         for (Eigen::Index p = 0; p < set.num_positions(); ++p)
-          worst = std::max(worst, (to_skin(i, set.boundary[p].row(i).transpose()) - set.skin[p].row(i).transpose())
-                                      .cwiseAbs()
-                                      .maxCoeff());
+          worst = std::max(worst,
+                           (to_skin(i, set.boundary[p].row(i).transpose()) - set.skin[p].row(i).transpose())
+                               .cwiseAbs()
+                               .maxCoeff());
       double worst_lift = 0.0;
       for (Eigen::Index i = 0; i < set.num_patients(); ++i)
         for (Eigen::Index p = 0; p < set.num_positions(); ++p)
           worst_lift = std::max(worst_lift, std::abs((set.lift_ties[static_cast<std::size_t>(i)] *
-                                                      set.boundary[p].row(i).transpose())(0) - set.lift_per_newton(i, p)));
+                                                      set.boundary[p].row(i).transpose())(0) -
+                                                     set.lift_per_newton(i, p)));
       report["training_set"]["lift_from_ties_max_difference_mm_per_n"] = worst_lift;
       report["training_set"]["boundary_nodes"] = nbn;
       report["training_set"]["skin_from_ties_max_difference_mm_per_n"] = worst;
@@ -365,12 +423,15 @@ int main(int argc, char** argv) {
     if (inputs_kind.rfind("ct", 0) == 0) {
       for (int c = 0; c < 6; ++c) {
         const Eigen::VectorXd v = set.ct_inputs.col(c).head(n);
-        if (log_lengths && c < 3) add(v.array().log().matrix(), "log_" + kCtInputNames[c]);
-        else add(v, kCtInputNames[c]);
+        if (log_lengths && c < 3)
+          add(v.array().log().matrix(), "log_" + kCtInputNames[c]);
+        else
+          add(v, kCtInputNames[c]);
       }
     }
     if (inputs_kind.find("map-log") != std::string::npos) {
-      for (int c = 0; c < 3; ++c) add(set.model_inputs.col(c).head(n).array().log().matrix(), "log_" + kModelInputNames[c]);
+      for (int c = 0; c < 3; ++c)
+        add(set.model_inputs.col(c).head(n).array().log().matrix(), "log_" + kModelInputNames[c]);
       add(set.model_inputs.col(3).head(n), kModelInputNames[3]);
     }
     report["inputs"] = input_names;
@@ -383,8 +444,9 @@ int main(int argc, char** argv) {
     nlohmann::json per_patient = nlohmann::json::array();
     Figures emulator, nearest, mean_response, ann_loo;
     std::vector<double> fit_s(static_cast<std::size_t>(n)), components;
-    std::vector<Figures> fold_emulator(static_cast<std::size_t>(n)), fold_nearest(static_cast<std::size_t>(n)),
-        fold_mean(static_cast<std::size_t>(n)), fold_ann(static_cast<std::size_t>(n));
+    std::vector<Figures> fold_emulator(static_cast<std::size_t>(n)),
+        fold_nearest(static_cast<std::size_t>(n)), fold_mean(static_cast<std::size_t>(n)),
+        fold_ann(static_cast<std::size_t>(n));
     std::vector<std::vector<int>> fold_components(static_cast<std::size_t>(n));
     std::vector<double> fold_explained_ann(static_cast<std::size_t>(n));
     std::vector<nlohmann::json> fold_json(static_cast<std::size_t>(n));
@@ -429,8 +491,9 @@ int main(int argc, char** argv) {
           for (Eigen::Index i : train)
             for (Eigen::Index p = 0; p < q; ++p)
               for (int f = 0; f < nf; ++f) cases.push_back({static_cast<int>(i * q + p), f});
-          network = std::make_unique<AnnBaseline>(set, inputs, forces, cases, train, ann_components, ann_iterations,
-                                                  ann_rate, 1400u + static_cast<unsigned>(out));
+          network =
+              std::make_unique<AnnBaseline>(set, inputs, forces, cases, train, ann_components, ann_iterations,
+                                            ann_rate, 1400u + static_cast<unsigned>(out));
           fold_explained_ann[o] = network->explained();
         }
         Eigen::VectorXd fe(m);
@@ -455,8 +518,10 @@ int main(int argc, char** argv) {
         }
         nlohmann::json pj = fold_emulator[o].Json();
         pj["patient"] = set.patients[o];
-        pj["lift_per_newton_fe"] = std::vector<double>(set.lift_per_newton.row(out).begin(), set.lift_per_newton.row(out).end());
-        pj["lift_per_newton_emulator"] = std::vector<double>(prediction.lift_per_newton.begin(), prediction.lift_per_newton.end());
+        pj["lift_per_newton_fe"] =
+            std::vector<double>(set.lift_per_newton.row(out).begin(), set.lift_per_newton.row(out).end());
+        pj["lift_per_newton_emulator"] =
+            std::vector<double>(prediction.lift_per_newton.begin(), prediction.lift_per_newton.end());
         pj["nearest_patient"] = set.patients[static_cast<std::size_t>(train[static_cast<std::size_t>(best)])];
         if (network) pj["ann_relative_l2_mean"] = Mean(fold_ann[o].relative_l2);
         fold_json[o] = pj;
@@ -468,7 +533,8 @@ int main(int argc, char** argv) {
     }
     for (Eigen::Index out = 0; out < (split_only ? 0 : n); ++out) {
       const auto o = static_cast<std::size_t>(out);
-      if (!fold_error[o].empty()) throw std::runtime_error("patient " + set.patients[o] + " left out: " + fold_error[o]);
+      if (!fold_error[o].empty())
+        throw std::runtime_error("patient " + set.patients[o] + " left out: " + fold_error[o]);
       emulator.Merge(fold_emulator[o]);
       nearest.Merge(fold_nearest[o]);
       mean_response.Merge(fold_mean[o]);
@@ -477,13 +543,15 @@ int main(int argc, char** argv) {
       per_patient.push_back(fold_json[o]);
     }
     const double explained_ann = Mean(fold_explained_ann);
-    report["emulator_options"] = {{"target", target},{"kernel", options.gp.kernel == GpKernel::kMatern52 ? "matern52" : "squared_exponential"},
-                                  {"linear_mean", options.gp.linear_mean},
-                                  {"explained_fraction", options.explained_fraction},
-                                  {"max_components", options.max_components},
-                                  {"scale", options.scale == ResponseScale::kNorm   ? "norm"
-                                            : options.scale == ResponseScale::kLift ? "lift"
-                                                                                    : "none"}};
+    report["emulator_options"] = {
+        {"target", target},
+        {"kernel", options.gp.kernel == GpKernel::kMatern52 ? "matern52" : "squared_exponential"},
+        {"linear_mean", options.gp.linear_mean},
+        {"explained_fraction", options.explained_fraction},
+        {"max_components", options.max_components},
+        {"scale", options.scale == ResponseScale::kNorm   ? "norm"
+                  : options.scale == ResponseScale::kLift ? "lift"
+                                                          : "none"}};
     nlohmann::json methods;
     methods["emulator_loo"] = emulator.Json();
     methods["emulator_loo"]["fit_s_mean"] = Mean(fit_s);
@@ -502,10 +570,12 @@ int main(int argc, char** argv) {
       std::mt19937 rng(1488);
       std::shuffle(all.begin(), all.end(), rng);
       const std::size_t n_train = all.size() * 70 / 100, n_valid = all.size() * 15 / 100;
-      const std::vector<std::array<int, 2>> training(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(n_train));
+      const std::vector<std::array<int, 2>> training(all.begin(),
+                                                     all.begin() + static_cast<std::ptrdiff_t>(n_train));
       std::vector<Eigen::Index> everyone(static_cast<std::size_t>(n));
       std::iota(everyone.begin(), everyone.end(), 0);
-      const AnnBaseline network(set, inputs, forces, training, everyone, ann_components, ann_iterations, ann_rate, 1488u);
+      const AnnBaseline network(set, inputs, forces, training, everyone, ann_components, ann_iterations,
+                                ann_rate, 1488u);
       Figures random_split;
       for (std::size_t s = n_train + n_valid; s < all.size(); ++s) {
         const int i = all[s][0] / static_cast<int>(q), p = all[s][0] % static_cast<int>(q);
@@ -515,8 +585,8 @@ int main(int argc, char** argv) {
         random_split.Add(u, f * set.skin[p].row(i).transpose(), {}, l, f * set.lift_per_newton(i, p), i);
       }
       methods["ann_random_split_test"] = random_split.Json();
-      methods["ann_random_split_test"]["split"] = {{"training", n_train}, {"validation_unused", n_valid},
-                                                    {"test", all.size() - n_train - n_valid}};
+      methods["ann_random_split_test"]["split"] = {
+          {"training", n_train}, {"validation_unused", n_valid}, {"test", all.size() - n_train - n_valid}};
     }
     report["methods"] = methods;
     report["per_patient_emulator"] = per_patient;

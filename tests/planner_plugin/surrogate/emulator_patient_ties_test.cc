@@ -21,7 +21,8 @@ TEST(EmulatorPatientTiesTest, SkinAndLiftOfPatient57FollowTheBoundaryNodes) {
   o.rib_cell_length_mm = 10.0;
   const GenericRibcage generic = BuildGenericRibcage(o);
   const std::string table = testing_support::SharedPath(testing_support::kPatientTable);
-  const PatientRibcage ribcage = MakePatientRibcage(generic, MeasurementsOf(FindPatient(ReadPatientTable(table), 57, table)));
+  const PatientRibcage ribcage =
+      MakePatientRibcage(generic, MeasurementsOf(FindPatient(ReadPatientTable(table), 57, table)));
   SkinSurfaceOptions skin_options;
   skin_options.rows = 16;
   skin_options.columns = 24;
@@ -33,17 +34,22 @@ TEST(EmulatorPatientTiesTest, SkinAndLiftOfPatient57FollowTheBoundaryNodes) {
   // A random nodal field (zero off the boundary): the ties give SkinSurface::Deformed's displacement.
   Points3 u = Points3::Zero(ribcage.mesh.num_nodes(), 3);
   Eigen::VectorXd nodes = Eigen::VectorXd::Random(3 * static_cast<Eigen::Index>(boundary.size()));
-  for (std::size_t b = 0; b < boundary.size(); ++b) u.row(boundary[b]) = nodes.segment<3>(3 * static_cast<Eigen::Index>(b));
+  for (std::size_t b = 0; b < boundary.size(); ++b)
+    u.row(boundary[b]) = nodes.segment<3>(3 * static_cast<Eigen::Index>(b));
   const Points3 expected = skin.Deformed(u) - skin.mesh.vertices.positions;
   ResponseEmulatorPrediction p;
   p.response = {nodes};
   p.response_sd = {Eigen::VectorXd::Ones(nodes.size())};
   const ResponseEmulatorPrediction through = ThroughTies(p, ties);
-  EXPECT_LT((through.response[0] - Eigen::Map<const Eigen::VectorXd>(expected.data(), expected.size())).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((through.response[0] - Eigen::Map<const Eigen::VectorXd>(expected.data(), expected.size()))
+                .cwiseAbs()
+                .maxCoeff(),
+            1e-12);
   // Rows sum to 1: a unit deviation at every node gives a unit deviation at every skin coordinate.
   EXPECT_LT((through.response_sd[0].array() - 1.0).abs().maxCoeff(), 1e-12);
   // Every node 1 mm anterior (-y): the sternum lifts 1 mm.
-  for (Eigen::Index b = 0; b < static_cast<Eigen::Index>(boundary.size()); ++b) nodes.segment<3>(3 * b) = Eigen::Vector3d(0, -1, 0);
+  for (Eigen::Index b = 0; b < static_cast<Eigen::Index>(boundary.size()); ++b)
+    nodes.segment<3>(3 * b) = Eigen::Vector3d(0, -1, 0);
   p.response = {nodes};
   EXPECT_NEAR(ThroughTies(p, ties).lift_per_newton(0), 1.0, 1e-12);
   // A boundary set that misses the skin's nodes fails, naming the patient.

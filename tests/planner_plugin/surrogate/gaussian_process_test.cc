@@ -1,6 +1,7 @@
 // The Gaussian process against known functions: a smooth function of four inputs recovered to a stated
-// accuracy (both kernels), a linear function reproduced exactly by the linear mean, the noise level of noisy data
-// recovered and the predicted 2-sigma band covering about 95 % of new observations, and the failure paths.
+// accuracy (both kernels), a linear function reproduced exactly by the linear mean, the noise level of noisy
+// data recovered and the predicted 2-sigma band covering about 95 % of new observations, and the failure
+// paths.
 #include "planner_plugin/surrogate/gaussian_process.h"
 
 #include <gtest/gtest.h>

@@ -43,7 +43,8 @@ Family MakeFamily(int n, unsigned seed, double noise_sd) {
     const Eigen::Vector3d x = f.x.row(i).transpose();
     for (int p = 0; p < 2; ++p) {
       const double lift = std::exp(0.3 * x(0) - 0.2 * x(1) + 0.1 * p) / 100.0;
-      const Eigen::Vector3d a(0.3 * std::sin(x(0) + x(2)) + 0.1 * p, 0.2 * x(1) * x(1), 0.1 * x(2) - 0.05 * x(0));
+      const Eigen::Vector3d a(0.3 * std::sin(x(0) + x(2)) + 0.1 * p, 0.2 * x(1) * x(1),
+                              0.1 * x(2) - 0.05 * x(0));
       Eigen::VectorXd shape = mean + phi * a;
       for (int j = 0; j < m; ++j) shape(j) += noise(rng);
       f.lift(i, p) = lift;
@@ -113,19 +114,24 @@ TEST(ResponseEmulatorTest, FailuresThrowWithAMessage) {
   bad.explained_fraction = 0.0;
   EXPECT_NE(message([&] { ResponseEmulator(f.x, f.lift, f.responses, bad); }).find("explained_fraction"),
             std::string::npos);
-  EXPECT_NE(message([&] { ResponseEmulator(f.x.topRows(4), f.lift.topRows(4), {f.responses[0].topRows(4), f.responses[1].topRows(4)}); })
-                .find("4 patients, at least 5 needed"),
+  EXPECT_NE(message([&] {
+              ResponseEmulator(f.x.topRows(4), f.lift.topRows(4),
+                               {f.responses[0].topRows(4), f.responses[1].topRows(4)});
+            }).find("4 patients, at least 5 needed"),
             std::string::npos);
-  EXPECT_NE(message([&] { ResponseEmulator(f.x, f.lift, {f.responses[0]}); }).find("2 positions of lifts but 1"),
-            std::string::npos);
-  EXPECT_NE(message([&] { ResponseEmulator(f.x, f.lift, {f.responses[0], f.responses[1].leftCols(10)}); })
-                .find("position 1 are 8 by 10, not 8 by 300"),
+  EXPECT_NE(
+      message([&] { ResponseEmulator(f.x, f.lift, {f.responses[0]}); }).find("2 positions of lifts but 1"),
+      std::string::npos);
+  EXPECT_NE(message([&] {
+              ResponseEmulator(f.x, f.lift, {f.responses[0], f.responses[1].leftCols(10)});
+            }).find("position 1 are 8 by 10, not 8 by 300"),
             std::string::npos);
   Eigen::MatrixXd negative = f.lift;
   negative(2, 1) = -1.0;
   EXPECT_NE(message([&] { ResponseEmulator(f.x, negative, f.responses); }).find("> 0"), std::string::npos);
   const ResponseEmulator emulator(f.x, f.lift, f.responses);
-  EXPECT_NE(message([&] { emulator.Predict(Eigen::VectorXd::Zero(4)); }).find("4 parameters"), std::string::npos);
+  EXPECT_NE(message([&] { emulator.Predict(Eigen::VectorXd::Zero(4)); }).find("4 parameters"),
+            std::string::npos);
 }
 
 }  // namespace
