@@ -111,9 +111,13 @@ Eigen::VectorXd RibcageFem::NodalForces(const BarLoad& load) const {
 }
 
 std::vector<std::pair<std::int32_t, double>> RibcageFem::SternumLiftTies() const {
-  const double level = ribcage_.measured.slice_z_mm;
-  const auto& midline = ribcage_.sternum_anterior_midline;
-  const Points3& x = ribcage_.mesh.nodes;
+  return SternumLiftTiesOf(ribcage_);
+}
+
+std::vector<std::pair<std::int32_t, double>> SternumLiftTiesOf(const PatientRibcage& ribcage) {
+  const double level = ribcage.measured.slice_z_mm;
+  const auto& midline = ribcage.sternum_anterior_midline;
+  const Points3& x = ribcage.mesh.nodes;
   for (std::size_t i = 1; i < midline.size(); ++i) {
     const double z0 = x(midline[i - 1], 2), z1 = x(midline[i], 2);
     if ((z0 - level) * (z1 - level) <= 0 && z0 != z1) {

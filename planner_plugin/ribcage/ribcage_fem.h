@@ -63,6 +63,10 @@ struct ForceToLift {
   double force_n = 0;             ///< depression / lift_per_newton_mm
 };
 
+/// RibcageFem::SternumLiftTies from the ribcage alone (its measurement slice and anterior midline; no
+/// finite element model needed). Throws Error(kFailure) if the slice misses the sternum.
+std::vector<std::pair<std::int32_t, double>> SternumLiftTiesOf(const PatientRibcage& ribcage);
+
 /// A patient's ribcage as a finite element model: assembled and factorised on construction.
 class RibcageFem {
  public:
