@@ -13,9 +13,8 @@
 #include <regex>
 #include <sstream>
 
-#include "shape/model/shape_model.h"
-#include "shape/model/statismo_io.h"
 #include "tests/planner_plugin/host/analytic_chest.h"
+#include "tests/planner_plugin/host/average_model_file.h"
 #include "tests/support/cli_run.h"
 #include "tests/support/require_shared_data.h"
 
@@ -32,16 +31,7 @@ class PlanCommandTest : public ::testing::Test {
     dir_ = fs::temp_directory_path() / ("pectus_plan_command_" + std::to_string(::getpid()));
     fs::create_directories(dir_);
     // The average chest: an analytic grid (landmarks by the grid's convention), two shapes 1 mm apart.
-    const TriangleMesh grid = testing::AnalyticChestGrid(31, 41);
-    Eigen::MatrixXd shapes(2, 3 * grid.num_vertices());
-    Points3 a = grid.vertices.positions, b = grid.vertices.positions;
-    a.col(2).array() += 0.5;
-    b.col(2).array() -= 0.5;
-    shapes.row(0) = Eigen::Map<const Eigen::VectorXd>(a.data(), a.size()).transpose();
-    shapes.row(1) = Eigen::Map<const Eigen::VectorXd>(b.data(), b.size()).transpose();
-    ShapeModel model = BuildShapeModel(shapes);
-    model.faces = grid.faces;
-    WriteStatismoModel(dir_ / "average.h5", model, nlohmann::json::object());
+    testing::WriteAverageModel(dir_ / "average.h5", testing::AnalyticChestGrid(31, 41));
   }
   void TearDown() override { fs::remove_all(dir_); }
   std::string Path(const std::string& name) const { return "'" + (dir_ / name).string() + "'"; }

@@ -9,9 +9,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "shape/model/shape_model.h"
-#include "shape/model/statismo_io.h"
 #include "tests/planner_plugin/host/analytic_chest.h"
+#include "tests/planner_plugin/host/average_model_file.h"
 #include "tests/support/cli_run.h"
 #include "tests/support/require_shared_data.h"
 
@@ -73,16 +72,7 @@ TEST(SurrogateCommand, BuildStoresTheBasesAndPlanTakesThePatientsOwn) {
   EXPECT_EQ(b["dataset"]["patients"].get<int>(), 1);
   EXPECT_GT(b["dataset"]["megabytes"].get<double>(), 0.5);
   // The average chest for the plan: the analytic grid.
-  const TriangleMesh grid = planner::testing::AnalyticChestGrid(31, 41);
-  Eigen::MatrixXd shapes(2, 3 * grid.num_vertices());
-  Points3 a = grid.vertices.positions, c = grid.vertices.positions;
-  a.col(2).array() += 0.5;
-  c.col(2).array() -= 0.5;
-  shapes.row(0) = Eigen::Map<const Eigen::VectorXd>(a.data(), a.size()).transpose();
-  shapes.row(1) = Eigen::Map<const Eigen::VectorXd>(c.data(), c.size()).transpose();
-  ShapeModel model = BuildShapeModel(shapes);
-  model.faces = grid.faces;
-  WriteStatismoModel(dir / "average.h5", model, nlohmann::json::object());
+  planner::testing::WriteAverageModel(dir / "average.h5", planner::testing::AnalyticChestGrid(31, 41));
   const std::string plan = "plan --patient-table " + table + " --patient 57 --model '" + (dir / "average.h5").string() +
                            "' --bar-position 0.85 --force 300 --search-positions 3 --search-forces 4 "
                            "--search-refinements 2 --threads 1";

@@ -5,28 +5,15 @@
 
 #include <filesystem>
 
-#include "analytic_chest.h"
 #include "shape/core/error.h"
-#include "shape/model/shape_model.h"
-#include "shape/model/statismo_io.h"
+#include "tests/planner_plugin/host/analytic_chest.h"
+#include "tests/planner_plugin/host/average_model_file.h"
 
 namespace pectus::planner {
 namespace {
 namespace fs = std::filesystem;
 
-// A statismo model file whose mean is `mean` (two training shapes, +-0.5 mm apart along z).
-void WriteModel(const fs::path& path, const TriangleMesh& mean,
-                const nlohmann::json& info = nlohmann::json::object()) {
-  Eigen::MatrixXd shapes(2, 3 * mean.num_vertices());
-  Points3 a = mean.vertices.positions, b = mean.vertices.positions;
-  a.col(2).array() += 0.5;
-  b.col(2).array() -= 0.5;
-  shapes.row(0) = Eigen::Map<const Eigen::VectorXd>(a.data(), a.size()).transpose();
-  shapes.row(1) = Eigen::Map<const Eigen::VectorXd>(b.data(), b.size()).transpose();
-  ShapeModel model = BuildShapeModel(shapes);
-  model.faces = mean.faces;
-  WriteStatismoModel(path, model, info);
-}
+using testing::WriteAverageModel;
 
 class AverageChestTest : public ::testing::Test {
  protected:
@@ -40,7 +27,7 @@ class AverageChestTest : public ::testing::Test {
 
 TEST_F(AverageChestTest, AResampledGridGivesItsLandmarksByConvention) {
   const TriangleMesh grid = testing::AnalyticChestGrid(31, 41);
-  WriteModel(dir_ / "average.h5", grid);
+  WriteAverageModel(dir_ / "average.h5", grid);
   const AverageChest average = LoadAverageChest(dir_ / "average.h5");
   EXPECT_EQ(average.grid_columns, 31);
   EXPECT_EQ(average.grid_rows, 41);
@@ -55,14 +42,14 @@ TEST_F(AverageChestTest, LandmarksInTheModelFileOrAFileComeFirst) {
   const TriangleMesh grid = testing::AnalyticChestGrid(31, 41);
   const nlohmann::json info = {
       {"landmarks", {{"sternal_notch", {1, 2, 3}}, {"xiphoid", {4, 5, 6}}, {"manubrium_centre", {7, 8, 9}}}}};
-  WriteModel(dir_ / "with_landmarks.h5", grid, info);
+  WriteAverageModel(dir_ / "with_landmarks.h5", grid, info);
   const AverageChest average = LoadAverageChest(dir_ / "with_landmarks.h5");
   EXPECT_EQ(average.landmarks.Position("manubrium_centre", "t"), Eigen::Vector3d(7, 8, 9));
   // A mesh that is not a grid and has no landmarks cannot be used.
   TriangleMesh shuffled = grid;
   shuffled.faces.row(0) = grid.faces.row(1);
   shuffled.faces.row(1) = grid.faces.row(0);
-  WriteModel(dir_ / "no_landmarks.h5", shuffled);
+  WriteAverageModel(dir_ / "no_landmarks.h5", shuffled);
   EXPECT_FALSE(DetectGrid(shuffled, nullptr, nullptr));
   try {
     LoadAverageChest(dir_ / "no_landmarks.h5");
