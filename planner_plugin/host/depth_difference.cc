@@ -5,6 +5,18 @@
 #include <limits>
 
 namespace pectus::planner {
+namespace {
+
+// The bin of coordinate `value` among `count` bins of 1 / `scale` from `lo`, clamped to the first and last
+// (before the conversion to int: a far or non-finite coordinate must not overflow it).
+int BinOf(double value, double lo, double scale, int count) {
+  const double x = (value - lo) * scale;
+  if (!(x > 0.0)) return 0;  // also NaN
+  if (x >= count - 1) return count - 1;
+  return static_cast<int>(x);
+}
+
+}  // namespace
 
 DepthProbe::DepthProbe(const Points3& points, const Eigen::Vector3d& direction)
     : a_(direction.normalized()), u_(a_.unitOrthogonal()), v_(a_.cross(u_)) {
@@ -22,14 +34,14 @@ DepthProbe::DepthProbe(const Points3& points, const Eigen::Vector3d& direction)
   hi_ = q_.colwise().maxCoeff().transpose();
   const Eigen::Vector2d extent = (hi_ - lo_).cwiseMax(1e-9);
   const double cell = std::max(std::sqrt(1.0 * extent.prod() / static_cast<double>(n)), 1e-6);
-  nu_ = std::min(static_cast<int>(extent.x() / cell) + 1, 2 * static_cast<int>(n) + 4);
-  nv_ = std::min(static_cast<int>(extent.y() / cell) + 1, 2 * static_cast<int>(n) + 4);
+  const double most = 2.0 * static_cast<double>(n) + 4.0;  // bins per axis, at most (in double: no overflow)
+  nu_ = static_cast<int>(std::min(extent.x() / cell + 1.0, most));
+  nv_ = static_cast<int>(std::min(extent.y() / cell + 1.0, most));
   scale_ = Eigen::Vector2d(nu_ / extent.x(), nv_ / extent.y());
   start_.assign(static_cast<std::size_t>(nu_) * nv_ + 1, 0);
   std::vector<std::int32_t> bin(static_cast<std::size_t>(n));
   for (Eigen::Index k = 0; k < n; ++k) {
-    const int i = std::clamp(static_cast<int>((q_(k, 0) - lo_.x()) * scale_.x()), 0, nu_ - 1);
-    const int j = std::clamp(static_cast<int>((q_(k, 1) - lo_.y()) * scale_.y()), 0, nv_ - 1);
+    const int i = BinOf(q_(k, 0), lo_.x(), scale_.x(), nu_), j = BinOf(q_(k, 1), lo_.y(), scale_.y(), nv_);
     bin[static_cast<std::size_t>(k)] = i * nv_ + j;
     ++start_[static_cast<std::size_t>(i * nv_ + j) + 1];
   }
@@ -75,8 +87,8 @@ Eigen::VectorXd DepthProbe::Depth(const Projected& projected, const Faces3& face
   const Eigen::VectorXd& h = projected.h;
   // Points outside the surface's box across the direction miss it.
   const Eigen::Vector2d box_lo = uv.colwise().minCoeff().transpose(), box_hi = uv.colwise().maxCoeff().transpose();
-  auto clamp_u = [&](double value) { return std::clamp(static_cast<int>((value - lo_.x()) * scale_.x()), 0, nu_ - 1); };
-  auto clamp_v = [&](double value) { return std::clamp(static_cast<int>((value - lo_.y()) * scale_.y()), 0, nv_ - 1); };
+  auto clamp_u = [&](double value) { return BinOf(value, lo_.x(), scale_.x(), nu_); };
+  auto clamp_v = [&](double value) { return BinOf(value, lo_.y(), scale_.y(), nv_); };
   constexpr double kEps = 1e-9;  // barycentric tolerance: a point on an edge belongs to both faces
   // Every face meets the points binned under its box; faces in order, so among equal depths the first
   // face's stays.
