@@ -20,6 +20,7 @@
  * Version 2 added the exact response basis (build_basis) and the real-time deform call: a deformer made
  * once per thread (create_deformer) evaluates the chest for any bar position and force without
  * allocation, lock, exception or I/O, at haptic rates (docs/planner.md, "The exact response basis").
+ * Version 3 added the learned emulator's leave-one-patient-out evaluation (evaluate_emulator).
  */
 #ifndef PECTUS_PLANNER_API_H_
 #define PECTUS_PLANNER_API_H_
@@ -32,7 +33,7 @@ extern "C" {
 #endif
 
 /** The interface version this header describes. Any change to a struct or function below bumps it. */
-#define PECTUS_PLANNER_INTERFACE_VERSION 2u
+#define PECTUS_PLANNER_INTERFACE_VERSION 3u
 /** The name of the one exported symbol (for dlsym). */
 #define PECTUS_PLANNER_ENTRY_POINT "pectus_planner_interface"
 
@@ -170,6 +171,46 @@ typedef struct PectusPlannerBasisSummary {
   double seconds;                   /**< wall time of the build */
 } PectusPlannerBasisSummary;
 
+/** How evaluate_emulator() runs (fill with zeros for the defaults; docs/planner.md, "The emulator"). */
+typedef struct PectusPlannerEmulatorOptions {
+  int32_t inputs;            /**< 0 the fitted patient map (default), 1 the CT measurements, 2 the same with
+                                  log lengths, 3 both 2 and 0 */
+  int32_t scale;             /**< divided out before the components: 0 sternal lift (default), 1 norm, 2 none */
+  int32_t max_components;    /**< principal components per position at most; 0: 20 */
+  int32_t learn_skin;        /**< 1: learn the skin grid directly instead of the mesh's boundary nodes */
+  double explained_fraction; /**< components kept to this fraction of the variance; 0: 0.9999 */
+} PectusPlannerEmulatorOptions;
+
+/** A method's errors over its leave-one-patient-out cases (the skin grid; a case is one patient, bar
+ *  position and force). "Small" cases: FE sternal lift at most 40 mm. */
+typedef struct PectusPlannerEmulatorFigures {
+  int64_t cases, small_lift_cases;
+  double skin_rms_mean_mm, skin_rms_max_mm, skin_rms_within_1mm; /**< small cases; fraction <= 1 mm */
+  double skin_p95_mean_mm, skin_p95_max_mm, skin_p95_within_2mm; /**< small cases; per-case 95th percentile */
+  double relative_l2_mean, relative_l2_max, relative_l2_within_5pc; /**< all cases; fractions */
+  double small_lift_error_mean_mm, small_lift_error_max_mm, small_lift_error_within_1mm;
+  double lift_error_mean_mm, lift_error_max_mm; /**< all cases */
+  double coverage_2sd; /**< share of all coordinates within the predicted 2 sigma band; -1 if none */
+  int32_t worst_skin_rms_patient, worst_relative_l2_patient, worst_lift_patient; /**< index; -1 none */
+} PectusPlannerEmulatorFigures;
+
+/** One left-out patient. */
+typedef struct PectusPlannerEmulatorPatient {
+  char id[64];
+  char nearest_patient[64]; /**< the nearest-patient baseline's choice */
+  PectusPlannerEmulatorFigures emulator;
+  double fit_seconds;       /**< the emulator's fit on the other patients */
+  double components_mean;   /**< principal components kept, mean over the positions */
+} PectusPlannerEmulatorPatient;
+
+/** What evaluate_emulator() measured. */
+typedef struct PectusPlannerEmulatorEvaluation {
+  int64_t patients, positions, forces, skin_vertices;
+  double training_set_seconds; /**< the FE solves of every patient */
+  double evaluation_seconds;   /**< the folds */
+  PectusPlannerEmulatorFigures emulator, nearest_patient, mean_response;
+} PectusPlannerEmulatorEvaluation;
+
 typedef struct PectusPlanner PectusPlanner;                 /**< opaque */
 typedef struct PectusPlannerDeformer PectusPlannerDeformer; /**< opaque: one per thread (version 2) */
 
@@ -263,6 +304,21 @@ typedef struct PectusPlannerInterface {
    *  ignored), from the basis: real time, as deform(). */
   int32_t (*lift_force)(PectusPlannerDeformer* deformer, const PectusPlannerBar* bar, double lift_mm,
                         double* force_n, PectusPlannerStatus* status);
+
+  /* ---- version 3: the learned emulator ---- */
+
+  /** The response emulator left one patient out at a time: every patient of `table_path` (or those of
+   *  `patients`, ids separated by commas; NULL: all) solved once by FE with a 1 N bar at the
+   *  dissertation's three positions, then per patient the emulator fitted on the others predicts its
+   *  load cases (3 positions x 8 forces) from its measurements alone, beside the nearest-patient and
+   *  mean-response baselines on the same folds. Minutes for 62 patients. `per_patient` (may be NULL)
+   *  receives at most `capacity` patients, in the table's order. `progress` counts the FE solves and
+   *  then the folds (2 per patient). */
+  int32_t (*evaluate_emulator)(const char* table_path, const char* patients, const PectusPlannerOptions* options,
+                               const PectusPlannerEmulatorOptions* emulator, PectusPlannerProgressFn progress,
+                               void* progress_user, PectusPlannerEmulatorEvaluation* out,
+                               PectusPlannerEmulatorPatient* per_patient, int64_t capacity,
+                               PectusPlannerStatus* status);
 } PectusPlannerInterface;
 
 /** The one exported symbol: the plugin's function table (static storage; never NULL). */

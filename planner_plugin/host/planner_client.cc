@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "shape/core/error.h"
+#include "shape/io/patient_table_io.h"
 
 namespace pectus::planner {
 
@@ -183,26 +184,50 @@ PectusPlannerOptions PluginDefaultOptions(const PlannerPlugin& plugin) {
   return options;
 }
 
+namespace {
+
+// A progress callback across the C boundary: it must not throw.
+void ProgressTrampoline(void* user, std::int64_t done, std::int64_t total) {
+  const auto* f = static_cast<const std::function<void(std::int64_t, std::int64_t)>*>(user);
+  try {
+    if (*f) (*f)(done, total);
+  } catch (...) {
+  }
+}
+
+void* ProgressUser(const std::function<void(std::int64_t, std::int64_t)>& progress) {
+  return const_cast<std::function<void(std::int64_t, std::int64_t)>*>(&progress);
+}
+
+}  // namespace
+
 PectusPlannerDatasetSummary WritePlannerDataset(
     const PlannerPlugin& plugin, const std::filesystem::path& table, const std::filesystem::path& output,
     const PectusPlannerOptions& options, const std::function<void(std::int64_t, std::int64_t)>& progress,
     const PectusPlannerBasisOptions* basis) {
   PectusPlannerDatasetSummary summary{};
   PectusPlannerStatus status{};
-  // The callback crosses the C boundary: it must not throw.
-  auto trampoline = [](void* user, std::int64_t done, std::int64_t total) {
-    const auto* f = static_cast<const std::function<void(std::int64_t, std::int64_t)>*>(user);
-    try {
-      if (*f) (*f)(done, total);
-    } catch (...) {
-    }
-  };
-  ThrowIfFailed(
-      plugin.api().write_dataset(table.c_str(), output.c_str(), &options, basis, trampoline,
-                                 const_cast<std::function<void(std::int64_t, std::int64_t)>*>(&progress),
-                                 &summary, &status),
-      status);
+  ThrowIfFailed(plugin.api().write_dataset(table.c_str(), output.c_str(), &options, basis, ProgressTrampoline,
+                                           ProgressUser(progress), &summary, &status),
+                status);
   return summary;
+}
+
+EmulatorEvaluationReport EvaluatePlannerEmulator(const PlannerPlugin& plugin, const std::filesystem::path& table,
+                                                 const std::string& patients, const PectusPlannerOptions& options,
+                                                 const PectusPlannerEmulatorOptions& emulator,
+                                                 const std::function<void(std::int64_t, std::int64_t)>& progress) {
+  EmulatorEvaluationReport report;
+  report.patients.resize(ReadPatientTable(table).size());  // at most every row of the table
+  PectusPlannerStatus status{};
+  ThrowIfFailed(plugin.api().evaluate_emulator(table.c_str(), patients.empty() ? nullptr : patients.c_str(),
+                                               &options, &emulator, ProgressTrampoline, ProgressUser(progress),
+                                               &report.summary, report.patients.data(),
+                                               static_cast<std::int64_t>(report.patients.size()), &status),
+                status);
+  report.patients.resize(static_cast<std::size_t>(std::min<std::int64_t>(
+      report.summary.patients, static_cast<std::int64_t>(report.patients.size()))));
+  return report;
 }
 
 }  // namespace pectus::planner

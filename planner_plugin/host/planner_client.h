@@ -120,4 +120,17 @@ PectusPlannerDatasetSummary WritePlannerDataset(
     const PectusPlannerOptions& options, const std::function<void(std::int64_t, std::int64_t)>& progress,
     const PectusPlannerBasisOptions* basis = nullptr);
 
+/// The learned emulator left one patient out at a time, through the plugin (evaluate_emulator).
+struct EmulatorEvaluationReport {
+  PectusPlannerEmulatorEvaluation summary{};
+  std::vector<PectusPlannerEmulatorPatient> patients;  ///< in the table's order
+};
+
+/// Evaluates the emulator on `patients` of `table` (ids separated by commas; empty: all); `progress(done,
+/// total)` counts the FE solves, then the folds.
+EmulatorEvaluationReport EvaluatePlannerEmulator(const PlannerPlugin& plugin, const std::filesystem::path& table,
+                                                 const std::string& patients, const PectusPlannerOptions& options,
+                                                 const PectusPlannerEmulatorOptions& emulator,
+                                                 const std::function<void(std::int64_t, std::int64_t)>& progress);
+
 }  // namespace pectus::planner

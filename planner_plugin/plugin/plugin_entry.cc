@@ -1,6 +1,8 @@
 // pectus planner plugin: the C entry points of planner_api.h. Every function runs its C++ body inside
 // Guard(), which turns any exception into a status code and a message: nothing is thrown across the
 // boundary and nothing aborts the host.
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -12,6 +14,7 @@
 #include "planner_plugin/plugin/planner_session.h"
 #include "planner_plugin/io/fem_dataset_h5.h"
 #include "planner_plugin/plugin/run_fem_dataset.h"
+#include "planner_plugin/surrogate/emulator_evaluation.h"
 #include "shape/core/error.h"
 #include "shape/io/patient_table_io.h"
 
@@ -280,6 +283,117 @@ std::int32_t LiftForce(PectusPlannerDeformer* deformer, const PectusPlannerBar* 
   return RealTimeOk(status);
 }
 
+PectusPlannerEmulatorFigures FiguresOf(const pectus::planner::EmulatorErrors& errors) {
+  const auto s = errors.Summarise();
+  return {s.cases,
+          s.small_lift_cases,
+          s.skin_rms_mean,
+          s.skin_rms_max,
+          s.skin_rms_within_1mm,
+          s.skin_p95_mean,
+          s.skin_p95_max,
+          s.skin_p95_within_2mm,
+          s.relative_l2_mean,
+          s.relative_l2_max,
+          s.relative_l2_within_5pc,
+          s.small_lift_error_mean,
+          s.small_lift_error_max,
+          s.small_lift_error_within_1mm,
+          s.lift_error_mean,
+          s.lift_error_max,
+          s.coverage_2sd,
+          s.worst_skin_rms_patient,
+          s.worst_relative_l2_patient,
+          s.worst_lift_patient};
+}
+
+std::int32_t EvaluateEmulator(const char* table_path, const char* patients, const PectusPlannerOptions* options,
+                              const PectusPlannerEmulatorOptions* emulator, PectusPlannerProgressFn progress,
+                              void* progress_user, PectusPlannerEmulatorEvaluation* out,
+                              PectusPlannerEmulatorPatient* per_patient, std::int64_t capacity,
+                              PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    using namespace pectus::planner;
+    Require(table_path, "table_path");
+    if (per_patient != nullptr && capacity < 0) pectus::ThrowUsage("planner: capacity must not be negative");
+    const PectusPlannerEmulatorOptions e = emulator != nullptr ? *emulator : PectusPlannerEmulatorOptions{};
+    EmulatorEvaluationOptions evaluation;
+    if (e.inputs < 0 || e.inputs > 3) pectus::ThrowUsage("planner: emulator inputs must be 0 to 3");
+    if (e.scale < 0 || e.scale > 2) pectus::ThrowUsage("planner: emulator scale must be 0 to 2");
+    if (e.max_components < 0) pectus::ThrowUsage("planner: emulator max_components must not be negative");
+    evaluation.inputs = std::array{EmulatorInputs::kMapLog, EmulatorInputs::kCt, EmulatorInputs::kCtLog,
+                                   EmulatorInputs::kCtLogMapLog}[static_cast<std::size_t>(e.inputs)];
+    evaluation.emulator.scale =
+        std::array{ResponseScale::kLift, ResponseScale::kNorm, ResponseScale::kNone}[static_cast<std::size_t>(e.scale)];
+    if (e.max_components > 0) evaluation.emulator.max_components = e.max_components;
+    if (e.explained_fraction != 0) evaluation.emulator.explained_fraction = e.explained_fraction;
+    evaluation.through_boundary_nodes = e.learn_skin == 0;
+    std::string why;
+    if (!evaluation.IsValid(&why)) pectus::ThrowUsage("planner: emulator options: " + why);
+
+    // The patients: the table's, or those named, in the table's order.
+    std::vector<pectus::PatientTableRow> rows = pectus::ReadPatientTable(table_path);
+    if (patients != nullptr) {
+      std::vector<int> named;
+      const std::string list(patients);
+      for (std::size_t from = 0; from <= list.size();) {
+        const std::size_t comma = std::min(list.find(',', from), list.size());
+        const std::string id = list.substr(from, comma - from);
+        if (!id.empty()) named.push_back(pectus::FindPatient(rows, std::string_view(id), table_path).patient);
+        from = comma + 1;
+      }
+      if (named.empty()) pectus::ThrowUsage(std::string("planner: patients '") + patients + "' names no patient");
+      std::sort(named.begin(), named.end());
+      if (std::adjacent_find(named.begin(), named.end()) != named.end()) {
+        pectus::ThrowUsage(std::string("planner: patients '") + patients + "' names a patient twice");
+      }
+      std::erase_if(rows, [&](const pectus::PatientTableRow& row) {
+        return !std::binary_search(named.begin(), named.end(), row.patient);
+      });
+    }
+    const auto n = static_cast<std::int64_t>(rows.size());
+    if (n < EmulatorEvaluationMinimumPatients(evaluation)) {
+      pectus::ThrowUsage("planner: " + std::to_string(n) + " patients; leaving one out with these inputs needs at least " +
+                         std::to_string(EmulatorEvaluationMinimumPatients(evaluation)));
+    }
+    EmulatorTrainingSetOptions training;
+    training.boundary_nodes = evaluation.through_boundary_nodes;
+    training.settings = SettingsFrom(options);
+    auto report = [&](std::int64_t done) {
+      if (progress != nullptr) progress(progress_user, done, 2 * n);
+    };
+    const EmulatorTrainingSet set =
+        BuildEmulatorTrainingSet(rows, training, [&](std::int64_t done, std::int64_t) { report(done); });
+    const EmulatorEvaluation result =
+        EvaluateEmulatorLeaveOneOut(set, evaluation, [&](std::int64_t done, std::int64_t) { report(n + done); });
+    if (out != nullptr) {
+      *out = {n,
+              set.num_positions(),
+              static_cast<std::int64_t>(evaluation.forces.size()),
+              set.num_skin_vertices(),
+              set.timings_s.Total(),
+              result.seconds,
+              FiguresOf(result.emulator),
+              FiguresOf(result.nearest),
+              FiguresOf(result.mean)};
+    }
+    if (per_patient != nullptr) {
+      for (std::int64_t i = 0; i < std::min(capacity, n); ++i) {
+        const EmulatorFold& fold = result.folds[static_cast<std::size_t>(i)];
+        PectusPlannerEmulatorPatient& p = per_patient[i];
+        p = {};
+        std::snprintf(p.id, sizeof(p.id), "%s", fold.patient.c_str());
+        std::snprintf(p.nearest_patient, sizeof(p.nearest_patient), "%s", fold.nearest_patient.c_str());
+        p.emulator = FiguresOf(fold.emulator);
+        p.fit_seconds = fold.fit_seconds;
+        double components = 0;
+        for (int c : fold.components) components += c;
+        p.components_mean = fold.components.empty() ? 0.0 : components / static_cast<double>(fold.components.size());
+      }
+    }
+  });
+}
+
 const PectusPlannerInterface kInterface = {
     PECTUS_PLANNER_INTERFACE_VERSION,
     sizeof(PectusPlannerInterface),
@@ -301,6 +415,7 @@ const PectusPlannerInterface kInterface = {
     DestroyDeformer,
     Deform,
     LiftForce,
+    EvaluateEmulator,
 };
 
 }  // namespace

@@ -56,7 +56,7 @@
 #include <vector>
 
 #include "planner_plugin/ribcage/ribcage_fem.h"
-#include "planner_plugin/surrogate/emulator_patient_ties.h"
+#include "planner_plugin/surrogate/emulator_evaluation.h"
 #include "planner_plugin/surrogate/emulator_training_set.h"
 #include "planner_plugin/surrogate/response_emulator.h"
 #include "shape/core/error.h"
@@ -85,88 +85,50 @@ double Mean(const std::vector<double>& v) {
 }
 double Max(const std::vector<double>& v) { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); }
 
-// The figures of one method over its test cases.
-struct Figures {
-  std::vector<double> rms_40, p95_40, lift_error_40;  // cases with FE lift <= 40 mm
-  std::vector<double> relative_l2, lift_error;        // all cases
-  std::vector<int> patient_of_40;                     // per <= 40 mm case, the patient index
-  double within_2sd = 0, coordinates = 0;             // coverage (methods with a predicted sd)
+// The figures of one method over its test cases (EmulatorErrors, emulator_evaluation.h), as JSON.
+nlohmann::json Json(const EmulatorErrors& errors) {
+  const EmulatorErrors::Summary s = errors.Summarise();
+  nlohmann::json j = {{"cases", s.cases},
+                      {"cases_lift_le_40mm", s.small_lift_cases},
+                      {"skin_rms_mm_lift_le_40",
+                       {{"mean", s.skin_rms_mean},
+                        {"p95", s.skin_rms_p95},
+                        {"max", s.skin_rms_max},
+                        {"fraction_le_1mm", s.skin_rms_within_1mm}}},
+                      {"skin_p95_mm_lift_le_40",
+                       {{"mean", s.skin_p95_mean},
+                        {"p95", s.skin_p95_p95},
+                        {"max", s.skin_p95_max},
+                        {"fraction_le_2mm", s.skin_p95_within_2mm}}},
+                      {"relative_l2_all",
+                       {{"mean", s.relative_l2_mean},
+                        {"p95", s.relative_l2_p95},
+                        {"max", s.relative_l2_max},
+                        {"fraction_le_5pc", s.relative_l2_within_5pc}}},
+                      {"lift_error_mm_lift_le_40",
+                       {{"mean", s.small_lift_error_mean},
+                        {"p95", s.small_lift_error_p95},
+                        {"max", s.small_lift_error_max},
+                        {"fraction_le_1mm", s.small_lift_error_within_1mm}}},
+                      {"lift_error_mm_all",
+                       {{"mean", s.lift_error_mean}, {"p95", s.lift_error_p95}, {"max", s.lift_error_max}}}};
+  if (s.coverage_2sd >= 0) j["coverage_2sd"] = s.coverage_2sd;
+  return j;
+}
 
-  // One case: predicted and FE displacements (3 #vertices, mm), the predicted sd (or empty), the lifts.
-  void Add(const Eigen::VectorXd& predicted, const Eigen::VectorXd& fe, const Eigen::VectorXd& sd,
-           double lift_predicted, double lift_fe, int patient) {
-    const Eigen::VectorXd e = predicted - fe;
-    const Eigen::Index nv = e.size() / 3;
-    std::vector<double> per_vertex(static_cast<std::size_t>(nv));
-    double sum2 = 0.0;
-    for (Eigen::Index v = 0; v < nv; ++v) {
-      per_vertex[static_cast<std::size_t>(v)] = e.segment<3>(3 * v).norm();
-      sum2 += e.segment<3>(3 * v).squaredNorm();
-    }
-    relative_l2.push_back(e.norm() / fe.norm());
-    lift_error.push_back(std::abs(lift_predicted - lift_fe));
-    if (lift_fe <= 40.0) {
-      rms_40.push_back(std::sqrt(sum2 / static_cast<double>(nv)));
-      p95_40.push_back(Quantile(per_vertex, 0.95));
-      lift_error_40.push_back(std::abs(lift_predicted - lift_fe));
-      patient_of_40.push_back(patient);
-    }
-    if (sd.size() == e.size()) {
-      within_2sd += static_cast<double>((e.array().abs() <= 2.0 * sd.array()).count());
-      coordinates += static_cast<double>(e.size());
-    }
-  }
-
-  void Merge(const Figures& o) {
-    for (auto [a, b] : {std::pair{&rms_40, &o.rms_40}, std::pair{&p95_40, &o.p95_40},
-                        std::pair{&lift_error_40, &o.lift_error_40}, std::pair{&relative_l2, &o.relative_l2},
-                        std::pair{&lift_error, &o.lift_error}})
-      a->insert(a->end(), b->begin(), b->end());
-    patient_of_40.insert(patient_of_40.end(), o.patient_of_40.begin(), o.patient_of_40.end());
-    within_2sd += o.within_2sd;
-    coordinates += o.coordinates;
-  }
-
-  nlohmann::json Json() const {
-    auto fraction = [](const std::vector<double>& v, double limit) {
-      return v.empty() ? 0.0
-                       : static_cast<double>(
-                             std::count_if(v.begin(), v.end(), [&](double x) { return x <= limit; })) /
-                             static_cast<double>(v.size());
-    };
-    nlohmann::json j = {
-        {"cases", relative_l2.size()},
-        {"cases_lift_le_40mm", rms_40.size()},
-        {"skin_rms_mm_lift_le_40",
-         {{"mean", Mean(rms_40)},
-          {"p95", Quantile(rms_40, 0.95)},
-          {"max", Max(rms_40)},
-          {"fraction_le_1mm", fraction(rms_40, 1.0)}}},
-        {"skin_p95_mm_lift_le_40",
-         {{"mean", Mean(p95_40)},
-          {"p95", Quantile(p95_40, 0.95)},
-          {"max", Max(p95_40)},
-          {"fraction_le_2mm", fraction(p95_40, 2.0)}}},
-        {"relative_l2_all",
-         {{"mean", Mean(relative_l2)},
-          {"p95", Quantile(relative_l2, 0.95)},
-          {"max", Max(relative_l2)},
-          {"fraction_le_5pc", fraction(relative_l2, 0.05)}}},
-        {"lift_error_mm_lift_le_40",
-         {{"mean", Mean(lift_error_40)},
-          {"p95", Quantile(lift_error_40, 0.95)},
-          {"max", Max(lift_error_40)},
-          {"fraction_le_1mm", fraction(lift_error_40, 1.0)}}},
-        {"lift_error_mm_all",
-         {{"mean", Mean(lift_error)}, {"p95", Quantile(lift_error, 0.95)}, {"max", Max(lift_error)}}}};
-    if (coordinates > 0) j["coverage_2sd"] = within_2sd / coordinates;
-    return j;
-  }
-};
-
-// Rows `keep` of a.
-Eigen::MatrixXd Rows(const Eigen::MatrixXd& a, const std::vector<Eigen::Index>& keep) {
-  return a(keep, Eigen::all);
+// The first n patients of `set`.
+EmulatorTrainingSet FirstPatients(const EmulatorTrainingSet& set, Eigen::Index n) {
+  EmulatorTrainingSet first = set;
+  first.patients.resize(static_cast<std::size_t>(n));
+  first.ct_inputs = set.ct_inputs.topRows(n);
+  first.model_inputs = set.model_inputs.topRows(n);
+  first.lift_per_newton = set.lift_per_newton.topRows(n);
+  first.skin_anchor_generic_mm = set.skin_anchor_generic_mm.topRows(n);
+  for (auto* arrays : {&first.skin, &first.bone, &first.boundary})
+    for (Eigen::MatrixXd& a : *arrays) a = Eigen::MatrixXd(a.topRows(n));
+  if (!first.skin_ties.empty()) first.skin_ties.resize(static_cast<std::size_t>(n));
+  if (!first.lift_ties.empty()) first.lift_ties.resize(static_cast<std::size_t>(n));
+  return first;
 }
 
 // The dissertation's network: inputs (patient parameters, position, force), outputs the first `k`
@@ -410,137 +372,78 @@ int main(int argc, char** argv) {
     }
 
     const auto n = static_cast<Eigen::Index>(rows.size());
-    const Eigen::Index q = set.num_positions(), m = 3 * set.num_skin_vertices();
-    // The inputs (columns of the training set, lengths and scales in log where asked).
-    Eigen::MatrixXd inputs(n, 0);
+    if (set.num_patients() > n) set = FirstPatients(set, n);
+    const Eigen::Index q = set.num_positions();
+    EmulatorEvaluationOptions evaluation;
+    evaluation.emulator = options;
+    evaluation.inputs = inputs_kind == "ct"       ? EmulatorInputs::kCt
+                        : inputs_kind == "ct-log" ? EmulatorInputs::kCtLog
+                        : inputs_kind == "map-log" ? EmulatorInputs::kMapLog
+                                                   : EmulatorInputs::kCtLogMapLog;
+    evaluation.through_boundary_nodes = target == "nodes";
     std::vector<std::string> input_names;
-    auto add = [&](const Eigen::VectorXd& column, const std::string& name) {
-      inputs.conservativeResize(n, inputs.cols() + 1);
-      inputs.rightCols(1) = column;
-      input_names.push_back(name);
-    };
-    const bool log_lengths = inputs_kind != "ct";
-    if (inputs_kind.rfind("ct", 0) == 0) {
-      for (int c = 0; c < 6; ++c) {
-        const Eigen::VectorXd v = set.ct_inputs.col(c).head(n);
-        if (log_lengths && c < 3)
-          add(v.array().log().matrix(), "log_" + kCtInputNames[c]);
-        else
-          add(v, kCtInputNames[c]);
-      }
-    }
-    if (inputs_kind.find("map-log") != std::string::npos) {
-      for (int c = 0; c < 3; ++c)
-        add(set.model_inputs.col(c).head(n).array().log().matrix(), "log_" + kModelInputNames[c]);
-      add(set.model_inputs.col(3).head(n), kModelInputNames[3]);
-    }
+    const Eigen::MatrixXd inputs = EmulatorInputMatrix(set, evaluation.inputs, &input_names);
     report["inputs"] = input_names;
-    std::vector<double> forces;
-    for (const BarLoad& load : DissertationLoadCases())
-      if (load.position == DissertationLoadCases().front().position) forces.push_back(load.force_n);
+    const std::vector<double>& forces = evaluation.forces;  // the dissertation's eight
     const auto nf = static_cast<int>(forces.size());
 
-    // Leave one patient out: the emulator, the nearest patient, the mean response, the network.
+    // Leave one patient out: the emulator, the nearest patient and the mean response (the library's
+    // evaluation, as `pectus surrogate evaluate`), then the network on the same folds.
+    EmulatorEvaluation loo;
+    if (!split_only) {
+      loo = EvaluateEmulatorLeaveOneOut(set, evaluation, [&](std::int64_t done, std::int64_t total) {
+        std::fprintf(stderr, "emulator_benchmark: %lld / %lld patients left out\n", static_cast<long long>(done),
+                     static_cast<long long>(total));
+      });
+    }
     nlohmann::json per_patient = nlohmann::json::array();
-    Figures emulator, nearest, mean_response, ann_loo;
-    std::vector<double> fit_s(static_cast<std::size_t>(n)), components;
-    std::vector<Figures> fold_emulator(static_cast<std::size_t>(n)),
-        fold_nearest(static_cast<std::size_t>(n)), fold_mean(static_cast<std::size_t>(n)),
-        fold_ann(static_cast<std::size_t>(n));
-    std::vector<std::vector<int>> fold_components(static_cast<std::size_t>(n));
+    std::vector<double> fit_s, components;
+    std::vector<EmulatorErrors> fold_ann(static_cast<std::size_t>(n));
     std::vector<double> fold_explained_ann(static_cast<std::size_t>(n));
-    std::vector<nlohmann::json> fold_json(static_cast<std::size_t>(n));
     std::vector<std::string> fold_error(static_cast<std::size_t>(n));
-    // The folds in parallel (OMP_NUM_THREADS), each on one thread, gathered in order.
     Eigen::setNbThreads(1);
 #pragma omp parallel for schedule(dynamic, 1)
-    for (Eigen::Index out = 0; out < (split_only ? 0 : n); ++out) {
+    for (Eigen::Index out = 0; out < (split_only || !ann ? 0 : n); ++out) {
+      const auto o = static_cast<std::size_t>(out);
       try {
-        const auto o = static_cast<std::size_t>(out);
         std::vector<Eigen::Index> train;
         for (Eigen::Index i = 0; i < n; ++i)
           if (i != out) train.push_back(i);
-        std::vector<Eigen::MatrixXd> responses, learnt;
+        std::vector<std::array<int, 2>> cases;
+        for (Eigen::Index i : train)
+          for (Eigen::Index p = 0; p < q; ++p)
+            for (int f = 0; f < nf; ++f) cases.push_back({static_cast<int>(i * q + p), f});
+        const AnnBaseline network(set, inputs, forces, cases, train, ann_components, ann_iterations, ann_rate,
+                                  1400u + static_cast<unsigned>(out));
+        fold_explained_ann[o] = network.explained();
         for (Eigen::Index p = 0; p < q; ++p) {
-          responses.push_back(Rows(set.skin[p].topRows(n), train));
-          learnt.push_back(target == "nodes" ? Rows(set.boundary[p].topRows(n), train) : responses.back());
-        }
-        const Eigen::MatrixXd x = Rows(inputs, train), lift = Rows(set.lift_per_newton.topRows(n), train);
-        const auto fold_start = Clock::now();
-        const ResponseEmulator model(x, lift, learnt, options);
-        fit_s[o] = Seconds(fold_start);
-        fold_components[o] = model.summary().components;
-        ResponseEmulatorPrediction prediction = model.Predict(inputs.row(out).transpose());
-        // The skin and the lift through the held-out patient's own ties (known from its fitted ribcage).
-        if (target == "nodes") prediction = ThroughTies(prediction, {set.skin_ties[o], set.lift_ties[o]});
-        // The nearest patient in standardised parameters.
-        const Eigen::RowVectorXd mu = x.colwise().mean();
-        const Eigen::RowVectorXd sd =
-            ((x.rowwise() - mu).cwiseAbs2().colwise().sum() / static_cast<double>(x.rows() - 1)).cwiseSqrt();
-        Eigen::Index best = 0;
-        double best_d = 1e300;
-        for (Eigen::Index j = 0; j < x.rows(); ++j) {
-          double d = 0.0;
-          for (Eigen::Index c = 0; c < x.cols(); ++c)
-            if (sd(c) > 0) d += std::pow((x(j, c) - inputs(out, c)) / sd(c), 2);
-          if (d < best_d) best_d = d, best = j;
-        }
-        std::unique_ptr<AnnBaseline> network;
-        if (ann) {
-          std::vector<std::array<int, 2>> cases;
-          for (Eigen::Index i : train)
-            for (Eigen::Index p = 0; p < q; ++p)
-              for (int f = 0; f < nf; ++f) cases.push_back({static_cast<int>(i * q + p), f});
-          network =
-              std::make_unique<AnnBaseline>(set, inputs, forces, cases, train, ann_components, ann_iterations,
-                                            ann_rate, 1400u + static_cast<unsigned>(out));
-          fold_explained_ann[o] = network->explained();
-        }
-        Eigen::VectorXd fe(m);
-        for (Eigen::Index p = 0; p < q; ++p) {
-          const Eigen::VectorXd g = set.skin[p].row(out).transpose();
-          const Eigen::VectorXd g_mean = responses[p].colwise().mean().transpose();
-          const Eigen::VectorXd g_near = responses[p].row(best).transpose();
           for (double f : forces) {
-            fe = f * g;
-            const double lift_fe = f * set.lift_per_newton(out, p);
-            const int who = static_cast<int>(out);
-            fold_emulator[o].Add(f * prediction.response[p], fe, f * prediction.response_sd[p],
-                                 f * prediction.lift_per_newton(p), lift_fe, who);
-            fold_nearest[o].Add(f * g_near, fe, {}, f * lift(best, p), lift_fe, who);
-            fold_mean[o].Add(f * g_mean, fe, {}, f * lift.col(p).mean(), lift_fe, who);
-            if (network) {
-              double l = 0.0;
-              const Eigen::VectorXd u = network->Predict(static_cast<int>(out), static_cast<int>(p), f, &l);
-              fold_ann[o].Add(u, fe, {}, l, lift_fe, who);
-            }
+            double l = 0.0;
+            const Eigen::VectorXd u = network.Predict(static_cast<int>(out), static_cast<int>(p), f, &l);
+            fold_ann[o].Add(u, f * set.skin[p].row(out).transpose(), {}, l, f * set.lift_per_newton(out, p),
+                            static_cast<int>(out));
           }
         }
-        nlohmann::json pj = fold_emulator[o].Json();
-        pj["patient"] = set.patients[o];
-        pj["lift_per_newton_fe"] =
-            std::vector<double>(set.lift_per_newton.row(out).begin(), set.lift_per_newton.row(out).end());
-        pj["lift_per_newton_emulator"] =
-            std::vector<double>(prediction.lift_per_newton.begin(), prediction.lift_per_newton.end());
-        pj["nearest_patient"] = set.patients[static_cast<std::size_t>(train[static_cast<std::size_t>(best)])];
-        if (network) pj["ann_relative_l2_mean"] = Mean(fold_ann[o].relative_l2);
-        fold_json[o] = pj;
-        std::fprintf(stderr, "emulator_benchmark: patient %s left out: rel L2 mean %.4f, fit %.1f s\n",
-                     set.patients[o].c_str(), Mean(fold_emulator[o].relative_l2), fit_s[o]);
       } catch (const std::exception& e) {
-        fold_error[static_cast<std::size_t>(out)] = e.what();
+        fold_error[o] = e.what();
       }
     }
-    for (Eigen::Index out = 0; out < (split_only ? 0 : n); ++out) {
-      const auto o = static_cast<std::size_t>(out);
+    EmulatorErrors ann_loo;
+    for (std::size_t o = 0; o < loo.folds.size(); ++o) {
       if (!fold_error[o].empty())
         throw std::runtime_error("patient " + set.patients[o] + " left out: " + fold_error[o]);
-      emulator.Merge(fold_emulator[o]);
-      nearest.Merge(fold_nearest[o]);
-      mean_response.Merge(fold_mean[o]);
       ann_loo.Merge(fold_ann[o]);
-      for (int c : fold_components[o]) components.push_back(c);
-      per_patient.push_back(fold_json[o]);
+      const EmulatorFold& fold = loo.folds[o];
+      fit_s.push_back(fold.fit_seconds);
+      for (int c : fold.components) components.push_back(c);
+      nlohmann::json pj = Json(fold.emulator);
+      pj["patient"] = fold.patient;
+      pj["lift_per_newton_fe"] = std::vector<double>(fold.lift_per_newton_fe.begin(), fold.lift_per_newton_fe.end());
+      pj["lift_per_newton_emulator"] =
+          std::vector<double>(fold.lift_per_newton_emulator.begin(), fold.lift_per_newton_emulator.end());
+      pj["nearest_patient"] = fold.nearest_patient;
+      if (ann) pj["ann_relative_l2_mean"] = fold_ann[o].Summarise().relative_l2_mean;
+      per_patient.push_back(pj);
     }
     const double explained_ann = Mean(fold_explained_ann);
     report["emulator_options"] = {
@@ -553,13 +456,13 @@ int main(int argc, char** argv) {
                   : options.scale == ResponseScale::kLift ? "lift"
                                                           : "none"}};
     nlohmann::json methods;
-    methods["emulator_loo"] = emulator.Json();
+    methods["emulator_loo"] = Json(loo.emulator);
     methods["emulator_loo"]["fit_s_mean"] = Mean(fit_s);
     methods["emulator_loo"]["components_mean"] = Mean(components);
-    methods["nearest_patient_loo"] = nearest.Json();
-    methods["mean_response_loo"] = mean_response.Json();
+    methods["nearest_patient_loo"] = Json(loo.nearest);
+    methods["mean_response_loo"] = Json(loo.mean);
     if (ann) {
-      methods["ann_loo"] = ann_loo.Json();
+      methods["ann_loo"] = Json(ann_loo);
       methods["ann_loo"]["explained_by_components"] = explained_ann;
 
       // The dissertation's split: the n x 24 results shuffled, 70 % training, 15 % validation, 15 % test.
@@ -576,7 +479,7 @@ int main(int argc, char** argv) {
       std::iota(everyone.begin(), everyone.end(), 0);
       const AnnBaseline network(set, inputs, forces, training, everyone, ann_components, ann_iterations,
                                 ann_rate, 1488u);
-      Figures random_split;
+      EmulatorErrors random_split;
       for (std::size_t s = n_train + n_valid; s < all.size(); ++s) {
         const int i = all[s][0] / static_cast<int>(q), p = all[s][0] % static_cast<int>(q);
         const double f = forces[static_cast<std::size_t>(all[s][1])];
@@ -584,7 +487,7 @@ int main(int argc, char** argv) {
         const Eigen::VectorXd u = network.Predict(i, p, f, &l);
         random_split.Add(u, f * set.skin[p].row(i).transpose(), {}, l, f * set.lift_per_newton(i, p), i);
       }
-      methods["ann_random_split_test"] = random_split.Json();
+      methods["ann_random_split_test"] = Json(random_split);
       methods["ann_random_split_test"]["split"] = {
           {"training", n_train}, {"validation_unused", n_valid}, {"test", all.size() - n_train - n_valid}};
     }

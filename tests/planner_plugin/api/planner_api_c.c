@@ -23,7 +23,13 @@ void pectus_planner_api_layout_from_c(size_t* out, int capacity) {
                            offsetof(PectusPlannerInterface, write_dataset),
                            offsetof(PectusPlannerPatient, ct_haller_index),
                            offsetof(PectusPlannerOptions, skin_columns),
-                           (size_t)PECTUS_PLANNER_INTERFACE_VERSION};
+                           (size_t)PECTUS_PLANNER_INTERFACE_VERSION,
+                           sizeof(PectusPlannerEmulatorOptions),
+                           sizeof(PectusPlannerEmulatorFigures),
+                           sizeof(PectusPlannerEmulatorPatient),
+                           sizeof(PectusPlannerEmulatorEvaluation),
+                           offsetof(PectusPlannerEmulatorFigures, worst_lift_patient),
+                           offsetof(PectusPlannerInterface, evaluate_emulator)};
   int i;
   for (i = 0; i < capacity && i < (int)(sizeof(values) / sizeof(values[0])); ++i) out[i] = values[i];
 }

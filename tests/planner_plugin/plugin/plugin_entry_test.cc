@@ -56,9 +56,9 @@ TEST_F(PluginEntry, ExportsOneVersionedTableThatCAndCppLayOutAlike) {
   EXPECT_EQ(api_->version, PECTUS_PLANNER_INTERFACE_VERSION);
   EXPECT_EQ(api_->struct_size, sizeof(PectusPlannerInterface));
   EXPECT_NE(std::string(api_->description).find("pectus planner"), std::string::npos);
-  size_t c[18] = {};
-  pectus_planner_api_layout_from_c(c, 18);
-  const size_t cpp[18] = {sizeof(PectusPlannerStatus),
+  size_t c[24] = {};
+  pectus_planner_api_layout_from_c(c, 24);
+  const size_t cpp[24] = {sizeof(PectusPlannerStatus),
                           sizeof(PectusPlannerPatient),
                           sizeof(PectusPlannerOptions),
                           sizeof(PectusPlannerMeasurements),
@@ -75,8 +75,14 @@ TEST_F(PluginEntry, ExportsOneVersionedTableThatCAndCppLayOutAlike) {
                           offsetof(PectusPlannerInterface, write_dataset),
                           offsetof(PectusPlannerPatient, ct_haller_index),
                           offsetof(PectusPlannerOptions, skin_columns),
-                          PECTUS_PLANNER_INTERFACE_VERSION};
-  for (int i = 0; i < 18; ++i) EXPECT_EQ(c[i], cpp[i]) << "layout item " << i;
+                          PECTUS_PLANNER_INTERFACE_VERSION,
+                          sizeof(PectusPlannerEmulatorOptions),
+                          sizeof(PectusPlannerEmulatorFigures),
+                          sizeof(PectusPlannerEmulatorPatient),
+                          sizeof(PectusPlannerEmulatorEvaluation),
+                          offsetof(PectusPlannerEmulatorFigures, worst_lift_patient),
+                          offsetof(PectusPlannerInterface, evaluate_emulator)};
+  for (int i = 0; i < 24; ++i) EXPECT_EQ(c[i], cpp[i]) << "layout item " << i;
   // Nothing but the entry point is visible: not even the engine's functions (which this test binary
   // links itself, so the name below is the real one).
   EXPECT_EQ(dlsym(handle_, "_ZN6pectus7planner19BuildGenericRibcageERKNS0_21GenericRibcageOptionsE"),
