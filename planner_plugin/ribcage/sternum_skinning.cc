@@ -20,6 +20,14 @@ double FallOff(double d, double inner, double outer) {
   return 1.0 - t * t * t * (t * (6 * t - 15) + 10);
 }
 
+// Across the chest: 1 up to `inner`, 0 beyond `outer`, a quarter sine in between: steepest at the inner
+// envelope and flat at the outer (continuous with one derivative there), so that beside the sternum the
+// chest wall rises at once from the sternum's depth, as a saucer does.
+double LateralFallOff(double d, double inner, double outer) {
+  const double t = std::clamp((d - inner) / (outer - inner), 0.0, 1.0);
+  return 1.0 - std::sin(0.5 * M_PI * t);
+}
+
 }  // namespace
 
 bool SternumSkinningOptions::IsValid(std::string* why) const {
@@ -103,7 +111,7 @@ double SternumSkinning::Weight(const Eigen::Vector3d& p) const {
   const double lateral = std::max(0.0, std::abs(p.x() - a.centre.x()) - a.half_width);
   const double distance = std::hypot(lateral, a.below);
   const double across =
-      FallOff(distance, scale_ * options_.inner_envelope_mm, scale_ * options_.outer_envelope_mm);
+      LateralFallOff(distance, scale_ * options_.inner_envelope_mm, scale_ * options_.outer_envelope_mm);
   const double behind = p.y() - a.centre.y();
   const double depth =
       FallOff(behind, scale_ * options_.posterior_inner_mm, scale_ * options_.posterior_outer_mm);

@@ -1,6 +1,11 @@
 // pectus planner: the patient's sternal depression and torsion applied to the ribcage by skinning
 // (dissertation §4.1.1, Figures 20-21): a bone in the sternum moves it, and every point follows with a
 // weight that is 1 inside an inner envelope around the sternum and falls smoothly to 0 at an outer one.
+// Across the chest the fall-off is steepest at the inner envelope (the sternum's edge by default), so
+// that the chest wall beside the sternum rises at once from its depth, as in a saucer-shaped depression:
+// with a flat start (a weight of 1 for 10 mm beyond the edge, then smootherstep, as before issue 14) the
+// cartilages beside the sternum kept the chest's normal curvature at the sternum's depth and lay behind
+// its back, and a flat bar met them first.
 #pragma once
 
 #include <Eigen/Core>
@@ -14,8 +19,8 @@ namespace pectus::planner {
 /// Envelopes of the sternal bone. Distances are measured from the sternum's lateral edge (and below
 /// its lower tip), in mm at the generic ribcage's size; they scale with the ribcage width.
 struct SternumSkinningOptions {
-  /// Full weight within this distance of the sternum (the inner envelope), mm. Default 10.
-  double inner_envelope_mm = 10.0;
+  /// Full weight within this distance of the sternum (the inner envelope), mm. Default 0.
+  double inner_envelope_mm = 0.0;
   /// Zero weight beyond this distance (the outer envelope), mm. Default 85: the broad "saucer" type of
   /// the dissertation's patients takes the cartilages of both sides down with the sternum.
   double outer_envelope_mm = 85.0;
@@ -40,7 +45,10 @@ class SternumSkinning {
   SternumSkinning(Points3 axis, std::vector<double> half_width, double ramp_from, double ramp_to,
                   double scale, const SternumSkinningOptions& options);
 
-  /// The weight of point p, in [0, 1] (smootherstep fall-off: continuous with two derivatives).
+  /// The weight of point p, in [0, 1]: the product of the fall-offs along the sternum and behind it
+  /// (smootherstep: continuous with two derivatives) and across the chest (1 - sin(pi t / 2), t the
+  /// distance beyond the inner envelope over the envelopes' gap: steepest at the inner envelope, flat at
+  /// the outer).
   double Weight(const Eigen::Vector3d& p) const;
   /// p moved by the bone, blended by its weight w: p + w (B(p) - p). The bone B hinges the sternal body
   /// back about a transverse axis through the joint of the second cartilage (the sternal angle), by the

@@ -1,6 +1,7 @@
 // The sternal bone's skinning on a straight vertical sternum, where the bone's motion and every weight
-// have closed forms: the hinge about the sternal angle, the torsion about the axis, the envelopes'
-// smootherstep fall-offs, and points of full weight moving rigidly with the bone.
+// have closed forms: the hinge about the sternal angle, the torsion about the axis, the envelopes' fall-offs
+// (a quarter sine across the chest, steepest at the sternum's edge; smootherstep along and behind), and
+// points of full weight moving rigidly with the bone.
 #include "planner_plugin/ribcage/sternum_skinning.h"
 
 #include <gtest/gtest.h>
@@ -36,29 +37,33 @@ Eigen::Vector3d Bone(const Eigen::Vector3d& p, double depression_mm, double tors
   return twist * hinge * (p - kHinge) + kHinge;
 }
 
-// smootherstep(t) = 6t^5 - 15t^4 + 10t^3 is 1/2 at t = 1/2, and smoothstep too: each envelope's middle
-// gives a weight of 1/2 exactly.
+// smootherstep(t) = 6t^5 - 15t^4 + 10t^3 is 1/2 at t = 1/2, and smoothstep too: the middle of the
+// envelopes along and behind gives a weight of 1/2 exactly; across, 1 - sin(pi t / 2) is 1/2 at t = 1/3.
 TEST(SternumSkinning, WeightsFollowTheEnvelopesInClosedForm) {
   const SternumSkinning s = StraightSternum();
-  // Full weight on and around the lower sternum (within the inner envelope, 10 mm beyond the edge, and
-  // 30 mm behind the axis); none above the second cartilage's joint, beyond 85 mm from the edge, or
-  // 70 mm behind the axis.
+  // Full weight on the lower sternum (up to its edge, 10 mm from the axis, and 30 mm behind it); none
+  // above the second cartilage's joint, beyond 85 mm from the edge, or 70 mm behind the axis.
   EXPECT_EQ(s.Weight({0, 0, 30}), 1.0);
-  EXPECT_EQ(s.Weight({19.9, -5, 30}), 1.0);
-  EXPECT_EQ(s.Weight({-15, 29.9, 50}), 1.0);
+  EXPECT_EQ(s.Weight({9.9, -5, 30}), 1.0);
+  EXPECT_EQ(s.Weight({-10, 29.9, 50}), 1.0);
   EXPECT_EQ(s.Weight({0, 0, 85}), 0.0);
   EXPECT_EQ(s.Weight({95.1, 0, 30}), 0.0);
   EXPECT_EQ(s.Weight({0, 70.1, 30}), 0.0);
-  // Each envelope's middle: along (z = 70, halfway from the hinge to full weight), across (47.5 mm
-  // beyond the edge: x = 57.5), behind (50 mm), below the tip (47.5 mm below it); and their product.
+  // Across the chest the weight is 1 - sin(pi t / 2), t the distance beyond the edge over 85 mm: it falls
+  // at once beside the sternum (a saucer: the chest wall rises from the sternum's depth), to 1/2 a third
+  // of the way (28.3 mm beyond the edge), the same below the tip.
+  EXPECT_NEAR(s.Weight({11, 0, 30}), 1.0 - std::sin(M_PI / 170.0), 1e-12);
+  EXPECT_LT(s.Weight({11, 0, 30}), 0.99);
+  const double third = 85.0 / 3.0;
+  EXPECT_NEAR(s.Weight({10 + third, 0, 30}), 0.5, 1e-12);
+  EXPECT_NEAR(s.Weight({-10 - third, 0, 30}), 0.5, 1e-12);
+  EXPECT_NEAR(s.Weight({0, 0, -third}), 0.5, 1e-12);
+  // Along (z = 70, halfway from the hinge to full weight) and behind (50 mm): smootherstep's middles.
   EXPECT_NEAR(s.Weight({0, 0, 70}), 0.5, 1e-12);
-  EXPECT_NEAR(s.Weight({57.5, 0, 30}), 0.5, 1e-12);
-  EXPECT_NEAR(s.Weight({-57.5, 0, 30}), 0.5, 1e-12);
   EXPECT_NEAR(s.Weight({0, 50, 30}), 0.5, 1e-12);
-  EXPECT_NEAR(s.Weight({0, 0, -47.5}), 0.5, 1e-12);
-  EXPECT_NEAR(s.Weight({57.5, 50, 70}), 0.125, 1e-12);
+  EXPECT_NEAR(s.Weight({10 + third, 50, 70}), 0.125, 1e-12);  // their product
   // The envelopes scale with the ribcage: twice as wide a ribcage, twice the distances.
-  EXPECT_NEAR(StraightSternum(2.0).Weight({105, 0, 30}), 0.5, 1e-12);
+  EXPECT_NEAR(StraightSternum(2.0).Weight({10 + 2 * third, 0, 30}), 0.5, 1e-12);
   // Weights lie in [0, 1] everywhere.
   for (double x = -120; x <= 120; x += 7.5) {
     for (double y = -40; y <= 90; y += 6.5) {
@@ -85,9 +90,8 @@ TEST(SternumSkinning, HingeMovesTheReferencePointByTheDepression) {
 TEST(SternumSkinning, PointsOfFullWeightMoveRigidlyWithTheBone) {
   const SternumSkinning s = StraightSternum();
   const double depression = 21.0, torsion = 0.2;
-  // Points of weight 1 (the lower sternum and its inner envelope) move by the bone's rigid motion.
-  const std::vector<Eigen::Vector3d> points = {
-      {0, 0, 50}, {-15, -5, 40}, {18, 20, 10}, {0, 10, 0}, {-5, 0, -5}};
+  // Points of weight 1 (the lower sternum) move by the bone's rigid motion.
+  const std::vector<Eigen::Vector3d> points = {{0, 0, 50}, {-10, -5, 40}, {8, 20, 10}, {0, 10, 0}, {-5, 0, 2}};
   for (const Eigen::Vector3d& p : points) {
     ASSERT_EQ(s.Weight(p), 1.0);
     EXPECT_LT((s.Apply(p, depression, torsion) - Bone(p, depression, torsion)).norm(), 1e-9) << p.transpose();
@@ -136,6 +140,7 @@ TEST(SternumSkinning, BadAxesAndEnvelopesAreRefused) {
   EXPECT_THROW(SternumSkinning(axis, {10.0}, 0.2, 0.4, 1.0, {}), Error);        // one half-width short
   EXPECT_THROW(SternumSkinning(axis, {10.0, 10.0}, 0.4, 0.2, 1.0, {}), Error);  // ramp backwards
   SternumSkinningOptions inverted;
+  inverted.inner_envelope_mm = 10.0;
   inverted.outer_envelope_mm = 5.0;  // inside the inner envelope
   EXPECT_THROW(SternumSkinning(axis, {10.0, 10.0}, 0.2, 0.4, 1.0, inverted), Error);
 }
