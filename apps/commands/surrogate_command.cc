@@ -83,8 +83,8 @@ class SurrogateCommand : public Command {
     build_->add_option("-o,--output", output_, "The dataset with bases (.h5), replaced only when complete")
         ->required();
     build_->add_option("--tolerance-mm", tolerance_mm_,
-                       "The bases' compression tolerance up to 2000 N, mm (default 0.001)")
-        ->default_val(0.001)
+                       "The bases' compression tolerance up to 2000 N, mm (default 0.003)")
+        ->default_val(0.003)
         ->check(CLI::PositiveNumber);
     build_->add_option("--cell-mm", cell_mm_, "Mesh: cell length along the ribs, 2 to 20 mm (default 6)");
     build_->add_option("--plugin", plugin_path_, "The planner plugin (default: beside pectus)");
@@ -97,8 +97,8 @@ class SurrogateCommand : public Command {
         ->check(CLI::NonNegativeNumber);
     check_->add_option("--seed", seed_, "Seed of the random pairs")->default_val(1400);
     check_->add_option("--tolerance-mm", tolerance_mm_,
-                       "The basis' compression tolerance up to 2000 N, mm (the plugin's default: 0.001)")
-        ->default_val(0.001)
+                       "The basis' compression tolerance up to 2000 N, mm (the plugin's default: 0.003)")
+        ->default_val(0.003)
         ->check(CLI::PositiveNumber);
     check_->add_option("--limit-mm", limit_mm_,
                        "Fail if any point of any case differs from the direct solve by more than this, mm")
@@ -377,7 +377,7 @@ class SurrogateCommand : public Command {
   bool learn_skin_ = false;
   int random_ = 100, evaluations_ = 2000;
   unsigned seed_ = 1400;
-  double tolerance_mm_ = 0.001, limit_mm_ = 0.01, cell_mm_ = 0;
+  double tolerance_mm_ = 0.003, limit_mm_ = 0.01, cell_mm_ = 0;
 };
 
 PECTUS_REGISTER_COMMAND(SurrogateCommand, 125);

@@ -157,7 +157,7 @@ typedef struct PectusPlannerDatasetSummary {
 
 /** How build_basis() compresses the response (fill with zeros for the defaults). */
 typedef struct PectusPlannerBasisOptions {
-  double tolerance_mm; /**< largest difference from the uncompressed response up to max_force_n; 0: 0.001 */
+  double tolerance_mm; /**< largest difference from the uncompressed response up to max_force_n; 0: 0.003 */
   double max_force_n;  /**< the largest bar force the tolerance is stated for; 0: 2000 */
 } PectusPlannerBasisOptions;
 

@@ -84,7 +84,7 @@ TEST_F(PlanCommandTest, Patient57GivesTwoScenariosTheBestPlacementAndAnHtmlRepor
   EXPECT_LT(best_rms, b["score"]["rms_mm"].get<double>());
   EXPECT_LT(best_rms, r["before"]["rms_mm"].get<double>());
   // The search scored it from the response basis, the scenario from a direct solve: equal to the basis'
-  // tolerance (0.001 mm; in practice 1e-8).
+  // tolerance (0.003 mm; in practice 1e-8).
   EXPECT_TRUE(r["search"]["from_basis"].get<bool>());
   EXPECT_GT(r["response_basis"]["rank"].get<int>(), 0);
   EXPECT_NEAR(best_rms, r["search"]["best"]["objective_mm"].get<double>(), 1e-3);

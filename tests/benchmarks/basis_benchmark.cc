@@ -5,7 +5,7 @@
 // surface + skin) and of the force for a wanted lift, on one thread. Prints JSON.
 //
 //   basis_benchmark [--patients 57,1,10,30,45 | all] [--random 1000] [--evaluations 20000] [--table CSV]
-//                   [--tolerance-mm 0.001]
+//                   [--tolerance-mm 0.003]
 #include <omp.h>
 #include <sys/resource.h>
 
@@ -174,7 +174,7 @@ int main(int argc, char** argv) {
       options.tolerance_mm = std::stod(next());
     } else {
       std::cerr << "usage: basis_benchmark [--patients 57,1,10,30,45] [--random 1000] [--evaluations 20000] "
-                   "[--table CSV] [--tolerance-mm 0.001]\n";
+                   "[--table CSV] [--tolerance-mm 0.003]\n";
       return 2;
     }
   }

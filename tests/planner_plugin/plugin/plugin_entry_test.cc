@@ -228,7 +228,7 @@ TEST_F(PluginEntry, TheDeformCallGivesTheSolvesAnswerInRealTime) {
   ASSERT_EQ(api_->skin_surface(planner, 0, &skin, &status), PECTUS_PLANNER_OK);
   EXPECT_EQ(summary.points, bone.num_vertices + skin.num_vertices + 5);
   EXPECT_GT(summary.rank, 0);
-  EXPECT_LE(summary.truncation_bound_mm, 1e-3);
+  EXPECT_LE(summary.truncation_bound_mm, 3e-3);  // the default tolerance
 #ifdef PECTUS_COUNT_ALLOCATIONS
   const std::size_t before_create = pectus::testing_support::AllocationCount();
 #endif
