@@ -215,6 +215,7 @@ EmulatorEvaluation EvaluateEmulatorLeaveOneOut(const EmulatorTrainingSet& set,
       fold.fit_seconds = std::chrono::duration<double>(Clock::now() - fit_start).count();
       fold.components = model.summary().components;
       ResponseEmulatorPrediction prediction = model.Predict(inputs.row(out).transpose());
+      fold.lift_per_newton_process = prediction.lift_per_newton;
       if (nodes) prediction = ThroughTies(prediction, {set.skin_ties[o], set.lift_ties[o]});
       // The nearest training patient in standardised inputs (a constant column counts for nothing).
       const Eigen::RowVectorXd mu = x.colwise().mean();

@@ -101,6 +101,9 @@ struct EmulatorFold {
   std::string patient;
   EmulatorErrors emulator, nearest, mean;
   Eigen::VectorXd lift_per_newton_fe, lift_per_newton_emulator;  ///< per position, mm/N
+  /// Per position, the emulator's own lift process (mm/N), before the nodes are carried through the
+  /// patient's ties (which give lift_per_newton_emulator); the same when the skin is learnt directly.
+  Eigen::VectorXd lift_per_newton_process;
   std::string nearest_patient;
   std::vector<int> components;  ///< principal components kept per position
   double fit_seconds = 0;

@@ -441,6 +441,8 @@ int main(int argc, char** argv) {
       pj["lift_per_newton_fe"] = std::vector<double>(fold.lift_per_newton_fe.begin(), fold.lift_per_newton_fe.end());
       pj["lift_per_newton_emulator"] =
           std::vector<double>(fold.lift_per_newton_emulator.begin(), fold.lift_per_newton_emulator.end());
+      pj["lift_per_newton_process"] =
+          std::vector<double>(fold.lift_per_newton_process.begin(), fold.lift_per_newton_process.end());
       pj["nearest_patient"] = fold.nearest_patient;
       if (ann) pj["ann_relative_l2_mean"] = fold_ann[o].Summarise().relative_l2_mean;
       per_patient.push_back(pj);
