@@ -460,6 +460,25 @@ int main(int argc, char** argv) {
     nlohmann::json methods;
     methods["emulator_loo"] = Json(loo.emulator);
     methods["emulator_loo"]["fit_s_mean"] = Mean(fit_s);
+    {
+      // The lift error on the cases within the linear model's range, where an FE answer is a prediction:
+      // a lift of at most twice the depression and at least 20 mm (the planner's flag, LinearRangeLiftMm).
+      std::vector<double> errors;
+      for (std::size_t o = 0; o < loo.folds.size(); ++o) {
+        const EmulatorFold& fold = loo.folds[o];
+        const double limit = std::max(2.0 * set.ct_inputs(static_cast<Eigen::Index>(o), 3), 20.0);
+        for (Eigen::Index p = 0; p < fold.lift_per_newton_fe.size(); ++p)
+          for (double f : forces)
+            if (f * fold.lift_per_newton_fe(p) <= limit)
+              errors.push_back(f * std::abs(fold.lift_per_newton_emulator(p) - fold.lift_per_newton_fe(p)));
+      }
+      const auto within = std::count_if(errors.begin(), errors.end(), [](double e) { return e <= 1.0; });
+      methods["emulator_loo"]["lift_error_mm_linear_range"] = {
+          {"cases", errors.size()},
+          {"mean", Mean(errors)},
+          {"max", Max(errors)},
+          {"fraction_le_1mm", errors.empty() ? 0.0 : static_cast<double>(within) / static_cast<double>(errors.size())}};
+    }
     methods["emulator_loo"]["components_mean"] = Mean(components);
     methods["nearest_patient_loo"] = Json(loo.nearest);
     methods["mean_response_loo"] = Json(loo.mean);
