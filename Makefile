@@ -1,7 +1,8 @@
 # pectus: the two commands of the README, and a few more for developers.
 #   make demo   install dependencies, build, run the main job on bundled data, print where results are
-#   make test   install dependencies, build everything once with ASan + UBSan (benchmarks included, not
-#               run), run every test under them, and every fuzzer's smoke run
+#   make test   install dependencies, build everything once with ASan + UBSan (the benchmarks compiled
+#               at -O0 without instrumentation and linked, not run), run every test under them, and
+#               every fuzzer's smoke run
 BUILD      ?= build
 SANBUILD   ?= build-sanitize
 JOBS       ?= $(shell nproc)
@@ -53,7 +54,7 @@ unit-test:
 
 # Sanitizer builds: clang, AddressSanitizer (with LeakSanitizer) and UBSan, -O2 (keeps the numeric tests
 # fast) with line tables (all a trace needs), together with one libFuzzer target per reader.
-#   sanitize-all  everything (the benchmarks built, not run), the whole unit suite (RBF, ICP, merge,
+#   sanitize-all  everything (the benchmarks built at -O0 uninstrumented, not run), the whole unit suite (RBF, ICP, merge,
 #                 model, FEM, HDF5, the plugin through its C interface, the command line) and all 13
 #                 fuzzers; OpenMP from libomp: `make test`;
 #   sanitize      the bottom layer alone (types, every parser), its tests and its parsers' fuzzers: a few
