@@ -71,37 +71,45 @@ class SurrogateCommand : public Command {
            "     the time of one full-surface update; fails if any point differs by more than --limit-mm)\n"
            "  pectus surrogate check --patient-table nuss_ct_parameters.csv --patients all --random 0\n"
            "  pectus surrogate evaluate --patient-table nuss_ct_parameters.csv --report emulator.json\n"
-           "    (every patient left out in turn: the emulator fitted on the others predicts its 24 load cases\n"
-           "     from its measurements, against its FE solution; about 4 minutes for 62 patients on 2 cores)\n"
-           "  pectus surrogate evaluate --patient-table nuss_ct_parameters.csv --patients 1,2,3,4,5,6,7,8 \\\n"
+           "    (every patient left out in turn: the emulator fitted on the others predicts its 24 load "
+           "cases\n"
+           "     from its measurements, against its FE solution; about 4 minutes for 62 patients on 2 "
+           "cores)\n"
+           "  pectus surrogate evaluate --patient-table nuss_ct_parameters.csv --patients 1,2,3,4,5,6,7,8 "
+           "\\\n"
            "      --cell-mm 12 --inputs ct-log";
   }
   void Configure(CLI::App* app) override {
     app->require_subcommand(1);
-    build_ = app->add_subcommand("build", "The FE dataset of a patient table with every patient's response basis");
+    build_ =
+        app->add_subcommand("build", "The FE dataset of a patient table with every patient's response basis");
     build_->add_option("--patient-table", table_, "CSV of CT measurements (as `pectus plan`)")->required();
     build_->add_option("-o,--output", output_, "The dataset with bases (.h5), replaced only when complete")
         ->required();
-    build_->add_option("--tolerance-mm", tolerance_mm_,
-                       "The bases' compression tolerance up to 2000 N, mm (default 0.003)")
+    build_
+        ->add_option("--tolerance-mm", tolerance_mm_,
+                     "The bases' compression tolerance up to 2000 N, mm (default 0.003)")
         ->default_val(0.003)
         ->check(CLI::PositiveNumber);
     build_->add_option("--cell-mm", cell_mm_, "Mesh: cell length along the ribs, 2 to 20 mm (default 6)");
     build_->add_option("--plugin", plugin_path_, "The planner plugin (default: beside pectus)");
     build_->fallthrough();
-    check_ = app->add_subcommand("check", "The exact response basis against the direct FE solve, per patient");
+    check_ =
+        app->add_subcommand("check", "The exact response basis against the direct FE solve, per patient");
     check_->add_option("--patient-table", table_, "CSV of CT measurements (as `pectus plan`)")->required();
     check_->add_option("--patients", patients_, "Patient ids separated by commas, or all")->default_val("57");
     check_->add_option("--random", random_, "Random (position, force) pairs per patient besides the 24 cases")
         ->default_val(100)
         ->check(CLI::NonNegativeNumber);
     check_->add_option("--seed", seed_, "Seed of the random pairs")->default_val(1400);
-    check_->add_option("--tolerance-mm", tolerance_mm_,
-                       "The basis' compression tolerance up to 2000 N, mm (the plugin's default: 0.003)")
+    check_
+        ->add_option("--tolerance-mm", tolerance_mm_,
+                     "The basis' compression tolerance up to 2000 N, mm (the plugin's default: 0.003)")
         ->default_val(0.003)
         ->check(CLI::PositiveNumber);
-    check_->add_option("--limit-mm", limit_mm_,
-                       "Fail if any point of any case differs from the direct solve by more than this, mm")
+    check_
+        ->add_option("--limit-mm", limit_mm_,
+                     "Fail if any point of any case differs from the direct solve by more than this, mm")
         ->default_val(0.01)
         ->check(CLI::PositiveNumber);
     check_->add_option("--evaluations", evaluations_, "Deform calls timed per patient")
@@ -113,14 +121,17 @@ class SurrogateCommand : public Command {
     evaluate_ = app->add_subcommand(
         "evaluate", "The learned emulator left one patient out at a time, against FE and two baselines");
     evaluate_->add_option("--patient-table", table_, "CSV of CT measurements (as `pectus plan`)")->required();
-    evaluate_->add_option("--patients", evaluate_patients_, "Patient ids separated by commas, or all (at least 6)")
+    evaluate_
+        ->add_option("--patients", evaluate_patients_, "Patient ids separated by commas, or all (at least 6)")
         ->default_val("all");
-    evaluate_->add_option("--inputs", inputs_,
-                          "What the emulator is given: map (the fitted patient map, default), ct, ct-log "
-                          "(log lengths) or ct-log+map")
+    evaluate_
+        ->add_option("--inputs", inputs_,
+                     "What the emulator is given: map (the fitted patient map, default), ct, ct-log "
+                     "(log lengths) or ct-log+map")
         ->check(CLI::IsMember({"map", "ct", "ct-log", "ct-log+map"}))
         ->default_val("map");
-    evaluate_->add_option("--scale", scale_, "Divided out before the components: lift (default), norm or none")
+    evaluate_
+        ->add_option("--scale", scale_, "Divided out before the components: lift (default), norm or none")
         ->check(CLI::IsMember({"lift", "norm", "none"}))
         ->default_val("lift");
     evaluate_->add_option("--components", components_, "Principal components per bar position at most")
@@ -169,14 +180,16 @@ class SurrogateCommand : public Command {
     context->report["max_difference_mm"] = worst;
     context->report["limit_mm"] = limit_mm_;
     char line[300];
-    std::snprintf(line, sizeof(line),
-                  "surrogate check: %zu patient(s), largest difference from the direct solve %.2e mm (patient "
-                  "%s; limit %.3g mm)",
-                  ids.size(), worst, worst_patient.c_str(), limit_mm_);
+    std::snprintf(
+        line, sizeof(line),
+        "surrogate check: %zu patient(s), largest difference from the direct solve %.2e mm (patient "
+        "%s; limit %.3g mm)",
+        ids.size(), worst, worst_patient.c_str(), limit_mm_);
     Info(line);
     if (worst > limit_mm_) {
-      ThrowFailure(std::string(line) + ": the basis does not reproduce the FE solve; a smaller --tolerance-mm "
-                                       "keeps more modes");
+      ThrowFailure(std::string(line) +
+                   ": the basis does not reproduce the FE solve; a smaller --tolerance-mm "
+                   "keeps more modes");
     }
   }
 
@@ -196,9 +209,9 @@ class SurrogateCommand : public Command {
     progress.reset();
     std::error_code error;
     const auto bytes = fs::file_size(staged, error);
-    context->report["dataset"] = {{"path", output_},         {"patients", s.patients},
-                                  {"load_cases", s.load_cases}, {"results", s.results},
-                                  {"seconds", s.seconds},       {"megabytes", error ? 0.0 : bytes / 1e6}};
+    context->report["dataset"] = {
+        {"path", output_},      {"patients", s.patients}, {"load_cases", s.load_cases},
+        {"results", s.results}, {"seconds", s.seconds},   {"megabytes", error ? 0.0 : bytes / 1e6}};
     Info("FE dataset with response bases: " + std::to_string(s.patients) + " patients in " + output_ +
          " (for `pectus plan --basis`)");
   }
@@ -209,23 +222,30 @@ class SurrogateCommand : public Command {
       if (i < 0 || static_cast<std::size_t>(i) >= patients.size()) return nullptr;
       return patients[static_cast<std::size_t>(i)].id;
     };
-    nlohmann::json j = {
-        {"cases", f.cases},
-        {"cases_lift_le_40mm", f.small_lift_cases},
-        {"skin_rms_mm_lift_le_40",
-         {{"mean", f.skin_rms_mean_mm}, {"max", f.skin_rms_max_mm}, {"fraction_le_1mm", f.skin_rms_within_1mm},
-          {"worst_patient", who(f.worst_skin_rms_patient)}}},
-        {"skin_p95_mm_lift_le_40",
-         {{"mean", f.skin_p95_mean_mm}, {"max", f.skin_p95_max_mm}, {"fraction_le_2mm", f.skin_p95_within_2mm}}},
-        {"relative_l2_all",
-         {{"mean", f.relative_l2_mean}, {"max", f.relative_l2_max}, {"fraction_le_5pc", f.relative_l2_within_5pc},
-          {"worst_patient", who(f.worst_relative_l2_patient)}}},
-        {"lift_error_mm_lift_le_40",
-         {{"mean", f.small_lift_error_mean_mm},
-          {"max", f.small_lift_error_max_mm},
-          {"fraction_le_1mm", f.small_lift_error_within_1mm}}},
-        {"lift_error_mm_all",
-         {{"mean", f.lift_error_mean_mm}, {"max", f.lift_error_max_mm}, {"worst_patient", who(f.worst_lift_patient)}}}};
+    nlohmann::json j = {{"cases", f.cases},
+                        {"cases_lift_le_40mm", f.small_lift_cases},
+                        {"skin_rms_mm_lift_le_40",
+                         {{"mean", f.skin_rms_mean_mm},
+                          {"max", f.skin_rms_max_mm},
+                          {"fraction_le_1mm", f.skin_rms_within_1mm},
+                          {"worst_patient", who(f.worst_skin_rms_patient)}}},
+                        {"skin_p95_mm_lift_le_40",
+                         {{"mean", f.skin_p95_mean_mm},
+                          {"max", f.skin_p95_max_mm},
+                          {"fraction_le_2mm", f.skin_p95_within_2mm}}},
+                        {"relative_l2_all",
+                         {{"mean", f.relative_l2_mean},
+                          {"max", f.relative_l2_max},
+                          {"fraction_le_5pc", f.relative_l2_within_5pc},
+                          {"worst_patient", who(f.worst_relative_l2_patient)}}},
+                        {"lift_error_mm_lift_le_40",
+                         {{"mean", f.small_lift_error_mean_mm},
+                          {"max", f.small_lift_error_max_mm},
+                          {"fraction_le_1mm", f.small_lift_error_within_1mm}}},
+                        {"lift_error_mm_all",
+                         {{"mean", f.lift_error_mean_mm},
+                          {"max", f.lift_error_max_mm},
+                          {"worst_patient", who(f.worst_lift_patient)}}}};
     if (f.coverage_2sd >= 0) j["coverage_2sd"] = f.coverage_2sd;
     return j;
   }
@@ -274,27 +294,30 @@ class SurrogateCommand : public Command {
     }
     auto line = [](const char* name, const PectusPlannerEmulatorFigures& f) {
       char text[400];
-      std::snprintf(text, sizeof(text),
-                    "  %-16s skin RMS %.3f mm (max %.2f, %.1f%% <= 1 mm), p95 %.3f mm (max %.2f), relative L2 "
-                    "%.2f%% (max %.1f%%), lift error %.3f mm (max %.2f; all cases max %.2f)",
-                    name, f.skin_rms_mean_mm, f.skin_rms_max_mm, 100 * f.skin_rms_within_1mm, f.skin_p95_mean_mm,
-                    f.skin_p95_max_mm, 100 * f.relative_l2_mean, 100 * f.relative_l2_max,
-                    f.small_lift_error_mean_mm, f.small_lift_error_max_mm, f.lift_error_max_mm);
+      std::snprintf(
+          text, sizeof(text),
+          "  %-16s skin RMS %.3f mm (max %.2f, %.1f%% <= 1 mm), p95 %.3f mm (max %.2f), relative L2 "
+          "%.2f%% (max %.1f%%), lift error %.3f mm (max %.2f; all cases max %.2f)",
+          name, f.skin_rms_mean_mm, f.skin_rms_max_mm, 100 * f.skin_rms_within_1mm, f.skin_p95_mean_mm,
+          f.skin_p95_max_mm, 100 * f.relative_l2_mean, 100 * f.relative_l2_max, f.small_lift_error_mean_mm,
+          f.small_lift_error_max_mm, f.lift_error_max_mm);
       return std::string(text);
     };
     char head[300];
-    std::snprintf(head, sizeof(head),
-                  "surrogate evaluate: %lld patients left out one at a time, %lld cases (%lld with a lift <= 40 mm); "
-                  "2 sigma band covers %.1f%% of the emulator's errors",
-                  static_cast<long long>(s.patients), static_cast<long long>(s.emulator.cases),
-                  static_cast<long long>(s.emulator.small_lift_cases), 100 * s.emulator.coverage_2sd);
+    std::snprintf(
+        head, sizeof(head),
+        "surrogate evaluate: %lld patients left out one at a time, %lld cases (%lld with a lift <= 40 mm); "
+        "2 sigma band covers %.1f%% of the emulator's errors",
+        static_cast<long long>(s.patients), static_cast<long long>(s.emulator.cases),
+        static_cast<long long>(s.emulator.small_lift_cases), 100 * s.emulator.coverage_2sd);
     Info(head);
     Info(line("emulator", s.emulator));
     Info(line("nearest patient", s.nearest_patient));
     Info(line("mean response", s.mean_response));
   }
 
-  nlohmann::json Check(const PlannerPlugin& plugin, const PectusPlannerOptions& options, const std::string& id) {
+  nlohmann::json Check(const PlannerPlugin& plugin, const PectusPlannerOptions& options,
+                       const std::string& id) {
     PlannerClient planner(plugin, ReadPlannerPatient(plugin, table_, id), options);
     PectusPlannerBasisOptions basis_options{tolerance_mm_, 2000.0};
     auto start = Clock::now();
@@ -310,18 +333,19 @@ class SurrogateCommand : public Command {
     for (int k = 0; k < random_; ++k) bars.push_back({position(rng), false, force(rng)});
     double worst = 0.0, worst_lift = 0.0;
     for (std::size_t first = 0; first < bars.size(); first += 64) {
-      const std::vector<BarPlacement> block(bars.begin() + static_cast<std::ptrdiff_t>(first),
-                                            bars.begin() + static_cast<std::ptrdiff_t>(std::min(first + 64, bars.size())));
+      const std::vector<BarPlacement> block(
+          bars.begin() + static_cast<std::ptrdiff_t>(first),
+          bars.begin() + static_cast<std::ptrdiff_t>(std::min(first + 64, bars.size())));
       const std::vector<PlannedCase> direct = planner.Solve(block);
       const std::vector<PlannedCase> fast = planner.Deform(block);
       for (std::size_t k = 0; k < block.size(); ++k) {
         worst = std::max({worst, (direct[k].bone - fast[k].bone).cwiseAbs().maxCoeff(),
                           (direct[k].skin - fast[k].skin).cwiseAbs().maxCoeff()});
         for (std::size_t l = 0; l < direct[k].skin_landmarks.size(); ++l) {
-          worst = std::max(worst, (direct[k].skin_landmarks.items[l].position -
-                                   fast[k].skin_landmarks.items[l].position)
-                                      .cwiseAbs()
-                                      .maxCoeff());
+          worst = std::max(
+              worst, (direct[k].skin_landmarks.items[l].position - fast[k].skin_landmarks.items[l].position)
+                         .cwiseAbs()
+                         .maxCoeff());
         }
         worst_lift = std::max(worst_lift,
                               std::abs(direct[k].figures.sternum_lift_mm - fast[k].figures.sternum_lift_mm));
@@ -342,7 +366,8 @@ class SurrogateCommand : public Command {
     for (int k = 0; k < evaluations_; ++k) {
       const PectusPlannerBar bar = {level(rng), 0, force(rng)};
       auto t0 = Clock::now();
-      const std::int32_t code = api.deform(deformer, &bar, bone.data(), skin.data(), nullptr, nullptr, &status);
+      const std::int32_t code =
+          api.deform(deformer, &bar, bone.data(), skin.data(), nullptr, nullptr, &status);
       auto t1 = Clock::now();
       ThrowIfFailed(code, status);
       double f = 0.0;
@@ -371,7 +396,7 @@ class SurrogateCommand : public Command {
   CLI::App* check_ = nullptr;
   CLI::App* evaluate_ = nullptr;
   std::string table_, patients_ = "57", evaluate_patients_ = "all", plugin_path_, output_, inputs_ = "map",
-      scale_ = "lift";
+                      scale_ = "lift";
   int components_ = 20;
   double explained_ = 0.9999;
   bool learn_skin_ = false;

@@ -163,21 +163,21 @@ typedef struct PectusPlannerBasisOptions {
 
 /** What build_basis() built. */
 typedef struct PectusPlannerBasisSummary {
-  int64_t rank;                     /**< modes kept */
-  int64_t contact_nodes;            /**< mesh nodes of the sternum's back the bar can load */
-  int64_t points;                   /**< outputs: bone vertices + skin vertices + skin landmarks */
-  int64_t bytes;                    /**< held by the basis */
-  double truncation_bound_mm;       /**< the compression's bound at max_force_n, mm */
-  double seconds;                   /**< wall time of the build */
+  int64_t rank;               /**< modes kept */
+  int64_t contact_nodes;      /**< mesh nodes of the sternum's back the bar can load */
+  int64_t points;             /**< outputs: bone vertices + skin vertices + skin landmarks */
+  int64_t bytes;              /**< held by the basis */
+  double truncation_bound_mm; /**< the compression's bound at max_force_n, mm */
+  double seconds;             /**< wall time of the build */
 } PectusPlannerBasisSummary;
 
 /** How evaluate_emulator() runs (fill with zeros for the defaults; docs/planner.md, "The emulator"). */
 typedef struct PectusPlannerEmulatorOptions {
-  int32_t inputs;            /**< 0 the fitted patient map (default), 1 the CT measurements, 2 the same with
-                                  log lengths, 3 both 2 and 0 */
-  int32_t scale;             /**< divided out before the components: 0 sternal lift (default), 1 norm, 2 none */
-  int32_t max_components;    /**< principal components per position at most; 0: 20 */
-  int32_t learn_skin;        /**< 1: learn the skin grid directly instead of the mesh's boundary nodes */
+  int32_t inputs;         /**< 0 the fitted patient map (default), 1 the CT measurements, 2 the same with
+                               log lengths, 3 both 2 and 0 */
+  int32_t scale;          /**< divided out before the components: 0 sternal lift (default), 1 norm, 2 none */
+  int32_t max_components; /**< principal components per position at most; 0: 20 */
+  int32_t learn_skin;     /**< 1: learn the skin grid directly instead of the mesh's boundary nodes */
   double explained_fraction; /**< components kept to this fraction of the variance; 0: 0.9999 */
 } PectusPlannerEmulatorOptions;
 
@@ -199,8 +199,8 @@ typedef struct PectusPlannerEmulatorPatient {
   char id[64];
   char nearest_patient[64]; /**< the nearest-patient baseline's choice */
   PectusPlannerEmulatorFigures emulator;
-  double fit_seconds;       /**< the emulator's fit on the other patients */
-  double components_mean;   /**< principal components kept, mean over the positions */
+  double fit_seconds;     /**< the emulator's fit on the other patients */
+  double components_mean; /**< principal components kept, mean over the positions */
 } PectusPlannerEmulatorPatient;
 
 /** What evaluate_emulator() measured. */
@@ -314,7 +314,8 @@ typedef struct PectusPlannerInterface {
    *  mean-response baselines on the same folds. Minutes for 62 patients. `per_patient` (may be NULL)
    *  receives at most `capacity` patients, in the table's order. `progress` counts the FE solves and
    *  then the folds (2 per patient). */
-  int32_t (*evaluate_emulator)(const char* table_path, const char* patients, const PectusPlannerOptions* options,
+  int32_t (*evaluate_emulator)(const char* table_path, const char* patients,
+                               const PectusPlannerOptions* options,
                                const PectusPlannerEmulatorOptions* emulator, PectusPlannerProgressFn progress,
                                void* progress_user, PectusPlannerEmulatorEvaluation* out,
                                PectusPlannerEmulatorPatient* per_patient, int64_t capacity,

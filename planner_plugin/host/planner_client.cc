@@ -213,20 +213,20 @@ PectusPlannerDatasetSummary WritePlannerDataset(
   return summary;
 }
 
-EmulatorEvaluationReport EvaluatePlannerEmulator(const PlannerPlugin& plugin, const std::filesystem::path& table,
-                                                 const std::string& patients, const PectusPlannerOptions& options,
-                                                 const PectusPlannerEmulatorOptions& emulator,
-                                                 const std::function<void(std::int64_t, std::int64_t)>& progress) {
+EmulatorEvaluationReport EvaluatePlannerEmulator(
+    const PlannerPlugin& plugin, const std::filesystem::path& table, const std::string& patients,
+    const PectusPlannerOptions& options, const PectusPlannerEmulatorOptions& emulator,
+    const std::function<void(std::int64_t, std::int64_t)>& progress) {
   EmulatorEvaluationReport report;
   report.patients.resize(ReadPatientTable(table).size());  // at most every row of the table
   PectusPlannerStatus status{};
-  ThrowIfFailed(plugin.api().evaluate_emulator(table.c_str(), patients.empty() ? nullptr : patients.c_str(),
-                                               &options, &emulator, ProgressTrampoline, ProgressUser(progress),
-                                               &report.summary, report.patients.data(),
-                                               static_cast<std::int64_t>(report.patients.size()), &status),
+  ThrowIfFailed(plugin.api().evaluate_emulator(
+                    table.c_str(), patients.empty() ? nullptr : patients.c_str(), &options, &emulator,
+                    ProgressTrampoline, ProgressUser(progress), &report.summary, report.patients.data(),
+                    static_cast<std::int64_t>(report.patients.size()), &status),
                 status);
-  report.patients.resize(static_cast<std::size_t>(std::min<std::int64_t>(
-      report.summary.patients, static_cast<std::int64_t>(report.patients.size()))));
+  report.patients.resize(static_cast<std::size_t>(
+      std::min<std::int64_t>(report.summary.patients, static_cast<std::int64_t>(report.patients.size()))));
   return report;
 }
 

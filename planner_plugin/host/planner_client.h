@@ -128,9 +128,9 @@ struct EmulatorEvaluationReport {
 
 /// Evaluates the emulator on `patients` of `table` (ids separated by commas; empty: all); `progress(done,
 /// total)` counts the FE solves, then the folds.
-EmulatorEvaluationReport EvaluatePlannerEmulator(const PlannerPlugin& plugin, const std::filesystem::path& table,
-                                                 const std::string& patients, const PectusPlannerOptions& options,
-                                                 const PectusPlannerEmulatorOptions& emulator,
-                                                 const std::function<void(std::int64_t, std::int64_t)>& progress);
+EmulatorEvaluationReport EvaluatePlannerEmulator(
+    const PlannerPlugin& plugin, const std::filesystem::path& table, const std::string& patients,
+    const PectusPlannerOptions& options, const PectusPlannerEmulatorOptions& emulator,
+    const std::function<void(std::int64_t, std::int64_t)>& progress);
 
 }  // namespace pectus::planner

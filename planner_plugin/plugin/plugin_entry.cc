@@ -11,8 +11,8 @@
 #include <string>
 
 #include "planner_plugin/api/planner_api.h"
-#include "planner_plugin/plugin/planner_session.h"
 #include "planner_plugin/io/fem_dataset_h5.h"
+#include "planner_plugin/plugin/planner_session.h"
 #include "planner_plugin/plugin/run_fem_dataset.h"
 #include "planner_plugin/surrogate/emulator_evaluation.h"
 #include "shape/core/error.h"
@@ -182,8 +182,8 @@ PectusPlannerBasisSummary SummaryOf(const pectus::planner::BarResponseBasis& bas
 
 std::int32_t WriteDataset(const char* table_path, const char* output_path,
                           const PectusPlannerOptions* options, const PectusPlannerBasisOptions* basis,
-                          PectusPlannerProgressFn progress, void* progress_user, PectusPlannerDatasetSummary* out,
-                          PectusPlannerStatus* status) {
+                          PectusPlannerProgressFn progress, void* progress_user,
+                          PectusPlannerDatasetSummary* out, PectusPlannerStatus* status) {
   return Guard(status, [&] {
     Require(table_path, "table_path");
     Require(output_path, "output_path");
@@ -218,7 +218,8 @@ std::int32_t LoadBasis(PectusPlanner* planner, const char* dataset_path, PectusP
     Require(dataset_path, "dataset_path");
     const auto start = std::chrono::steady_clock::now();
     planner->session.LoadBasis(
-        pectus::planner::ReadStoredResponseBasis(dataset_path, planner->session.ribcage().patient), dataset_path);
+        pectus::planner::ReadStoredResponseBasis(dataset_path, planner->session.ribcage().patient),
+        dataset_path);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const pectus::planner::BarResponseBasis& basis = *planner->session.basis();
     // The force the tolerance was stated for is not stored; the bound is given per 2000 N, the default.
@@ -262,10 +263,11 @@ pectus::planner::BarLoad LoadOf(const PectusPlannerBar& bar) noexcept {
 std::int32_t Deform(PectusPlannerDeformer* deformer, const PectusPlannerBar* bar, double* bone_positions,
                     double* skin_positions, double* skin_landmarks, double* sternum_lift_mm,
                     PectusPlannerStatus* status) noexcept {
-  if (deformer == nullptr || bar == nullptr) return RealTimeFailure(status, "deformer and bar must not be NULL");
+  if (deformer == nullptr || bar == nullptr)
+    return RealTimeFailure(status, "deformer and bar must not be NULL");
   const char* why = "";
-  if (!deformer->deformer.Deform(LoadOf(*bar), bone_positions, skin_positions, skin_landmarks, sternum_lift_mm,
-                                 &why)) {
+  if (!deformer->deformer.Deform(LoadOf(*bar), bone_positions, skin_positions, skin_landmarks,
+                                 sternum_lift_mm, &why)) {
     return RealTimeFailure(status, why);
   }
   return RealTimeOk(status);
@@ -307,7 +309,8 @@ PectusPlannerEmulatorFigures FiguresOf(const pectus::planner::EmulatorErrors& er
           s.worst_lift_patient};
 }
 
-std::int32_t EvaluateEmulator(const char* table_path, const char* patients, const PectusPlannerOptions* options,
+std::int32_t EvaluateEmulator(const char* table_path, const char* patients,
+                              const PectusPlannerOptions* options,
                               const PectusPlannerEmulatorOptions* emulator, PectusPlannerProgressFn progress,
                               void* progress_user, PectusPlannerEmulatorEvaluation* out,
                               PectusPlannerEmulatorPatient* per_patient, std::int64_t capacity,
@@ -323,8 +326,8 @@ std::int32_t EvaluateEmulator(const char* table_path, const char* patients, cons
     if (e.max_components < 0) pectus::ThrowUsage("planner: emulator max_components must not be negative");
     evaluation.inputs = std::array{EmulatorInputs::kMapLog, EmulatorInputs::kCt, EmulatorInputs::kCtLog,
                                    EmulatorInputs::kCtLogMapLog}[static_cast<std::size_t>(e.inputs)];
-    evaluation.emulator.scale =
-        std::array{ResponseScale::kLift, ResponseScale::kNorm, ResponseScale::kNone}[static_cast<std::size_t>(e.scale)];
+    evaluation.emulator.scale = std::array{ResponseScale::kLift, ResponseScale::kNorm,
+                                           ResponseScale::kNone}[static_cast<std::size_t>(e.scale)];
     if (e.max_components > 0) evaluation.emulator.max_components = e.max_components;
     if (e.explained_fraction != 0) evaluation.emulator.explained_fraction = e.explained_fraction;
     evaluation.through_boundary_nodes = e.learn_skin == 0;
@@ -342,7 +345,8 @@ std::int32_t EvaluateEmulator(const char* table_path, const char* patients, cons
         if (!id.empty()) named.push_back(pectus::FindPatient(rows, std::string_view(id), table_path).patient);
         from = comma + 1;
       }
-      if (named.empty()) pectus::ThrowUsage(std::string("planner: patients '") + patients + "' names no patient");
+      if (named.empty())
+        pectus::ThrowUsage(std::string("planner: patients '") + patients + "' names no patient");
       std::sort(named.begin(), named.end());
       if (std::adjacent_find(named.begin(), named.end()) != named.end()) {
         pectus::ThrowUsage(std::string("planner: patients '") + patients + "' names a patient twice");
@@ -353,7 +357,8 @@ std::int32_t EvaluateEmulator(const char* table_path, const char* patients, cons
     }
     const auto n = static_cast<std::int64_t>(rows.size());
     if (n < EmulatorEvaluationMinimumPatients(evaluation)) {
-      pectus::ThrowUsage("planner: " + std::to_string(n) + " patients; leaving one out with these inputs needs at least " +
+      pectus::ThrowUsage("planner: " + std::to_string(n) +
+                         " patients; leaving one out with these inputs needs at least " +
                          std::to_string(EmulatorEvaluationMinimumPatients(evaluation)));
     }
     EmulatorTrainingSetOptions training;
@@ -364,8 +369,8 @@ std::int32_t EvaluateEmulator(const char* table_path, const char* patients, cons
     };
     const EmulatorTrainingSet set =
         BuildEmulatorTrainingSet(rows, training, [&](std::int64_t done, std::int64_t) { report(done); });
-    const EmulatorEvaluation result =
-        EvaluateEmulatorLeaveOneOut(set, evaluation, [&](std::int64_t done, std::int64_t) { report(n + done); });
+    const EmulatorEvaluation result = EvaluateEmulatorLeaveOneOut(
+        set, evaluation, [&](std::int64_t done, std::int64_t) { report(n + done); });
     if (out != nullptr) {
       *out = {n,
               set.num_positions(),
@@ -388,7 +393,8 @@ std::int32_t EvaluateEmulator(const char* table_path, const char* patients, cons
         p.fit_seconds = fold.fit_seconds;
         double components = 0;
         for (int c : fold.components) components += c;
-        p.components_mean = fold.components.empty() ? 0.0 : components / static_cast<double>(fold.components.size());
+        p.components_mean =
+            fold.components.empty() ? 0.0 : components / static_cast<double>(fold.components.size());
       }
     }
   });

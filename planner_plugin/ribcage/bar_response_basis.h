@@ -63,10 +63,10 @@ class BarResponseBasis {
   /// the quadrature of the sternum's back. What evaluation derives from them (panels, prefix sums) is
   /// recomputed on loading.
   struct Stored {
-    Eigen::Index num_points = 0;          ///< output points (3 #points rows of `modes`)
-    double contact_width_mm = 0.0;        ///< the bar's contact width (RibcageFemOptions)
-    double notch_z_mm = 0.0;              ///< height of the sternal notch (bar positions are measured from it)
-    double sternal_length_mm = 0.0;       ///< for bar positions given as fractions
+    Eigen::Index num_points = 0;     ///< output points (3 #points rows of `modes`)
+    double contact_width_mm = 0.0;   ///< the bar's contact width (RibcageFemOptions)
+    double notch_z_mm = 0.0;         ///< height of the sternal notch (bar positions are measured from it)
+    double sternal_length_mm = 0.0;  ///< for bar positions given as fractions
     double truncation_bound_mm_per_n = 0.0;
     std::vector<std::int32_t> contact_nodes;  ///< #contact nodes: mesh nodes of the sternum's back
     Eigen::VectorXd quadrature_z;             ///< #quadrature points, ascending, mm
@@ -152,12 +152,12 @@ class BarResponseBasis {
   static constexpr int kPanel = 8;
   std::vector<float> panels_;
   Eigen::Index rows_ = 0, rank_ = 0;
-  Eigen::VectorXd lift_;  // per contact node: sternal lift per newton (exact, uncompressed)
+  Eigen::VectorXd lift_;    // per contact node: sternal lift per newton (exact, uncompressed)
   Eigen::MatrixXd mixing_;  // rank by #contact nodes (kept to store the basis)
   // Packs the modes into panels_ and the prefix sums from quadrature_, mixing_ and lift_.
   template <typename Modes>
   void Pack(const Modes& modes);
-  Eigen::VectorXd z_;     // the quadrature points' heights, ascending
+  Eigen::VectorXd z_;  // the quadrature points' heights, ascending
   // Prefix sums over the quadrature points (index q + 1: points 0..q), plain, times cos, times sin.
   Eigen::VectorXd prefix_area_[3], prefix_lift_[3];
   Eigen::MatrixXd prefix_mixing_[3];  // r by #quadrature points + 1

@@ -66,18 +66,22 @@ Eigen::MatrixXd EmulatorInputMatrix(const EmulatorTrainingSet& set, EmulatorInpu
   }
   if (kind == EmulatorInputs::kMapLog || kind == EmulatorInputs::kCtLogMapLog) {
     if (set.model_inputs.rows() != n || set.model_inputs.cols() < 4)
-      ThrowBadInput("emulator training set", "emulator inputs: the training set holds no fitted-map measurements");
+      ThrowBadInput("emulator training set",
+                    "emulator inputs: the training set holds no fitted-map measurements");
     for (int c = 0; c < 3; ++c)
-      add(set.model_inputs.col(c).array().log().matrix(), "log_" + kModelInputNames[static_cast<std::size_t>(c)]);
+      add(set.model_inputs.col(c).array().log().matrix(),
+          "log_" + kModelInputNames[static_cast<std::size_t>(c)]);
     add(set.model_inputs.col(3), kModelInputNames[3]);
   }
-  if (!inputs.allFinite()) ThrowBadInput("emulator training set", "emulator inputs: a patient's measurement is not finite or not positive");
+  if (!inputs.allFinite())
+    ThrowBadInput("emulator training set",
+                  "emulator inputs: a patient's measurement is not finite or not positive");
   if (names != nullptr) *names = std::move(local);
   return inputs;
 }
 
-void EmulatorErrors::Add(const Eigen::VectorXd& predicted, const Eigen::VectorXd& fe, const Eigen::VectorXd& sd,
-                         double lift_predicted, double lift_fe, int patient) {
+void EmulatorErrors::Add(const Eigen::VectorXd& predicted, const Eigen::VectorXd& fe,
+                         const Eigen::VectorXd& sd, double lift_predicted, double lift_fe, int patient) {
   if (predicted.size() != fe.size() || fe.size() % 3 != 0 || (sd.size() != 0 && sd.size() != fe.size()))
     ThrowUsage("emulator errors: predicted, FE and deviation vectors of different sizes");
   const Eigen::VectorXd e = predicted - fe;
@@ -153,8 +157,8 @@ bool EmulatorEvaluationOptions::IsValid(std::string* why) const {
     if (why) *why = "emulator: " + reason;
     return false;
   }
-  if (forces.empty() || !std::all_of(forces.begin(), forces.end(),
-                                     [](double f) { return std::isfinite(f) && f > 0; })) {
+  if (forces.empty() ||
+      !std::all_of(forces.begin(), forces.end(), [](double f) { return std::isfinite(f) && f > 0; })) {
     if (why) *why = "forces must be one or more finite values > 0 N";
     return false;
   }
@@ -166,12 +170,13 @@ Eigen::Index EmulatorEvaluationMinimumPatients(const EmulatorEvaluationOptions& 
                          : options.inputs == EmulatorInputs::kCtLogMapLog ? 10
                                                                           : 6;
   // A linear mean has p + 1 terms and a process needs two points more than its mean has terms.
-  return 1 + std::max<Eigen::Index>(options.emulator.min_patients, options.emulator.gp.linear_mean ? p + 3 : 3);
+  return 1 +
+         std::max<Eigen::Index>(options.emulator.min_patients, options.emulator.gp.linear_mean ? p + 3 : 3);
 }
 
-EmulatorEvaluation EvaluateEmulatorLeaveOneOut(const EmulatorTrainingSet& set,
-                                               const EmulatorEvaluationOptions& options,
-                                               const std::function<void(std::int64_t, std::int64_t)>& progress) {
+EmulatorEvaluation EvaluateEmulatorLeaveOneOut(
+    const EmulatorTrainingSet& set, const EmulatorEvaluationOptions& options,
+    const std::function<void(std::int64_t, std::int64_t)>& progress) {
   const auto start = Clock::now();
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage("emulator evaluation: " + why);
@@ -187,7 +192,8 @@ EmulatorEvaluation EvaluateEmulatorLeaveOneOut(const EmulatorTrainingSet& set,
   const bool nodes = options.through_boundary_nodes;
   if (nodes && (set.boundary_nodes.empty() || set.skin_ties.size() != static_cast<std::size_t>(n) ||
                 set.lift_ties.size() != static_cast<std::size_t>(n))) {
-    ThrowBadInput("emulator training set", "emulator evaluation: it holds no boundary nodes and ties (build it with "
+    ThrowBadInput("emulator training set",
+                  "emulator evaluation: it holds no boundary nodes and ties (build it with "
                   "boundary nodes, or learn the skin directly)");
   }
   result.folds.resize(static_cast<std::size_t>(n));
@@ -262,7 +268,8 @@ EmulatorEvaluation EvaluateEmulatorLeaveOneOut(const EmulatorTrainingSet& set,
   Eigen::setNbThreads(eigen_threads);
   for (Eigen::Index out = 0; out < n; ++out) {
     const auto o = static_cast<std::size_t>(out);
-    if (!errors[o].empty()) ThrowFailure("emulator evaluation: patient " + set.patients[o] + " left out: " + errors[o]);
+    if (!errors[o].empty())
+      ThrowFailure("emulator evaluation: patient " + set.patients[o] + " left out: " + errors[o]);
     result.emulator.Merge(result.folds[o].emulator);
     result.nearest.Merge(result.folds[o].nearest);
     result.mean.Merge(result.folds[o].mean);

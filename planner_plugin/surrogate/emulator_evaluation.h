@@ -112,7 +112,7 @@ struct EmulatorFold {
 /// The whole evaluation.
 struct EmulatorEvaluation {
   std::vector<std::string> input_names;
-  std::vector<EmulatorFold> folds;     ///< one per patient, in the set's order
+  std::vector<EmulatorFold> folds;         ///< one per patient, in the set's order
   EmulatorErrors emulator, nearest, mean;  ///< every fold's cases together
   double seconds = 0;
 };

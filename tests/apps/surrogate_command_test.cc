@@ -63,7 +63,8 @@ TEST(SurrogateCommand, BuildStoresTheBasesAndPlanTakesThePatientsOwn) {
   fs::create_directories(dir);
   std::ofstream(dir / "one.csv") << "patient,haller_index,width_mm,sternal_length_mm,depth_mm,depression_mm\n"
                                     "57,6.5,231,168,123,21\n";
-  const std::string table = "'" + (dir / "one.csv").string() + "'", bases = "'" + (dir / "bases.h5").string() + "'";
+  const std::string table = "'" + (dir / "one.csv").string() + "'",
+                    bases = "'" + (dir / "bases.h5").string() + "'";
   const auto build = Pectus("surrogate build --patient-table " + table + " -o " + bases +
                             " --cell-mm 10 --threads 1 --report '" + (dir / "b.json").string() + "'");
   ASSERT_EQ(build.code, 0) << build.output;
@@ -73,24 +74,28 @@ TEST(SurrogateCommand, BuildStoresTheBasesAndPlanTakesThePatientsOwn) {
   EXPECT_GT(b["dataset"]["megabytes"].get<double>(), 0.5);
   // The average chest for the plan: the analytic grid.
   planner::testing::WriteAverageModel(dir / "average.h5", planner::testing::AnalyticChestGrid(31, 41));
-  const std::string plan = "plan --patient-table " + table + " --patient 57 --model '" + (dir / "average.h5").string() +
+  const std::string plan = "plan --patient-table " + table + " --patient 57 --model '" +
+                           (dir / "average.h5").string() +
                            "' --bar-position 0.85 --force 300 --search-positions 3 --search-forces 4 "
                            "--search-refinements 2 --threads 1";
   const auto own = Pectus(plan + " --cell-mm 10 --out '" + (dir / "own").string() + "' --report '" +
                           (dir / "own.json").string() + "'");
   ASSERT_EQ(own.code, 0) << own.output;
-  const auto stored = Pectus(plan + " --cell-mm 10 --basis " + bases + " --out '" + (dir / "stored").string() +
-                             "' --report '" + (dir / "stored.json").string() + "'");
+  const auto stored =
+      Pectus(plan + " --cell-mm 10 --basis " + bases + " --out '" + (dir / "stored").string() +
+             "' --report '" + (dir / "stored.json").string() + "'");
   ASSERT_EQ(stored.code, 0) << stored.output;
   std::ifstream own_in(dir / "own.json"), stored_in(dir / "stored.json");
   const nlohmann::json o = nlohmann::json::parse(own_in), t = nlohmann::json::parse(stored_in);
   EXPECT_EQ(o["response_basis"]["from"], "built");
   EXPECT_NE(t["response_basis"]["from"].get<std::string>().find("bases.h5"), std::string::npos);
-  EXPECT_NEAR(t["search"]["best"]["objective_mm"].get<double>(), o["search"]["best"]["objective_mm"].get<double>(),
-              0.01);
-  EXPECT_NEAR(t["search"]["best"]["position"].get<double>(), o["search"]["best"]["position"].get<double>(), 1e-3);
+  EXPECT_NEAR(t["search"]["best"]["objective_mm"].get<double>(),
+              o["search"]["best"]["objective_mm"].get<double>(), 0.01);
+  EXPECT_NEAR(t["search"]["best"]["position"].get<double>(), o["search"]["best"]["position"].get<double>(),
+              1e-3);
   // A planner of another mesh (12 mm cells) refuses the 10 mm basis, naming the file.
-  const auto other = Pectus(plan + " --cell-mm 12 --basis " + bases + " --out '" + (dir / "other").string() + "'");
+  const auto other =
+      Pectus(plan + " --cell-mm 12 --basis " + bases + " --out '" + (dir / "other").string() + "'");
   EXPECT_EQ(other.code, 3) << other.output;
   EXPECT_NE(other.output.find("bases.h5"), std::string::npos) << other.output;
   EXPECT_NE(other.output.find("another planner"), std::string::npos) << other.output;
@@ -104,10 +109,12 @@ TEST(SurrogateCommand, BuildStoresTheBasesAndPlanTakesThePatientsOwn) {
 // before any FE work.
 TEST(SurrogateCommand, EvaluateLeavesEachPatientOutAndBeatsTheBaselines) {
   PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
-  const fs::path dir = fs::temp_directory_path() / ("pectus_surrogate_evaluate_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("pectus_surrogate_evaluate_" + std::to_string(::getpid()));
   fs::create_directories(dir);
-  const auto run = Pectus("surrogate evaluate --patient-table '" + kTable +
-                          "' --patients 8,7,6,5,4,3,2,1 --cell-mm 20 --report '" + (dir / "e.json").string() + "'");
+  const auto run =
+      Pectus("surrogate evaluate --patient-table '" + kTable +
+             "' --patients 8,7,6,5,4,3,2,1 --cell-mm 20 --report '" + (dir / "e.json").string() + "'");
   ASSERT_EQ(run.code, 0) << run.output;
   EXPECT_NE(run.output.find("8 patients left out one at a time"), std::string::npos) << run.output;
   std::ifstream in(dir / "e.json");

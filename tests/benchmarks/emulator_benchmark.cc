@@ -376,8 +376,8 @@ int main(int argc, char** argv) {
     const Eigen::Index q = set.num_positions();
     EmulatorEvaluationOptions evaluation;
     evaluation.emulator = options;
-    evaluation.inputs = inputs_kind == "ct"       ? EmulatorInputs::kCt
-                        : inputs_kind == "ct-log" ? EmulatorInputs::kCtLog
+    evaluation.inputs = inputs_kind == "ct"        ? EmulatorInputs::kCt
+                        : inputs_kind == "ct-log"  ? EmulatorInputs::kCtLog
                         : inputs_kind == "map-log" ? EmulatorInputs::kMapLog
                                                    : EmulatorInputs::kCtLogMapLog;
     evaluation.through_boundary_nodes = target == "nodes";
@@ -392,8 +392,8 @@ int main(int argc, char** argv) {
     EmulatorEvaluation loo;
     if (!split_only) {
       loo = EvaluateEmulatorLeaveOneOut(set, evaluation, [&](std::int64_t done, std::int64_t total) {
-        std::fprintf(stderr, "emulator_benchmark: %lld / %lld patients left out\n", static_cast<long long>(done),
-                     static_cast<long long>(total));
+        std::fprintf(stderr, "emulator_benchmark: %lld / %lld patients left out\n",
+                     static_cast<long long>(done), static_cast<long long>(total));
       });
     }
     nlohmann::json per_patient = nlohmann::json::array();
@@ -438,7 +438,8 @@ int main(int argc, char** argv) {
       for (int c : fold.components) components.push_back(c);
       nlohmann::json pj = Json(fold.emulator);
       pj["patient"] = fold.patient;
-      pj["lift_per_newton_fe"] = std::vector<double>(fold.lift_per_newton_fe.begin(), fold.lift_per_newton_fe.end());
+      pj["lift_per_newton_fe"] =
+          std::vector<double>(fold.lift_per_newton_fe.begin(), fold.lift_per_newton_fe.end());
       pj["lift_per_newton_emulator"] =
           std::vector<double>(fold.lift_per_newton_emulator.begin(), fold.lift_per_newton_emulator.end());
       pj["lift_per_newton_process"] =
@@ -477,7 +478,8 @@ int main(int argc, char** argv) {
           {"cases", errors.size()},
           {"mean", Mean(errors)},
           {"max", Max(errors)},
-          {"fraction_le_1mm", errors.empty() ? 0.0 : static_cast<double>(within) / static_cast<double>(errors.size())}};
+          {"fraction_le_1mm",
+           errors.empty() ? 0.0 : static_cast<double>(within) / static_cast<double>(errors.size())}};
     }
     methods["emulator_loo"]["components_mean"] = Mean(components);
     methods["nearest_patient_loo"] = Json(loo.nearest);

@@ -39,7 +39,8 @@ TEST(PlannerPluginLoader, RefusesAPluginOfAnotherVersionNamingBoth) {
   const auto [kind, message] = Failure([] { PlannerPlugin::Load(PECTUS_PLANNER_FAKE_V1_PATH); });
   EXPECT_EQ(kind, ErrorKind::kBadInput);
   EXPECT_NE(message.find("interface version 1"), std::string::npos) << message;
-  EXPECT_NE(message.find("needs version " + std::to_string(PECTUS_PLANNER_INTERFACE_VERSION)), std::string::npos)
+  EXPECT_NE(message.find("needs version " + std::to_string(PECTUS_PLANNER_INTERFACE_VERSION)),
+            std::string::npos)
       << message;
   EXPECT_NE(message.find("older"), std::string::npos) << message;
   EXPECT_NE(message.find(fs::path(PECTUS_PLANNER_FAKE_V1_PATH).filename().string()), std::string::npos)

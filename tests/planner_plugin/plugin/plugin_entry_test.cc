@@ -131,8 +131,8 @@ TEST_F(PluginEntry, FailuresComeBackAsStatusesNamingWhatIsWrong) {
   std::memset(unterminated.id, 'x', sizeof(unterminated.id));
   EXPECT_EQ(api_->create(&unterminated, nullptr, &planner, &status), PECTUS_PLANNER_BAD_INPUT);
   // A dataset that cannot be written is a failure, and nothing is left behind.
-  EXPECT_EQ(api_->write_dataset("/nonexistent/table.csv", "/tmp/pectus_never.h5", nullptr, nullptr, nullptr, nullptr,
-                                nullptr, &status),
+  EXPECT_EQ(api_->write_dataset("/nonexistent/table.csv", "/tmp/pectus_never.h5", nullptr, nullptr, nullptr,
+                                nullptr, nullptr, &status),
             PECTUS_PLANNER_BAD_INPUT);
   EXPECT_FALSE(std::filesystem::exists("/tmp/pectus_never.h5"));
 }
@@ -239,11 +239,12 @@ TEST_F(PluginEntry, TheDeformCallGivesTheSolvesAnswerInRealTime) {
 #endif
 
   const PectusPlannerBar bars[3] = {{0.62, 0, 80.0}, {0.77, 0, 450.0}, {131.0, 1, 1700.0}};
-  const auto nb = static_cast<std::size_t>(bone.num_vertices), ns = static_cast<std::size_t>(skin.num_vertices);
+  const auto nb = static_cast<std::size_t>(bone.num_vertices),
+             ns = static_cast<std::size_t>(skin.num_vertices);
   std::vector<double> bone_direct(3 * 3 * nb), skin_direct(3 * 3 * ns), marks_direct(3 * 5 * 3);
   PectusPlannerCaseResult results[3];
-  ASSERT_EQ(api_->solve(planner, bars, 3, bone_direct.data(), skin_direct.data(), marks_direct.data(), results,
-                        &status),
+  ASSERT_EQ(api_->solve(planner, bars, 3, bone_direct.data(), skin_direct.data(), marks_direct.data(),
+                        results, &status),
             PECTUS_PLANNER_OK)
       << status.message;
   std::vector<double> bone_fast(3 * nb), skin_fast(3 * ns), marks_fast(5 * 3);
@@ -260,16 +261,19 @@ TEST_F(PluginEntry, TheDeformCallGivesTheSolvesAnswerInRealTime) {
 #ifdef PECTUS_COUNT_ALLOCATIONS
     EXPECT_EQ(pectus::testing_support::AllocationCount(), before) << "the deform call allocated";
 #endif
-    for (std::size_t i = 0; i < 3 * nb; ++i) worst = std::max(worst, std::abs(bone_fast[i] - bone_direct[3 * nb * k + i]));
-    for (std::size_t i = 0; i < 3 * ns; ++i) worst = std::max(worst, std::abs(skin_fast[i] - skin_direct[3 * ns * k + i]));
-    for (std::size_t i = 0; i < 15; ++i) worst = std::max(worst, std::abs(marks_fast[i] - marks_direct[15 * k + i]));
+    for (std::size_t i = 0; i < 3 * nb; ++i)
+      worst = std::max(worst, std::abs(bone_fast[i] - bone_direct[3 * nb * k + i]));
+    for (std::size_t i = 0; i < 3 * ns; ++i)
+      worst = std::max(worst, std::abs(skin_fast[i] - skin_direct[3 * ns * k + i]));
+    for (std::size_t i = 0; i < 15; ++i)
+      worst = std::max(worst, std::abs(marks_fast[i] - marks_direct[15 * k + i]));
     EXPECT_NEAR(lift, results[k].sternum_lift_mm, 1e-3) << "bar " << k;
     // Something moved: the comparison is not of two undeformed chests.
     EXPECT_GT(results[k].max_displacement_mm, 1.0);
   }
   EXPECT_LT(worst, 0.01);
-  std::printf("deform vs solve: largest difference %.2e mm over bone, skin and landmarks (rank %lld)\n", worst,
-              static_cast<long long>(summary.rank));
+  std::printf("deform vs solve: largest difference %.2e mm over bone, skin and landmarks (rank %lld)\n",
+              worst, static_cast<long long>(summary.rank));
   // The force for a lift: what force_to_lift() finds for the depression.
   PectusPlannerForceToLift to_lift{};
   ASSERT_EQ(api_->force_to_lift(planner, &bars[1], 1, &to_lift, &status), PECTUS_PLANNER_OK);
@@ -281,12 +285,15 @@ TEST_F(PluginEntry, TheDeformCallGivesTheSolvesAnswerInRealTime) {
   // Off the sternum, or a bad force: a status with the reason, the outputs untouched.
   const PectusPlannerBar off = {1.4, 0, 100.0}, bad = {0.8, 0, std::nan("")};
   std::vector<double> untouched(3 * ns, -7.0);
-  EXPECT_EQ(api_->deform(deformer, &off, nullptr, untouched.data(), nullptr, nullptr, &status), PECTUS_PLANNER_USAGE);
+  EXPECT_EQ(api_->deform(deformer, &off, nullptr, untouched.data(), nullptr, nullptr, &status),
+            PECTUS_PLANNER_USAGE);
   EXPECT_NE(std::string(status.message).find("off the sternum"), std::string::npos) << status.message;
-  EXPECT_EQ(api_->deform(deformer, &bad, nullptr, untouched.data(), nullptr, nullptr, nullptr), PECTUS_PLANNER_USAGE);
+  EXPECT_EQ(api_->deform(deformer, &bad, nullptr, untouched.data(), nullptr, nullptr, nullptr),
+            PECTUS_PLANNER_USAGE);
   EXPECT_EQ(api_->lift_force(deformer, &off, 10.0, &force, &status), PECTUS_PLANNER_USAGE);
   EXPECT_TRUE(std::all_of(untouched.begin(), untouched.end(), [](double v) { return v == -7.0; }));
-  EXPECT_EQ(api_->deform(nullptr, &bars[0], nullptr, nullptr, nullptr, nullptr, &status), PECTUS_PLANNER_USAGE);
+  EXPECT_EQ(api_->deform(nullptr, &bars[0], nullptr, nullptr, nullptr, nullptr, &status),
+            PECTUS_PLANNER_USAGE);
   api_->destroy_deformer(deformer);
   api_->destroy_deformer(nullptr);
   api_->destroy(planner);

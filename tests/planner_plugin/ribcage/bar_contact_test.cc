@@ -75,8 +75,8 @@ TEST_F(BarContactTest, AFlatBarTouchesTheSternumFirstAndOnlyPushes) {
       first = i;
   }
   EXPECT_EQ(probe.regions[static_cast<std::size_t>(first)], kSternumRegion)
-      << "the flat bar meets node " << probe.nodes[static_cast<std::size_t>(first)] << " at x = "
-      << patient_->mesh.nodes(probe.nodes[static_cast<std::size_t>(first)], 0) << " mm first";
+      << "the flat bar meets node " << probe.nodes[static_cast<std::size_t>(first)]
+      << " at x = " << patient_->mesh.nodes(probe.nodes[static_cast<std::size_t>(first)], 0) << " mm first";
   for (const double lift : {1.0, 3.0}) {
     BarShape bar = BarShape::Flat(level, MostPosteriorY(probe), kHalfLength);
     bar.lift_mm = lift;

@@ -91,7 +91,8 @@ TEST(SternumSkinning, PointsOfFullWeightMoveRigidlyWithTheBone) {
   const SternumSkinning s = StraightSternum();
   const double depression = 21.0, torsion = 0.2;
   // Points of weight 1 (the lower sternum) move by the bone's rigid motion.
-  const std::vector<Eigen::Vector3d> points = {{0, 0, 50}, {-10, -5, 40}, {8, 20, 10}, {0, 10, 0}, {-5, 0, 2}};
+  const std::vector<Eigen::Vector3d> points = {
+      {0, 0, 50}, {-10, -5, 40}, {8, 20, 10}, {0, 10, 0}, {-5, 0, 2}};
   for (const Eigen::Vector3d& p : points) {
     ASSERT_EQ(s.Weight(p), 1.0);
     EXPECT_LT((s.Apply(p, depression, torsion) - Bone(p, depression, torsion)).norm(), 1e-9) << p.transpose();

@@ -79,7 +79,8 @@ EmulatorTrainingSet MakeSet(int n, bool smooth, unsigned seed) {
         const double t = c / 15.0;
         double value = 0.1 + 0.05 * std::sin(3.0 * t + p);
         if (smooth) {
-          const double a = std::log(x(0)) - 0.5 * std::log(x(2)), b = 0.02 * x(3), d = std::log(x(1)) * x(3) / 40.0;
+          const double a = std::log(x(0)) - 0.5 * std::log(x(2)), b = 0.02 * x(3),
+                       d = std::log(x(1)) * x(3) / 40.0;
           value *= 1.0 + a * std::cos(2.0 * t) + b * t * t + 0.5 * d * std::sin(5.0 * t);
         }
         nodes(c) = value;
@@ -115,11 +116,12 @@ TEST(EmulatorEvaluationTest, TheLeftOutPatientsOwnTiesMakeTheEmulatorExact) {
 TEST(EmulatorEvaluationTest, ASmoothFamilyIsPredictedFarBetterThanTheBaselines) {
   const EmulatorTrainingSet set = MakeSet(24, true, 2);
   std::int64_t calls = 0, last = 0;
-  const EmulatorEvaluation e = EvaluateEmulatorLeaveOneOut(set, {}, [&](std::int64_t done, std::int64_t total) {
-    ++calls;
-    last = done;
-    EXPECT_EQ(total, 24);
-  });
+  const EmulatorEvaluation e =
+      EvaluateEmulatorLeaveOneOut(set, {}, [&](std::int64_t done, std::int64_t total) {
+        ++calls;
+        last = done;
+        EXPECT_EQ(total, 24);
+      });
   EXPECT_EQ(calls, 24);
   EXPECT_EQ(last, 24);
   const auto emulator = e.emulator.Summarise(), mean = e.mean.Summarise(), nearest = e.nearest.Summarise();
@@ -141,7 +143,8 @@ TEST(EmulatorEvaluationTest, TheNearestPatientIsTheClosestInStandardisedInputs) 
 }
 
 TEST(EmulatorEvaluationTest, BadSetsAndOptionsAreRefused) {
-  EXPECT_THROW(EvaluateEmulatorLeaveOneOut(MakeSet(7, false, 4)), Error);  // 6 left; 4 inputs and a linear mean need 7
+  EXPECT_THROW(EvaluateEmulatorLeaveOneOut(MakeSet(7, false, 4)),
+               Error);  // 6 left; 4 inputs and a linear mean need 7
   EmulatorTrainingSet no_nodes = MakeSet(8, false, 5);
   no_nodes.boundary_nodes.clear();
   no_nodes.boundary.clear();
