@@ -169,6 +169,7 @@ TrackerAdjustmentResult AdjustPosesToTracker(const std::vector<SweepCorresponden
 
   // 4. Solve and move every sweep by its twist.
   const Eigen::VectorXd xi = A.ldlt().solve(b);
+  result.information = A;
   for (std::size_t sw = 0; sw < n; ++sw) {
     const Eigen::Vector3d w = xi.segment<3>(Eigen::Index(6 * sw));
     const Eigen::Vector3d v = xi.segment<3>(Eigen::Index(6 * sw + 3));

@@ -50,6 +50,10 @@ struct TrackerAdjustmentResult {
   double rms_before_mm = 0.0;    ///< RMS point-to-plane residual of the correspondences at the start
   double robust_scale_mm = 0.0;  ///< sigma of the Cauchy loss (1.4826 MAD of the residuals)
   std::vector<PairConstraintReport> pairs;
+  /// The joint normal matrix of the step (6n x 6n, the pairs' pinned parts and the priors; per sweep a
+  /// twist (rotation rad, translation mm) about the world origin): the information the step had on the
+  /// poses, whose inverse is their covariance under the model.
+  Eigen::MatrixXd information;
 };
 
 /// One Gauss-Newton step of min sum_pairs rho(r / s) + sum_sweeps |e_s|^2 over all poses, r the

@@ -1,5 +1,6 @@
 #include "shape/surface/merge_sweeps.h"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -24,6 +25,48 @@ double Since(Clock::time_point t) { return std::chrono::duration<double>(Clock::
 
 double AngleDeg(const Eigen::Matrix3d& R) {
   return std::acos(std::clamp((R.trace() - 1.0) / 2.0, -1.0, 1.0)) * 180.0 / M_PI;
+}
+
+// The prior's weights of a sweep's twist (rotation rad, translation mm) about its centre.
+Eigen::Matrix<double, 6, 1> PriorWeights(const PosePrior& prior) {
+  const double wr = 1.0 / std::pow(prior.rotation_sd_deg * M_PI / 180.0, 2);
+  const double wt = 1.0 / std::pow(prior.translation_sd_mm, 2);
+  Eigen::Matrix<double, 6, 1> w;
+  w << wr, wr, wr, wt, wt, wt;
+  return w;
+}
+
+// A twist about the origin as a twist about c (the motion of c is v + w x c).
+Eigen::Matrix<double, 6, 6> TwistAboutPoint(const Eigen::Vector3d& c) {
+  Eigen::Matrix<double, 6, 6> m = Eigen::Matrix<double, 6, 6>::Identity();
+  m.block<3, 3>(3, 0) << 0, c.z(), -c.y(), -c.z(), 0, c.x(), c.y(), -c.x(), 0;
+  return m;
+}
+
+// The expected sum over sweeps of the squared correction, in the prior's units, that the data's noise
+// alone puts into the poses: sum_s trace(W C_ss), C = A^-1 H A^-1 with A the tracker step's joint normal
+// matrix (twists about the origin), H = A less the priors' blocks (the data's information). 0 without A.
+double CorrectionNoise(const Eigen::MatrixXd& A, const std::vector<Rigid3>& P,
+                       const std::vector<SweepSurface>& sweeps, const PosePrior& prior) {
+  const Eigen::Index m = A.rows();
+  if (m == 0 || m != Eigen::Index(6 * P.size())) return 0.0;
+  const Eigen::Matrix<double, 6, 1> w = PriorWeights(prior);
+  Eigen::MatrixXd H = A;
+  std::vector<Eigen::Matrix<double, 6, 6>> M(P.size());
+  for (std::size_t s = 0; s < P.size(); ++s) {
+    M[s] = TwistAboutPoint(P[s] * sweeps[s].centroid);
+    H.block<6, 6>(Eigen::Index(6 * s), Eigen::Index(6 * s)) -= M[s].transpose() * w.asDiagonal() * M[s];
+  }
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(A);
+  const Eigen::MatrixXd A_inv = ldlt.solve(Eigen::MatrixXd::Identity(m, m));
+  const Eigen::MatrixXd C = A_inv * H * A_inv;
+  double noise = 0.0;
+  for (std::size_t s = 0; s < P.size(); ++s) {
+    const Eigen::Matrix<double, 6, 6> Cs =
+        M[s] * C.block<6, 6>(Eigen::Index(6 * s), Eigen::Index(6 * s)) * M[s].transpose();
+    noise += (w.asDiagonal() * Cs).trace();
+  }
+  return std::isfinite(noise) ? std::max(0.0, noise) : 0.0;
 }
 
 }  // namespace
@@ -164,6 +207,7 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
     // less than the noise then, and the search is most of a round's cost).
     std::vector<SweepCorrespondence> pairs;
     TrackerAdjustmentOptions adjustment = options.tracker_adjustment;
+    Eigen::MatrixXd information;  // the last tracker step's joint normal matrix
     auto run_rounds = [&](double first_gate, int rounds, bool fixed) {
       double round_gate = first_gate;
       for (int round = 0; round < rounds; ++round) {
@@ -175,6 +219,7 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
           result.global_rms_before_mm = a.rms_before_mm;
           result.global_rms_after_mm = PointToPlaneRms(pairs, P);
           pinned = a.pairs;
+          information = a.information;
         } else {
           const PoseAdjustmentResult a = AdjustPoses(pairs, &P, ao);
           result.global_rms_before_mm = a.rms_before_mm;
@@ -199,11 +244,12 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
     // squared corrections in the prior's units, summed and divided by the number of pinned directions,
     // estimate the square of the factor by which the stated accuracy is off. The prior then holds what
     // the overlaps leave free with the accuracy the tracker showed, and the poses are adjusted again from
-    // where they are: up to three times, while the factor is off 1 by more than 25 % and not clamped.
+    // where they are: up to six times, while the factor is off 1 by more than 25 % and not clamped (an
+    // exact tracker takes four to six fits down to the floor, each about halving it).
     const double stated_deg = prior ? prior->rotation_sd_deg : 0.0;
     const double stated_mm = prior ? prior->translation_sd_mm : 0.0;
     double total = 1.0;
-    for (int fit = 0; prior && options.fit_tracker_accuracy && fit < 3; ++fit) {
+    for (int fit = 0; prior && options.fit_tracker_accuracy && fit < 6; ++fit) {
       double sum = 0.0;
       for (std::size_t s = 0; s < n; ++s) {
         const Eigen::AngleAxisd turned(P[s].linear() * P_start[s].linear().transpose());
@@ -213,7 +259,12 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
       }
       int directions = 0;
       for (const auto& pc : pinned) directions += pc.pinned_directions;
-      const double factor = std::sqrt(sum / std::max(1, directions));
+      // The corrections hold the data's own noise as well as the tracker's error: take off its expected
+      // share, sum_s trace(W C_ss), C = A^-1 H A^-1 the covariance the noise gives the poses (A the last
+      // step's joint normal matrix, H its data part, W the prior's weights), so that exact poses read as
+      // an exact tracker and not as one off by the data's noise (an unbiased moment estimate).
+      const double noise = CorrectionNoise(information, P, sweeps, *prior);
+      const double factor = std::sqrt(std::max(0.0, sum - noise) / std::max(1, directions));
       if (factor > 0.8 && factor < 1.25) break;
       const double next = std::clamp(total * factor, 0.01, 3.0);
       if (next == total) break;

@@ -57,10 +57,12 @@ struct SweepMergeOptions {
   /// tracker_adjustment.min_pinned_ratio or more: no final rounds (docs/benchmarks/merge.md).
   double final_min_pinned_ratio = 2.0;
   /// With a tracker prior: after the rounds, estimate how far off the stated accuracy the tracker really
-  /// was from the corrections along the directions the overlaps pin (empirical Bayes), scale the prior
-  /// by that factor (0.01 to 3 in all) and adjust again from there (up to three times, while the factor
-  /// is off 1 by more than 25 %), so that what the overlaps pin only weakly is held as tightly as the
-  /// tracker proved to be: given exact poses, the weak directions no longer follow the data's noise.
+  /// was from the corrections along the directions the overlaps pin (empirical Bayes: their squares, less
+  /// the share the data's own noise puts there by the joint step's information, per pinned direction),
+  /// scale the prior by that factor (0.01 to 3 in all) and adjust again from there (up to six times,
+  /// while the factor is off 1 by more than 25 %), so that what the overlaps pin only weakly is held as
+  /// tightly as the tracker proved to be: given exact poses, the weak directions no longer follow the
+  /// data's noise.
   bool fit_tracker_accuracy = true;
   int global_rounds = 10;             ///< at most this many rounds of correspondence search + joint solve
   int global_points_per_pair = 3000;  ///< source samples per linked pair, direction and round

@@ -10,7 +10,11 @@
 //     of its overlap information matrix (merge_grid_benchmark_metrics.h): "weak" along the least pinned
 //     direction, "pinned" the norm along the other five, with the smallest eigenvalue / largest;
 //   - wall time of the merge;
-//   - from the exact poses: how far the merge moves each sweep (RMS displacement, mm, after the fit).
+//   - from the exact poses: how far the merge moves each sweep (RMS displacement, mm, after the fit);
+//   - the bound: the least expected shape RMS any overlap-based merge can reach on that scan (a Bayesian
+//     Cramer-Rao bound at the truth: every covered point's point-to-plane information with the measured
+//     noise, the tracker's error as drawn; merge_grid_benchmark_bound.h); with --model-bound also what the
+//     merge's own information at the truth predicts.
 // JSON on stdout; a PNG of success and RMS over the grid (--png). The default grid runs in a few minutes;
 // --full runs skin {0, 2, 4, 6} mm x overlap {0.10, 0.15, 0.20, 0.30, 0.40} x sampling {grid, random} x
 // sweeps {3, 5, 8}.
@@ -20,7 +24,7 @@
 //       [--spacing 1.5] [--no-open3d] [--png merge_grid.png] [--workdir /tmp/pectus_merge_grid]
 //       [--prior-deg D --prior-mm M --prior-lever L] [--min-overlap-fraction F] [--border-gap DEG]
 //       [--min-pinned-ratio R] [--final-pinned-ratio R] [--sample-spacings S] [--points-per-pair N]
-//       [--rounds N] [--fit-tracker 0|1]
+//       [--rounds N] [--fit-tracker 0|1] [--normal-neighbours K] [--model-bound]
 // (the tracker prior, SweepMergeOptions::tracker_deg/tracker_mm/tracker_lever_mm, defaults MergeSweeps's;
 // the others override SweepMergeOptions::min_overlap_fraction, global_points_per_pair and global_rounds,
 // SweepSurfaceOptions::border_gap_deg and sample_spacings, and
@@ -40,6 +44,8 @@
 #include "datasets/synth.h"
 #include "shape/io/mesh_io.h"
 #include "shape/surface/merge_sweeps.h"
+#include "shape/surface/sweep_graph.h"
+#include "tests/benchmarks/merge_grid_benchmark_bound.h"
 #include "tests/benchmarks/merge_grid_benchmark_figure.h"
 #include "tests/benchmarks/merge_grid_benchmark_flags.h"
 #include "tests/benchmarks/merge_grid_benchmark_metrics.h"
@@ -66,6 +72,7 @@ SweepMergeOptions MergeOptions(const Flags& f) {
   if (f.min_pinned_ratio >= 0.0) options.tracker_adjustment.min_pinned_ratio = f.min_pinned_ratio;
   if (f.final_pinned_ratio >= 0.0) options.final_min_pinned_ratio = f.final_pinned_ratio;
   if (f.sample_spacings >= 0.0) options.surface.sample_spacings = f.sample_spacings;
+  if (f.normal_neighbours >= 0) options.surface.normal_neighbours = f.normal_neighbours;
   if (f.points_per_pair >= 0) options.global_points_per_pair = f.points_per_pair;
   if (f.rounds >= 0) options.global_rounds = f.rounds;
   if (f.fit_tracker >= 0) options.fit_tracker_accuracy = f.fit_tracker != 0;
@@ -90,12 +97,16 @@ struct Run {
                         {"weak_mm", std::abs(along(0))},
                         {"pinned_mm", along.tail<5>().norm()},
                         {"weakest_eigenvalue_ratio", constraints[s].eigenvalue_ratio(0)}});
+      if (s < figures.sweep_shape_rms_mm.size())
+        sweeps.back()["shape_rms_mm"] = figures.sweep_shape_rms_mm[s];
     }
     return {{"success", success},
             {"rms_mm", figures.rms_mm},
             {"max_mm", figures.max_mm},
             {"shape_rms_mm", figures.shape_rms_mm},
             {"shape_max_mm", figures.shape_max_mm},
+            {"interior_shape_rms_mm", figures.interior_shape_rms_mm},
+            {"interior_shape_max_mm", figures.interior_shape_max_mm},
             {"seconds", seconds},
             {"tracker_accuracy_factor", tracker_accuracy_factor},
             {"sweeps", sweeps}};
@@ -137,6 +148,33 @@ Run RunPectus(const std::vector<PointCloud>& clouds, const std::vector<Rigid3>& 
     run.error = e.what();
     return run;
   }
+}
+
+// The merge's own information at the true poses (diagnostic): its sweeps prepared, linked and paired at
+// the truth with its finest gate, one tracker-adjustment step's joint normal matrix.
+Eigen::MatrixXd ModelInformation(const std::vector<PointCloud>& clouds, const std::vector<Rigid3>& truth,
+                                 const Flags& f) {
+  const SweepMergeOptions options = MergeOptions(f);
+  std::vector<SweepSurface> sweeps;
+  double spacing = 0.0;
+  for (std::size_t s = 0; s < clouds.size(); ++s) {
+    sweeps.push_back(PrepareSweep(clouds[s], options.surface, "sweep"));
+    spacing += sweeps.back().spacing_mm / double(clouds.size());
+  }
+  OrientSweeps(truth, options.StartingRadiusMm(), 0, &sweeps);
+  const auto links = FindSweepLinks(sweeps, truth, options.StartingRadiusMm(), options.min_overlap_fraction);
+  const auto pairs = AllCorrespondences(sweeps, truth, links, options.global_points_per_pair, 3.0 * spacing);
+  PosePrior prior;
+  prior.T_world_sweep = truth;
+  for (const auto& w : sweeps) prior.centre.push_back(w.centroid);
+  prior.rotation_sd_deg = options.tracker_deg;
+  prior.translation_sd_mm =
+      std::hypot(options.tracker_mm, options.tracker_deg * M_PI / 180.0 * options.tracker_lever_mm);
+  std::vector<Rigid3> P = truth;
+  TrackerAdjustmentOptions adjustment = options.tracker_adjustment;
+  if (options.final_min_pinned_ratio < adjustment.min_pinned_ratio)
+    adjustment.min_pinned_ratio = options.final_min_pinned_ratio;
+  return AdjustPosesToTracker(pairs, sweeps, prior, &P, adjustment).information;
 }
 
 Run RunOpen3d(const std::vector<PointCloud>& clouds, const fs::path& dir, const std::vector<Points3>& inliers,
@@ -225,6 +263,14 @@ int main(int argc, char** argv) {
             json skin_rms = json::array();
             for (const ds::Sweep& s : scanned.scan.sweeps) skin_rms.push_back(s.truth.skin_rms_mm);
             one["tracker_skin_rms_mm"] = skin_rms;
+            Eigen::MatrixXd model_information;
+            if (f.model_bound) model_information = ModelInformation(clouds, truth, f);
+            const merge_grid::ShapeBound bound = merge_grid::BoundShapeError(
+                skin_surface, scanned.scan.sweeps, model_information.size() ? &model_information : nullptr);
+            if (model_information.size()) one["model_shape_rms_mm"] = bound.model_shape_rms_mm;
+            one["shape_rms_bound_mm"] = bound.shape_rms_mm;
+            one["noise_along_normal_mm"] = bound.noise_along_normal_mm;
+            rms["bound"].push_back(bound.shape_rms_mm);
             const Run pectus = RunPectus(clouds, identity, inliers, truth, f);
             one["pectus"] = pectus.Json(constraints);
             success["pectus"].push_back(pectus.success);
@@ -274,8 +320,11 @@ int main(int argc, char** argv) {
               summary += text;
             }
           }
-          std::fprintf(stderr, "skin %g mm, overlap %.2f, %s, %d sweeps:%s\n", skin, overlap,
-                       sampling.c_str(), o.sweeps, summary.c_str());
+          double bound = 0.0;
+          for (double x : rms["bound"]) bound += x / double(rms["bound"].size());
+          cell["shape_rms_bound_mm_mean"] = bound;
+          std::fprintf(stderr, "skin %g mm, overlap %.2f, %s, %d sweeps:%s; shape bound %.3f mm\n", skin,
+                       overlap, sampling.c_str(), o.sweeps, summary.c_str(), bound);
           cells.push_back(cell);
         }
       }
@@ -300,6 +349,7 @@ int main(int argc, char** argv) {
         {"min_pinned_ratio", MergeOptions(f).tracker_adjustment.min_pinned_ratio},
         {"final_min_pinned_ratio", MergeOptions(f).final_min_pinned_ratio},
         {"sample_spacings", MergeOptions(f).surface.sample_spacings},
+        {"normal_neighbours", MergeOptions(f).surface.normal_neighbours},
         {"points_per_pair", MergeOptions(f).global_points_per_pair},
         {"global_rounds", MergeOptions(f).global_rounds},
         {"fit_tracker_accuracy", MergeOptions(f).fit_tracker_accuracy}}},

@@ -22,9 +22,11 @@ struct Flags {
   double min_pinned_ratio = -1.0;                                   // < 0: MergeSweeps's default
   double final_pinned_ratio = -1.0;                                 // < 0: MergeSweeps's default
   double sample_spacings = -1.0;                                    // < 0: MergeSweeps's default
-  int points_per_pair = -1;                                         // < 0: MergeSweeps's default
-  int rounds = -1;                                                  // < 0: MergeSweeps's default
-  int fit_tracker = -1;                                             // 0 / 1; < 0: MergeSweeps's default
+  int normal_neighbours = -1;                                       // < 0: MergeSweeps's default
+  bool model_bound = false;  // also the shape figure the merge's own information at the truth predicts
+  int points_per_pair = -1;  // < 0: MergeSweeps's default
+  int rounds = -1;           // < 0: MergeSweeps's default
+  int fit_tracker = -1;      // 0 / 1; < 0: MergeSweeps's default
   bool open3d = true;
 };
 
@@ -94,6 +96,10 @@ inline Flags Parse(int argc, char** argv) {
       f.final_pinned_ratio = std::stod(value());
     else if (key == "--sample-spacings")
       f.sample_spacings = std::stod(value());
+    else if (key == "--model-bound")
+      f.model_bound = true;
+    else if (key == "--normal-neighbours")
+      f.normal_neighbours = std::stoi(value());
     else if (key == "--fit-tracker")
       f.fit_tracker = std::stoi(value());
     else if (key == "--rounds")

@@ -30,6 +30,11 @@ struct Figures {
   /// it (after G), RMS and max (mm). A sweep that slid along a surface it fits moves its points (rms_mm)
   /// but not the shape; this is the issue-13 "shape error after a rigid fit".
   double shape_rms_mm = 0.0, shape_max_mm = 0.0;
+  std::vector<double> sweep_shape_rms_mm;  ///< per sweep, the shape RMS
+  /// The same over the points whose nearest point of the true surface is not on the patch's edge: a
+  /// point that slid beyond the edge is measured there by its distance to the edge, along the surface,
+  /// which is not shape (the max above is mostly such points on 8-sweep scans).
+  double interior_shape_rms_mm = 0.0, interior_shape_max_mm = 0.0;
   Rigid3 G = Rigid3::Identity();  ///< the common rigid motion removed
 };
 
@@ -46,21 +51,33 @@ inline Points3 TrueInliers(const datasets::Sweep& s) {
   return p;
 }
 
-/// Adds the shape figures to `f` (see Figures::shape_rms_mm).
+/// Adds the shape figures to `f` (see Figures::shape_rms_mm and interior_shape_rms_mm).
 inline void EvaluateShape(const datasets::ChestSurface& surface, const std::vector<Points3>& true_inliers,
                           const std::vector<Rigid3>& placed, Figures* f) {
-  double sum = 0.0, count = 0.0;
-  f->shape_max_mm = 0.0;
+  double sum = 0.0, count = 0.0, interior_sum = 0.0, interior_count = 0.0;
+  f->shape_max_mm = f->interior_shape_max_mm = 0.0;
+  f->sweep_shape_rms_mm.clear();
   for (std::size_t s = 0; s < true_inliers.size(); ++s) {
+    double sweep_sum = 0.0, sweep_count = 0.0;
     for (Eigen::Index i = 0; i < true_inliers[s].rows(); i += 7) {
-      const double d = std::abs(
-          datasets::SignedDistance(surface, placed[s] * Eigen::Vector3d(true_inliers[s].row(i).transpose())));
-      sum += d * d;
-      count += 1.0;
+      const datasets::ClosestPointResult foot =
+          datasets::ClosestPoint(surface, placed[s] * Eigen::Vector3d(true_inliers[s].row(i).transpose()));
+      const double d = std::abs(foot.signed_distance);
+      sweep_sum += d * d;
+      sweep_count += 1.0;
       f->shape_max_mm = std::max(f->shape_max_mm, d);
+      if (!foot.on_boundary) {
+        interior_sum += d * d;
+        interior_count += 1.0;
+        f->interior_shape_max_mm = std::max(f->interior_shape_max_mm, d);
+      }
     }
+    sum += sweep_sum;
+    count += sweep_count;
+    f->sweep_shape_rms_mm.push_back(std::sqrt(sweep_sum / std::max(1.0, sweep_count)));
   }
   f->shape_rms_mm = std::sqrt(sum / std::max(1.0, count));
+  f->interior_shape_rms_mm = std::sqrt(interior_sum / std::max(1.0, interior_count));
 }
 
 /// Inlier points (reported frame) of a sweep, #points by 3.

@@ -13,6 +13,7 @@
 
 #include <unistd.h>
 
+#include <cstdlib>
 #include <map>
 #include <sstream>
 #include <tuple>
@@ -135,7 +136,12 @@ json RunProcesses(const fs::path& dir, const ProcessCase& c, const std::string& 
 }
 
 json Process(int chest_pairs, bool bunny, const std::string& pectus_before) {
-  const fs::path dir = fs::temp_directory_path() / ("pectus_reg_process_" + std::to_string(::getpid()));
+  // PECTUS_PROCESS_DIR keeps the last chest pair's files there, without the bunny's (to profile a process
+  // by hand).
+  const char* keep = std::getenv("PECTUS_PROCESS_DIR");
+  const fs::path dir = keep
+                           ? fs::path(keep)
+                           : fs::temp_directory_path() / ("pectus_reg_process_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   json rows = json::array();
   // Chest pairs: the "pairs" part's first seeds, landmarks with 3 mm noise; the peers start where pectus's
@@ -159,7 +165,7 @@ json Process(int chest_pairs, bool bunny, const std::string& pectus_before) {
                                 pectus_before));
     std::cerr << "process: " << c.name << "\n";
   }
-  if (bunny) {
+  if (bunny && !keep) {
     const fs::path data = testing_support::BunnyDirectory();
     ReadOptions metres;
     metres.input_units = LengthUnit::kMetre;
@@ -186,7 +192,7 @@ json Process(int chest_pairs, bool bunny, const std::string& pectus_before) {
     }
   }
   std::error_code ec;
-  fs::remove_all(dir, ec);
+  if (!keep) fs::remove_all(dir, ec);
   // Per peer: the smallest and median time ratios, and the pairs where pectus is not as accurate.
   json summary = json::object();
   for (const char* peer : {"open3d_plain", "open3d_staged", "pcl_plain", "pcl_staged"}) {
