@@ -86,7 +86,6 @@ inline ShapeBound BoundShapeError(const datasets::ChestSurface& surface,
                                   const std::vector<datasets::Sweep>& sweeps,
                                   const Eigen::MatrixXd* model_information = nullptr) {
   using Mat = Eigen::MatrixXd;
-  using Vec6 = Eigen::Matrix<double, 6, 1>;
   ShapeBound out;
   const std::size_t n = sweeps.size();
   bool any_error = false;
