@@ -9,24 +9,13 @@
 
 #include "planner_plugin/surrogate/emulator_patient_ties.h"
 #include "shape/core/error.h"
+#include "shape/core/sample_statistics.h"
 
 namespace pectus::planner {
 namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double Quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const double at = q * static_cast<double>(v.size() - 1);
-  const auto lo = static_cast<std::size_t>(std::floor(at));
-  const std::size_t hi = std::min(lo + 1, v.size() - 1);
-  return v[lo] + (at - static_cast<double>(lo)) * (v[hi] - v[lo]);
-}
-double Mean(const std::vector<double>& v) {
-  return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
-}
-double Max(const std::vector<double>& v) { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); }
 double Within(const std::vector<double>& v, double limit) {
   if (v.empty()) return 0.0;
   return static_cast<double>(std::count_if(v.begin(), v.end(), [&](double x) { return x <= limit; })) /
@@ -122,28 +111,17 @@ void EmulatorErrors::Merge(const EmulatorErrors& o) {
 }
 
 EmulatorErrors::Summary EmulatorErrors::Summarise() const {
+  auto figures = [](const std::vector<double>& v, double limit) {
+    return Figures{Mean(v), Quantile(v, 0.95), Max(v), limit > 0 ? Within(v, limit) : 0.0};
+  };
   Summary s;
   s.cases = static_cast<std::int64_t>(relative_l2_.size());
   s.small_lift_cases = static_cast<std::int64_t>(rms_small_.size());
-  s.skin_rms_mean = Mean(rms_small_);
-  s.skin_rms_p95 = Quantile(rms_small_, 0.95);
-  s.skin_rms_max = Max(rms_small_);
-  s.skin_rms_within_1mm = Within(rms_small_, 1.0);
-  s.skin_p95_mean = Mean(p95_small_);
-  s.skin_p95_p95 = Quantile(p95_small_, 0.95);
-  s.skin_p95_max = Max(p95_small_);
-  s.skin_p95_within_2mm = Within(p95_small_, 2.0);
-  s.relative_l2_mean = Mean(relative_l2_);
-  s.relative_l2_p95 = Quantile(relative_l2_, 0.95);
-  s.relative_l2_max = Max(relative_l2_);
-  s.relative_l2_within_5pc = Within(relative_l2_, 0.05);
-  s.small_lift_error_mean = Mean(lift_error_small_);
-  s.small_lift_error_p95 = Quantile(lift_error_small_, 0.95);
-  s.small_lift_error_max = Max(lift_error_small_);
-  s.small_lift_error_within_1mm = Within(lift_error_small_, 1.0);
-  s.lift_error_mean = Mean(lift_error_);
-  s.lift_error_p95 = Quantile(lift_error_, 0.95);
-  s.lift_error_max = Max(lift_error_);
+  s.skin_rms = figures(rms_small_, 1.0);
+  s.skin_p95 = figures(p95_small_, 2.0);
+  s.relative_l2 = figures(relative_l2_, 0.05);
+  s.small_lift_error = figures(lift_error_small_, 1.0);
+  s.lift_error = figures(lift_error_, 0.0);
   if (coordinates_ > 0) s.coverage_2sd = within_2sd_ / coordinates_;
   s.worst_skin_rms_patient = WorstOf(rms_small_, patient_small_);
   s.worst_relative_l2_patient = WorstOf(relative_l2_, patient_);

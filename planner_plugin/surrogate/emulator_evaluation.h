@@ -52,15 +52,20 @@ class EmulatorErrors {
   /// Appends `other`'s cases.
   void Merge(const EmulatorErrors& other);
 
-  /// The summary: means, quantiles, maxima and the fractions within the limits.
+  /// One error's figures over its cases: mean, 95th percentile (linear between order statistics), maximum,
+  /// and the fraction of cases within the limit for it (1 mm, 2 mm, 5 %, 1 mm; none for the lift
+  /// over all cases: 0).
+  struct Figures {
+    double mean = 0, p95 = 0, max = 0, within = 0;
+  };
+  /// The summary: every error's figures, the coverage and the worst patients.
   struct Summary {
     std::int64_t cases = 0, small_lift_cases = 0;
-    double skin_rms_mean = 0, skin_rms_p95 = 0, skin_rms_max = 0, skin_rms_within_1mm = 0;
-    double skin_p95_mean = 0, skin_p95_p95 = 0, skin_p95_max = 0, skin_p95_within_2mm = 0;
-    double relative_l2_mean = 0, relative_l2_p95 = 0, relative_l2_max = 0, relative_l2_within_5pc = 0;
-    double small_lift_error_mean = 0, small_lift_error_p95 = 0, small_lift_error_max = 0,
-           small_lift_error_within_1mm = 0;
-    double lift_error_mean = 0, lift_error_p95 = 0, lift_error_max = 0;
+    Figures skin_rms;          ///< per small-lift case, the RMS over the skin (mm); within 1 mm
+    Figures skin_p95;          ///< per small-lift case, the 95th percentile over the skin (mm); within 2 mm
+    Figures relative_l2;       ///< per case, |u_pred - u_fe| / |u_fe| (a fraction); within 5 %
+    Figures small_lift_error;  ///< per small-lift case, the lift's error (mm); within 1 mm
+    Figures lift_error;        ///< per case, the lift's error (mm)
     double coverage_2sd = -1;  ///< -1 without predicted deviations
     /// The patient (an index) of the largest skin RMS, relative L2 and lift error; -1 without cases.
     int worst_skin_rms_patient = -1, worst_relative_l2_patient = -1, worst_lift_patient = -1;

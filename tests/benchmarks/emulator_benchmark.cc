@@ -60,30 +60,21 @@
 #include "planner_plugin/surrogate/emulator_training_set.h"
 #include "planner_plugin/surrogate/response_emulator.h"
 #include "shape/core/error.h"
+#include "shape/core/sample_statistics.h"
 #include "shape/io/patient_table_io.h"
 #include "tests/support/shared_data.h"
 
 namespace {
 
 using namespace pectus::planner;
+using pectus::Max;
+using pectus::Mean;
+using pectus::Quantile;
 using Clock = std::chrono::steady_clock;
 
 double Seconds(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
-
-double Quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const double at = q * static_cast<double>(v.size() - 1);
-  const auto lo = static_cast<std::size_t>(std::floor(at));
-  const std::size_t hi = std::min(lo + 1, v.size() - 1);
-  return v[lo] + (at - static_cast<double>(lo)) * (v[hi] - v[lo]);
-}
-double Mean(const std::vector<double>& v) {
-  return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
-}
-double Max(const std::vector<double>& v) { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); }
 
 // The figures of one method over its test cases (EmulatorErrors, emulator_evaluation.h), as JSON.
 nlohmann::json Json(const EmulatorErrors& errors) {
@@ -91,27 +82,27 @@ nlohmann::json Json(const EmulatorErrors& errors) {
   nlohmann::json j = {{"cases", s.cases},
                       {"cases_lift_le_40mm", s.small_lift_cases},
                       {"skin_rms_mm_lift_le_40",
-                       {{"mean", s.skin_rms_mean},
-                        {"p95", s.skin_rms_p95},
-                        {"max", s.skin_rms_max},
-                        {"fraction_le_1mm", s.skin_rms_within_1mm}}},
+                       {{"mean", s.skin_rms.mean},
+                        {"p95", s.skin_rms.p95},
+                        {"max", s.skin_rms.max},
+                        {"fraction_le_1mm", s.skin_rms.within}}},
                       {"skin_p95_mm_lift_le_40",
-                       {{"mean", s.skin_p95_mean},
-                        {"p95", s.skin_p95_p95},
-                        {"max", s.skin_p95_max},
-                        {"fraction_le_2mm", s.skin_p95_within_2mm}}},
+                       {{"mean", s.skin_p95.mean},
+                        {"p95", s.skin_p95.p95},
+                        {"max", s.skin_p95.max},
+                        {"fraction_le_2mm", s.skin_p95.within}}},
                       {"relative_l2_all",
-                       {{"mean", s.relative_l2_mean},
-                        {"p95", s.relative_l2_p95},
-                        {"max", s.relative_l2_max},
-                        {"fraction_le_5pc", s.relative_l2_within_5pc}}},
+                       {{"mean", s.relative_l2.mean},
+                        {"p95", s.relative_l2.p95},
+                        {"max", s.relative_l2.max},
+                        {"fraction_le_5pc", s.relative_l2.within}}},
                       {"lift_error_mm_lift_le_40",
-                       {{"mean", s.small_lift_error_mean},
-                        {"p95", s.small_lift_error_p95},
-                        {"max", s.small_lift_error_max},
-                        {"fraction_le_1mm", s.small_lift_error_within_1mm}}},
+                       {{"mean", s.small_lift_error.mean},
+                        {"p95", s.small_lift_error.p95},
+                        {"max", s.small_lift_error.max},
+                        {"fraction_le_1mm", s.small_lift_error.within}}},
                       {"lift_error_mm_all",
-                       {{"mean", s.lift_error_mean}, {"p95", s.lift_error_p95}, {"max", s.lift_error_max}}}};
+                       {{"mean", s.lift_error.mean}, {"p95", s.lift_error.p95}, {"max", s.lift_error.max}}}};
   if (s.coverage_2sd >= 0) j["coverage_2sd"] = s.coverage_2sd;
   return j;
 }
@@ -445,7 +436,7 @@ int main(int argc, char** argv) {
       pj["lift_per_newton_process"] =
           std::vector<double>(fold.lift_per_newton_process.begin(), fold.lift_per_newton_process.end());
       pj["nearest_patient"] = fold.nearest_patient;
-      if (ann) pj["ann_relative_l2_mean"] = fold_ann[o].Summarise().relative_l2_mean;
+      if (ann) pj["ann_relative_l2_mean"] = fold_ann[o].Summarise().relative_l2.mean;
       per_patient.push_back(pj);
     }
     const double explained_ann = Mean(fold_explained_ann);

@@ -27,13 +27,13 @@ TEST(EmulatorErrorsTest, FiguresOfHandComputedCases) {
   const EmulatorErrors::Summary s = errors.Summarise();
   EXPECT_EQ(s.cases, 2);
   EXPECT_EQ(s.small_lift_cases, 1);
-  EXPECT_NEAR(s.skin_rms_mean, std::sqrt(0.125), 1e-12);
-  EXPECT_NEAR(s.skin_p95_mean, 0.3 + 0.95 * 0.1, 1e-12);  // linear between the two vertices' errors
-  EXPECT_NEAR(s.relative_l2_mean, 0.5 * (0.5 / std::sqrt(2.0) + 1.0), 1e-12);
-  EXPECT_NEAR(s.relative_l2_max, 1.0, 1e-12);
-  EXPECT_NEAR(s.relative_l2_within_5pc, 0.0, 0.0);
-  EXPECT_NEAR(s.small_lift_error_mean, 0.5, 1e-12);
-  EXPECT_NEAR(s.lift_error_max, 2.0, 1e-12);
+  EXPECT_NEAR(s.skin_rms.mean, std::sqrt(0.125), 1e-12);
+  EXPECT_NEAR(s.skin_p95.mean, 0.3 + 0.95 * 0.1, 1e-12);  // linear between the two vertices' errors
+  EXPECT_NEAR(s.relative_l2.mean, 0.5 * (0.5 / std::sqrt(2.0) + 1.0), 1e-12);
+  EXPECT_NEAR(s.relative_l2.max, 1.0, 1e-12);
+  EXPECT_NEAR(s.relative_l2.within, 0.0, 0.0);
+  EXPECT_NEAR(s.small_lift_error.mean, 0.5, 1e-12);
+  EXPECT_NEAR(s.lift_error.max, 2.0, 1e-12);
   EXPECT_NEAR(s.coverage_2sd, 5.0 / 6.0, 1e-12);  // 0.4 > 0.36; the other five coordinates are within
   EXPECT_EQ(s.worst_relative_l2_patient, 7);
   EXPECT_EQ(s.worst_lift_patient, 7);
@@ -102,13 +102,13 @@ TEST(EmulatorEvaluationTest, TheLeftOutPatientsOwnTiesMakeTheEmulatorExact) {
   ASSERT_EQ(e.folds.size(), 8u);
   const auto emulator = e.emulator.Summarise(), mean = e.mean.Summarise(), nearest = e.nearest.Summarise();
   EXPECT_EQ(emulator.cases, 8 * 2 * 8);  // patients x positions x the dissertation's forces
-  EXPECT_LT(emulator.relative_l2_max, 1e-9);
-  EXPECT_LT(emulator.lift_error_max, 1e-9);
+  EXPECT_LT(emulator.relative_l2.max, 1e-9);
+  EXPECT_LT(emulator.lift_error.max, 1e-9);
   // The baselines carry other patients' skins: their blends differ, so their skins do.
-  EXPECT_GT(mean.relative_l2_mean, 1e-3);
-  EXPECT_GT(nearest.relative_l2_mean, 1e-3);
+  EXPECT_GT(mean.relative_l2.mean, 1e-3);
+  EXPECT_GT(nearest.relative_l2.mean, 1e-3);
   // The lift is node 0's y in everyone: every method has it.
-  EXPECT_LT(mean.lift_error_max, 1e-9);
+  EXPECT_LT(mean.lift_error.max, 1e-9);
   EXPECT_EQ(e.input_names.size(), 4u);
   for (const EmulatorFold& fold : e.folds) EXPECT_NE(fold.nearest_patient, fold.patient);
 }
@@ -125,9 +125,9 @@ TEST(EmulatorEvaluationTest, ASmoothFamilyIsPredictedFarBetterThanTheBaselines) 
   EXPECT_EQ(calls, 24);
   EXPECT_EQ(last, 24);
   const auto emulator = e.emulator.Summarise(), mean = e.mean.Summarise(), nearest = e.nearest.Summarise();
-  EXPECT_LT(emulator.relative_l2_mean, 0.01);
-  EXPECT_LT(emulator.relative_l2_mean, 0.2 * mean.relative_l2_mean);
-  EXPECT_LT(emulator.relative_l2_mean, 0.5 * nearest.relative_l2_mean);
+  EXPECT_LT(emulator.relative_l2.mean, 0.01);
+  EXPECT_LT(emulator.relative_l2.mean, 0.2 * mean.relative_l2.mean);
+  EXPECT_LT(emulator.relative_l2.mean, 0.5 * nearest.relative_l2.mean);
   EXPECT_GE(emulator.coverage_2sd, 0.9);
   EXPECT_LT(mean.coverage_2sd, 0.0);  // the baselines predict no deviation
 }
