@@ -141,7 +141,12 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
 
   // 2. Which sweeps overlap, on their surfaces within the starting radius (the tracker's error).
   t0 = Clock::now();
-  std::vector<SweepLink> links = FindSweepLinks(sweeps, P, radius, options.min_overlap_fraction);
+  // A sweep the tracker slid off its neighbour still shares with it what it shares at the truth: at the
+  // starting poses, a sample within the radius of the other's edge counts. The data cannot tell a sweep
+  // slid off a narrow overlap along a direction they hardly pin from one that only touches its neighbour;
+  // both are linked, and the joint adjustment uses only the correspondences they really have (a sweep
+  // that only touches keeps its tracker pose). A sweep with nothing within the radius is refused.
+  std::vector<SweepLink> links = FindSweepLinks(sweeps, P, radius, options.min_overlap_fraction, radius);
   result.timings_s.Add("overlap", Since(t0));
   if (n > 1) {
     for (std::size_t s = 0; s < n; ++s) {
@@ -301,6 +306,9 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
       if (l.i == links[k].i && l.j == links[k].j) links[k].overlap = l.overlap;
   }
   for (std::size_t k = 0; k < links.size(); ++k) {
+    // Pairs that lay within the tracker's error of each other at the start but share nothing aligned (two
+    // strips that only touch) are not reported.
+    if (!(links[k].overlap > 0.0)) continue;
     SweepPairReport pr;
     pr.i = links[k].i;
     pr.j = links[k].j;

@@ -76,7 +76,7 @@ void OrientSweeps(const std::vector<Rigid3>& P, double distance_mm, std::size_t 
 }
 
 std::vector<SweepLink> FindSweepLinks(const std::vector<SweepSurface>& S, const std::vector<Rigid3>& P,
-                                      double distance_mm, double min_fraction) {
+                                      double distance_mm, double min_fraction, double edge_mm) {
   const std::size_t n = S.size();
   std::vector<SweepLink> all;
   for (std::size_t i = 0; i < n; ++i)
@@ -84,10 +84,14 @@ std::vector<SweepLink> FindSweepLinks(const std::vector<SweepSurface>& S, const 
 #pragma omp parallel for schedule(dynamic)
   for (std::size_t k = 0; k < all.size(); ++k) {
     const auto [i, j, unused] = all[k];
-    // Of b's samples (at most 2000, evenly strided), those with a point of a within distance_mm that is
-    // not on a's border, neither seen at a grazing angle, facing the same way (normals within 45 degrees):
-    // the surfaces overlap there where both sweeps see them well,
-    // whatever the sampling (no tangential test, which unstructured sampling fails by its own gaps).
+    // Of b's samples (at most 2000, evenly strided), those with a point of a within distance_mm, facing
+    // the same way (normals within 45 degrees), that is not on a's border, or is but with the sample
+    // within edge_mm of it along a's tangent plane: the surfaces overlap there, whatever the sampling (no
+    // tangential test inside, which unstructured sampling fails by its own gaps). With one spacing, a
+    // sample beyond a's edge pairs with the edge and does not count, and one inside a narrow band of
+    // overlap, where most of a's points near it are border points, does (eight strips reaching 15 % into
+    // each other, randomly sampled, measured under 5 % with every border point left out, for a true
+    // 12-14 %).
     auto fraction = [&](std::size_t a, std::size_t b) {
       const Rigid3 T_a_b = P[a].inverse() * P[b];
       const std::size_t count = S[b].samples.size();
@@ -99,10 +103,15 @@ std::vector<SweepLink> FindSweepLinks(const std::vector<SweepSurface>& S, const 
         std::uint32_t nearest = 0;
         double d2 = 0;
         const Eigen::Vector3d x = T_a_b * S[b].cloud->positions.row(r).transpose() - S[a].target->origin();
-        if (!S[a].target->tree().NearestWithin(x, distance_mm, &nearest, &d2) || S[a].border[nearest])
-          continue;
+        if (!S[a].target->tree().NearestWithin(x, distance_mm, &nearest, &d2)) continue;
+        const Eigen::Vector3d na = S[a].normals.row(nearest).transpose();
+        if (S[a].border[nearest]) {
+          const Eigen::Vector3d d = x - S[a].target->centred_positions().row(nearest).transpose();
+          const double edge = edge_mm >= 0.0 ? edge_mm : S[a].spacing_mm;
+          if ((d - na.dot(d) * na).squaredNorm() > edge * edge) continue;
+        }
         const Eigen::Vector3d nb = T_a_b.linear() * S[b].normals.row(r).transpose();
-        if (nb.dot(S[a].normals.row(nearest).transpose()) > std::cos(M_PI / 4)) on += 1;
+        if (nb.dot(na) > std::cos(M_PI / 4)) on += 1;
       }
       return on / std::max(1.0, tried);
     };

@@ -27,10 +27,12 @@ void OrientSweeps(const std::vector<Rigid3>& P, double distance_mm, std::size_t 
                   std::vector<SweepSurface>* sweeps);
 
 /// Every pair overlapping by at least min_fraction of the smaller sweep's samples: samples with a point of
-/// the other sweep within distance_mm that is not on its border, neither grazing, facing the same way
-/// (normals within 45 degrees).
+/// the other sweep within distance_mm facing the same way (normals within 45 degrees) that is not on its
+/// border, or is but with the sample within edge_mm of it along its tangent plane (< 0: one point spacing
+/// of that sweep, so that a sample beyond its edge does not count; the tracker's expected error at the
+/// starting poses, where a sweep slid off by the tracker still shares what it shares at the truth).
 std::vector<SweepLink> FindSweepLinks(const std::vector<SweepSurface>& S, const std::vector<Rigid3>& P,
-                                      double distance_mm, double min_fraction);
+                                      double distance_mm, double min_fraction, double edge_mm = -1.0);
 
 /// The smallest distance (mm) from a sample of sweep s to any point of another sweep at the poses P, and
 /// which sweep that is (*nearest; s itself when there is no other sweep).

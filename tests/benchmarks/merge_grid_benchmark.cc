@@ -270,6 +270,7 @@ int main(int argc, char** argv) {
             if (model_information.size()) one["model_shape_rms_mm"] = bound.model_shape_rms_mm;
             one["shape_rms_bound_mm"] = bound.shape_rms_mm;
             one["noise_along_normal_mm"] = bound.noise_along_normal_mm;
+            one["true_overlap_fraction"] = bound.largest_overlap_fraction;
             rms["bound"].push_back(bound.shape_rms_mm);
             const Run pectus = RunPectus(clouds, identity, inliers, truth, f);
             one["pectus"] = pectus.Json(constraints);

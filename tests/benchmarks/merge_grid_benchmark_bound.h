@@ -20,6 +20,9 @@ struct ShapeBound {
   double noise_along_normal_mm = 0.0;  ///< the range noise along the normal, RMS over every inlier (mm)
   double overlap_points = 0.0;         ///< points of a sweep that another sweep covers, counted per pair
   double model_shape_rms_mm = 0.0;     ///< the same figure from the merge's own information (if given)
+  /// Per sweep, the largest fraction of its true inliers that one other sweep covers (a true point of it
+  /// within 2 mm): the overlap the sweep really has, against which a merge's linking is judged.
+  std::vector<double> largest_overlap_fraction;
 };
 
 /// The expected shape RMS after a rigid fit (in the metric of the error along each point's normal) of
@@ -122,7 +125,8 @@ inline ShapeBound BoundShapeError(const datasets::ChestSurface& surface,
         points[s].rows() ? Eigen::Vector3d(points[s].colwise().mean().transpose()) : Eigen::Vector3d::Zero();
   }
   out.noise_along_normal_mm = std::sqrt(noise_sum / std::max(1.0, noise_count));
-  if (!any_error || n < 2) return out;
+  out.largest_overlap_fraction.assign(n, 0.0);
+  if (n < 2) return out;
 
   // The Fisher information of the overlaps.
   Mat F = Mat::Zero(6 * Eigen::Index(n), 6 * Eigen::Index(n));
@@ -132,6 +136,7 @@ inline ShapeBound BoundShapeError(const datasets::ChestSurface& surface,
     for (std::size_t s = 0; s < n; ++s) {
       if (s == t) continue;
       Mat block = Mat::Zero(12, 12);
+      double covered = 0.0;
       for (Eigen::Index i = 0; i < points[s].rows(); ++i) {
         const Eigen::Vector3d p = points[s].row(i).transpose();
         std::uint32_t nearest = 0;
@@ -142,7 +147,11 @@ inline ShapeBound BoundShapeError(const datasets::ChestSurface& surface,
         J << (p - centre[s]).cross(nrm), nrm, -(p - centre[t]).cross(nrm), -nrm;
         block += J * J.transpose();
         out.overlap_points += 1.0;
+        covered += 1.0;
       }
+      if (points[s].rows() > 0)
+        out.largest_overlap_fraction[s] =
+            std::max(out.largest_overlap_fraction[s], covered / double(points[s].rows()));
       block /= 2.0 * (sigma2[s] + sigma2[t]);
       const Eigen::Index a = 6 * Eigen::Index(s), b = 6 * Eigen::Index(t);
       F.block(a, a, 6, 6) += block.topLeftCorner(6, 6);
@@ -151,6 +160,8 @@ inline ShapeBound BoundShapeError(const datasets::ChestSurface& surface,
       F.block(b, b, 6, 6) += block.bottomRightCorner(6, 6);
     }
   }
+
+  if (!any_error) return out;
 
   // The tracker's prior: (w, t_pivot) isotropic, moved to the twist about the centroid, t = t_pivot -
   // [c - pivot]x w.

@@ -91,11 +91,12 @@ TEST_F(SweepGraph, LinksExactlyTheOverlappingPairs) {
   for (const SweepLink& l : links) {
     pairs.insert({l.i, l.j});
     EXPECT_LT(l.i, l.j);
-    // A quarter of each sweep lies on its neighbour; the samples whose nearest point is on the
-    // neighbour's border (its edge, about 1 mm of the 8.7 mm strip, and its two ends along y) are not
-    // counted, so the fraction is a little under 0.25 (0.22 measured).
-    EXPECT_GT(l.overlap, 0.19) << l.i << "-" << l.j;
-    EXPECT_LE(l.overlap, 0.25) << l.i << "-" << l.j;
+    // A quarter of each sweep lies on its neighbour, and its edge row with it: a sample whose nearest
+    // point is on the neighbour's border counts when it lies within one point spacing of it along the
+    // surface (inside the neighbour's edge), so the fraction is a little over 0.25 (0.27-0.28 measured);
+    // the next row out does not count.
+    EXPECT_GT(l.overlap, 0.22) << l.i << "-" << l.j;
+    EXPECT_LE(l.overlap, 0.30) << l.i << "-" << l.j;
   }
   const std::set<std::pair<std::size_t, std::size_t>> expected = {{0, 1}, {1, 2}};
   EXPECT_EQ(pairs, expected) << "0-2 do not overlap; sweep 3 overlaps nothing";
