@@ -137,6 +137,9 @@ int Integer(const json& object, const char* key, int lo, int hi, int fallback, c
   return v.get<int>();
 }
 
+// Longer than any sternum: bars in mm are checked against this before the patient's planner exists.
+constexpr double kLongestSternumMm = 1000.0;
+
 // {"position": 0.85, "position_in_mm": false, "force_n": 200}
 BarPlacement ParseBar(const json& body, const char* key, double sternal_length_mm) {
   const auto it = body.find(key);
@@ -392,16 +395,13 @@ std::shared_ptr<PatientSession> PlannerServer::State::Session(const std::string&
 // ---------------------------------------------------------------------
 
 json PlannerServer::State::Plan(const json& body) {
+  // Step 1: the request checked in full before any work (a bar in mm against the sternum's length below).
   const auto it = body.find("patient");
   if (it == body.end() || !it->is_string())
     throw HttpError(400, "patient must be a string (an id of the table)");
-  const std::shared_ptr<PatientSession> s = Session(it->get<std::string>());
-  std::lock_guard<std::mutex> lock(s->mutex);
-  const PlannerClient& p = *s->planner;
-  const double length = p.measurements().sternal_length_mm;
   NussPlanOptions options;
-  options.scenario_a = ParseBar(body, "bar", length);
-  if (body.contains("compare")) options.scenario_b = ParseBar(body, "compare", length);
+  options.scenario_a = ParseBar(body, "bar", kLongestSternumMm);
+  if (body.contains("compare")) options.scenario_b = ParseBar(body, "compare", kLongestSternumMm);
   options.search = false;
   if (body.contains("search")) {
     const json& search = body.at("search");
@@ -417,6 +417,14 @@ json PlannerServer::State::Plan(const json& body) {
     std::string why;
     if (!o.IsValid(&why)) throw HttpError(400, "search: " + why);
   }
+  // Step 2: the patient's planner (made on first use), then the bars against its sternum.
+  const std::shared_ptr<PatientSession> s = Session(it->get<std::string>());
+  std::lock_guard<std::mutex> lock(s->mutex);
+  const PlannerClient& p = *s->planner;
+  const double length = p.measurements().sternal_length_mm;
+  options.scenario_a = ParseBar(body, "bar", length);
+  if (body.contains("compare")) options.scenario_b = ParseBar(body, "compare", length);
+  // Step 3: the plan, as `pectus plan` makes it.
   NussPlan plan;
   try {
     plan = MakeNussPlan(p, average, options);
@@ -511,6 +519,7 @@ void PlannerServer::State::Routes() {
     const auto id = body.find("patient");
     if (id == body.end() || !id->is_string())
       throw HttpError(400, "patient must be a string (an id of the table)");
+    ParseBar(body, "bar", kLongestSternumMm);  // checked before any work
     const auto s = Session(id->get<std::string>());
     std::lock_guard<std::mutex> lock(s->mutex);
     const BarPlacement bar = ParseBar(body, "bar", s->planner->measurements().sternal_length_mm);

@@ -100,6 +100,8 @@ function update() {
       forceToLift: perN > 0 ? state.info.depression_mm / perN : NaN,
       beyondLinear: lift > state.info.linear_range_lift_mm,
       updateMs,
+      position: bar.position,
+      force: bar.force,
     },
   });
 }
@@ -244,4 +246,19 @@ window.pectus = { state, set, setBar, setLift, loadPatient, loadPlan, planJson, 
     const out = new Float32Array(basis.skinRows);
     deform(basis, mm, force, basis.boneRows, out);
     return Array.from(out, (d, i) => d + scene.skinRest[i]);
-  } };
+  },
+  liftAt: (mm, force) => liftPerNewton(basis, mm) * force,
+  skinPositions: () => scene.skin.geometry.attributes.position.array,
+  /// Mean time of the per-frame deformation (bone, skin, landmarks from the basis), ms.
+  timeUpdate: (n) => {
+    const mm = positionMm();
+    const t0 = performance.now();
+    for (let i = 0; i < n; ++i) {
+      deform(basis, mm + (i % 10) * 0.05, state.bar.force, 0, scene.boneDisplacement);
+      deform(basis, mm + (i % 10) * 0.05, state.bar.force, basis.boneRows, scene.skinDisplacement);
+      deform(basis, mm + (i % 10) * 0.05, state.bar.force, basis.boneRows + basis.skinRows, scene.landmarkDisplacement);
+    }
+    drawnBar = null;
+    return (performance.now() - t0) / n;
+  },
+};
