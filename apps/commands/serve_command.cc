@@ -86,6 +86,6 @@ class ServeCommand : public Command {
 
 }  // namespace
 
-PECTUS_REGISTER_COMMAND(ServeCommand, 95);
+PECTUS_REGISTER_COMMAND(ServeCommand, 130);
 
 }  // namespace pectus::cli

@@ -5,6 +5,7 @@
 
 #include <Eigen/SVD>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <cstdint>
@@ -243,6 +244,10 @@ struct PlannerServer::State {
 // ---- a patient's session: planner, registration, basis and the page's coefficient table ----------------
 
 void PlannerServer::State::MakeSession(const std::string& id, PatientSession* s) const {
+  using Clock = std::chrono::steady_clock;
+  auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+  json timings;
+  auto t = Clock::now();
   const PectusPlannerPatient& patient = patients.at(id);
   s->planner = std::make_unique<PlannerClient>(*plugin, patient, planner_options);
   PlannerClient& p = *s->planner;
@@ -256,7 +261,8 @@ void PlannerServer::State::MakeSession(const std::string& id, PatientSession* s)
   // The page's coefficient table (docs/planner.md, "Planner in the browser"): the response to 1 N at bar
   // levels every table_step_mm along the sternum, u_k (3 #points: bone vertices, skin vertices, skin
   // landmarks), written as u_k = U c_k with U orthonormal modes spanning the responses (their SVD at
-  // 1 mm spacing) and c_k = U' u_k; the page interpolates c linearly between levels and multiplies by U.
+  // 1.5 mm spacing, the plugin's own sampling) and c_k = U' u_k; the page interpolates c linearly between
+  // levels and multiplies by U.
   const double length = p.measurements().sternal_length_mm;
   const Points3& bone0 = p.bone().vertices.positions;
   const Points3& skin0 = p.skin().vertices.positions;
@@ -289,7 +295,9 @@ void PlannerServer::State::MakeSession(const std::string& id, PatientSession* s)
   }
   if (levels.size() < 2)
     ThrowFailure("patient " + id + ": the bar reaches the sternum at fewer than 2 levels");
-  const auto every = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(1.0 / h)));
+  timings["levels"] = since(t);
+  t = Clock::now();
+  const auto every = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(1.5 / h)));
   std::vector<std::size_t> picked;
   for (std::size_t k = 0; k < responses.size(); k += every) picked.push_back(k);
   if (picked.back() != responses.size() - 1) picked.push_back(responses.size() - 1);
@@ -302,14 +310,21 @@ void PlannerServer::State::MakeSession(const std::string& id, PatientSession* s)
   const Eigen::VectorXd& sigma = svd.singularValues();
   while (rank < sigma.size() && sigma[rank] > 1e-9 * sigma[0]) ++rank;
   const Eigen::MatrixXd U = svd.matrixU().leftCols(rank);
+  timings["modes"] = since(t);
+  t = Clock::now();
   const auto K = static_cast<Eigen::Index>(responses.size());
   Eigen::MatrixXd C(rank, K);
-  double residual_per_n = 0;  // largest coordinate the modes miss, mm per newton
-  for (Eigen::Index k = 0; k < K; ++k) {
-    C.col(k) = U.transpose() * responses[static_cast<std::size_t>(k)];
-    residual_per_n = std::max(residual_per_n,
-                              (responses[static_cast<std::size_t>(k)] - U * C.col(k)).cwiseAbs().maxCoeff());
+  double residual_per_n = 0;           // largest coordinate the modes miss, mm per newton
+  constexpr Eigen::Index kBlock = 64;  // levels projected together: U is read once per block
+  for (Eigen::Index k0 = 0; k0 < K; k0 += kBlock) {
+    const Eigen::Index n = std::min(kBlock, K - k0);
+    Eigen::MatrixXd block(rows, n);
+    for (Eigen::Index j = 0; j < n; ++j) block.col(j) = responses[static_cast<std::size_t>(k0 + j)];
+    C.middleCols(k0, n).noalias() = U.transpose() * block;
+    block.noalias() -= U * C.middleCols(k0, n);
+    residual_per_n = std::max(residual_per_n, block.cwiseAbs().maxCoeff());
   }
+  timings["projection"] = since(t);
   s->basis.clear();
   AppendFloats(&s->basis, lift.data(), lift.size());
   const Eigen::MatrixXd coefficients = C;  // column k: level k (column-major: c_k contiguous)
@@ -355,7 +370,8 @@ void PlannerServer::State::MakeSession(const std::string& id, PatientSession* s)
                {"projection_residual_mm_per_n", residual_per_n},
                {"plugin_rank", summary.rank},
                {"from", options.basis.empty() ? "built" : options.basis.string()},
-               {"seconds", summary.seconds}}}};
+               {"seconds", summary.seconds}}},
+             {"timings_s", timings}};
 }
 
 std::shared_ptr<PatientSession> PlannerServer::State::Session(const std::string& id) {

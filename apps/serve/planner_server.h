@@ -34,8 +34,8 @@ struct PlannerServerOptions {
   int max_patients = 4;                  ///< patients kept in memory (planner + basis), least recent out
   /// The planner's mesh and materials, as `pectus plan`'s options (0 or < 0: the plugin's defaults).
   double cell_mm = 0, cartilage_mpa = 0, soft_tissue_mm = -1;
-  /// Bar levels of the page's coefficient table, mm apart along the sternum (docs/planner.md). 0.1.
-  double table_step_mm = 0.1;
+  /// Bar levels of the page's coefficient table, mm apart along the sternum (docs/planner.md). 0.25.
+  double table_step_mm = 0.25;
 
   /// False, with the reason, for a missing file option or a value out of range.
   bool IsValid(std::string* why) const;

@@ -228,20 +228,34 @@ async function start() {
     set({ busy: '', error: e.message });
   }
 }
+// Frames are drawn when something changed (the state, the camera, the size), not continuously: an idle
+// page costs nothing.
+let dirty = true, renders = 0;
+subscribe(() => (dirty = true));
+scene.controls.addEventListener('change', () => (dirty = true));
+new ResizeObserver(() => (dirty = true)).observe(document.getElementById('scene'));
 function loop() {
   update();
-  scene.render();
+  if (dirty) {
+    dirty = false;
+    scene.render();
+    ++renders;
+  }
   requestAnimationFrame(loop);
 }
-const firstFrame = start().then(() => {
+// The first frame with the patient, ms after the page started loading (performance.now()'s origin).
+let firstFrameMs = null;
+start().then(() => {
   update();
   scene.render();
-  return performance.now();
+  firstFrameMs = performance.now();
 });
 requestAnimationFrame(loop);
 
 // For tests and for a user's console: the state, the actions, the basis evaluation and the exports.
-window.pectus = { state, set, setBar, setLift, loadPatient, loadPlan, planJson, plyText, runSearch, firstFrame,
+window.pectus = { state, set, setBar, setLift, loadPatient, loadPlan, planJson, plyText, runSearch,
+  firstFrameMs: () => firstFrameMs,
+  renders: () => renders,
   deformSkin: (mm, force) => {
     const out = new Float32Array(basis.skinRows);
     deform(basis, mm, force, basis.boneRows, out);

@@ -181,7 +181,6 @@ export class Scene {
   }
 
   render() {
-    this.controls.update();
     this.renderer.render(this.scene, this.camera);
   }
 }
