@@ -644,6 +644,13 @@ void PlannerServer::Start() {
     s.stopped = true;
     s.stopped_cv.notify_all();
   });
+  // Answering before Start() returns: a Stop() before the thread listens would not stop it.
+  std::unique_lock<std::mutex> lock(s.run_mutex);
+  while (!s.http.is_running() && !s.stopped) {
+    lock.unlock();
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    lock.lock();
+  }
 }
 
 void PlannerServer::Wait() {

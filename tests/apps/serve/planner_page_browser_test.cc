@@ -45,6 +45,7 @@ TEST(PlannerPageBrowserTest, FiguresDeformationControlsSearchRoundTripAndScreens
   options.plugin = PECTUS_PLANNER_PLUGIN_PATH;
   options.port = 0;
   options.cell_mm = 10;
+  options.table_step_mm = 0.5;  // half the levels of the default (the test asserts its error: <= 0.01 mm)
   PlannerServer server(options);
   server.Start();
   const fs::path script = fs::path(PECTUS_SOURCE_DIR) / "tests/apps/serve/planner_page_test.mjs";
