@@ -1,0 +1,186 @@
+// The 3D view, drawn from the state: the patient's ribcage (by material) and skin in the patient's frame
+// placed by T_average_patient, the average chest and the predicted chest coloured by its difference in
+// the average chest's frame, the landmarks and the bar. The deformation is applied every frame the bar
+// changes, from the basis (basis.js).
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { colour } from './colormap.js';
+
+const materialColours = [0xd9c9a3, 0xf2ead8, 0x7fb3d5]; // sternum, rib, costal cartilage
+
+export class Scene {
+  constructor(element) {
+    this.renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+    this.renderer.setPixelRatio(1);
+    this.renderer.setClearColor(0xf4f4f4);
+    element.prepend(this.renderer.domElement);
+    this.renderer.domElement.tabIndex = 0;
+    this.element = element;
+    this.scene = new THREE.Scene();
+    this.camera = new THREE.PerspectiveCamera(35, 1, 1, 5000);
+    this.controls = new OrbitControls(this.camera, this.renderer.domElement);
+    this.scene.add(new THREE.HemisphereLight(0xffffff, 0x666666, 2.2));
+    const light = new THREE.DirectionalLight(0xffffff, 1.2);
+    this.camera.add(light);
+    this.scene.add(this.camera);
+    this.patient = new THREE.Group();
+    this.patient.matrixAutoUpdate = false;
+    this.scene.add(this.patient);
+    this.resize();
+    new ResizeObserver(() => this.resize()).observe(element);
+  }
+
+  resize() {
+    const w = Math.max(this.element.clientWidth, 1), h = Math.max(this.element.clientHeight, 1);
+    this.renderer.setSize(w, h, false);
+    this.camera.aspect = w / h;
+    this.camera.updateProjectionMatrix();
+  }
+
+  /// The patient's meshes (replacing any before).
+  setPatient(info, bone, skin, landmarks) {
+    this.patient.clear();
+    const m = info.T_average_patient;
+    this.patient.matrix.set(...m[0], ...m[1], ...m[2], ...m[3]);
+    this.patient.matrixWorldNeedsUpdate = true;
+    // Ribcage: faces grouped by material.
+    const nb = info.bone.vertices, fb = info.bone.faces;
+    const vertices = new Float32Array(bone, 0, 3 * nb);
+    const faces = new Uint32Array(bone, 12 * nb, 3 * fb);
+    const labels = new Uint32Array(bone, 12 * nb + 12 * fb, fb);
+    const order = [...Array(fb).keys()].sort((a, b) => labels[a] - labels[b]);
+    const index = new Uint32Array(3 * fb);
+    order.forEach((f, i) => index.set(faces.subarray(3 * f, 3 * f + 3), 3 * i));
+    const g = new THREE.BufferGeometry();
+    this.boneRest = vertices.slice();
+    g.setAttribute('position', new THREE.BufferAttribute(vertices.slice(), 3));
+    g.setIndex(new THREE.BufferAttribute(index, 1));
+    let start = 0;
+    for (let label = 0; label < 3; ++label) {
+      let count = 0;
+      while (start + count < fb && labels[order[start + count]] === label) ++count;
+      if (count) g.addGroup(3 * start, 3 * count, label);
+      start += count;
+    }
+    g.computeVertexNormals();
+    this.bone = new THREE.Mesh(g, materialColours.map((c) => new THREE.MeshLambertMaterial({ color: c, side: THREE.DoubleSide })));
+    this.patient.add(this.bone);
+    // Skin, translucent.
+    const ns = info.skin.vertices, fs = info.skin.faces;
+    this.skinRest = new Float32Array(skin, 0, 3 * ns).slice();
+    const sg = new THREE.BufferGeometry();
+    sg.setAttribute('position', new THREE.BufferAttribute(this.skinRest.slice(), 3));
+    sg.setIndex(new THREE.BufferAttribute(new Uint32Array(skin, 24 * ns, 3 * fs), 1));
+    sg.computeVertexNormals();
+    this.skin = new THREE.Mesh(sg, new THREE.MeshLambertMaterial({ color: 0xe8b89a, transparent: true, opacity: 0.45, side: THREE.DoubleSide, depthWrite: false }));
+    this.skin.renderOrder = 2;
+    this.patient.add(this.skin);
+    // Landmarks: the skin's (moving with it) and the bone's.
+    const nl = info.landmarks.skin.length, nbl = info.landmarks.bone.length;
+    this.landmarkRest = new Float32Array(landmarks, 0, 3 * nl).slice();
+    this.landmarks = new THREE.Group();
+    const sphere = new THREE.SphereGeometry(2.5, 12, 8);
+    for (let i = 0; i < nl + nbl; ++i) {
+      const dot = new THREE.Mesh(sphere, new THREE.MeshBasicMaterial({ color: i < nl ? 0xd62728 : 0x1f77b4 }));
+      const p = new Float32Array(landmarks, 12 * i, 3);
+      dot.position.set(p[0], p[1], p[2]);
+      this.landmarks.add(dot);
+    }
+    this.patient.add(this.landmarks);
+    // The bar: across the chest, behind the sternum at its level.
+    const notch = info.landmarks.bone.indexOf('sternal_notch');
+    const n = notch >= 0 ? new Float32Array(landmarks, 12 * (nl + notch), 3) : [0, 0, 0];
+    this.notch = new THREE.Vector3(n[0], n[1], n[2]);
+    this.bar = new THREE.Mesh(new THREE.CylinderGeometry(3, 3, 260, 16), new THREE.MeshLambertMaterial({ color: 0x555555 }));
+    this.bar.rotation.z = Math.PI / 2;
+    this.patient.add(this.bar);
+    this.boneDisplacement = new Float32Array(3 * nb);
+    this.skinDisplacement = new Float32Array(3 * ns);
+    this.landmarkDisplacement = new Float32Array(3 * nl);
+    this.frame(info);
+  }
+
+  /// The average chest mesh (average frame) and the predicted chest drawn over it.
+  setAverage(average, mesh) {
+    const nv = average.vertices, nf = average.faces;
+    this.averageRest = new Float32Array(mesh, 0, 3 * nv).slice();
+    const index = new THREE.BufferAttribute(new Uint32Array(mesh, 12 * nv, 3 * nf), 1);
+    const g = new THREE.BufferGeometry();
+    g.setAttribute('position', new THREE.BufferAttribute(this.averageRest.slice(), 3));
+    g.setIndex(index);
+    g.computeVertexNormals();
+    this.average = new THREE.Mesh(g, new THREE.MeshLambertMaterial({ color: 0x9aa7b1, wireframe: true, transparent: true, opacity: 0.5 }));
+    this.scene.add(this.average);
+    const pg = new THREE.BufferGeometry();
+    pg.setAttribute('position', new THREE.BufferAttribute(this.averageRest.slice(), 3));
+    pg.setAttribute('color', new THREE.BufferAttribute(new Float32Array(3 * nv).fill(0.7), 3));
+    pg.setIndex(index);
+    pg.computeVertexNormals();
+    this.predicted = new THREE.Mesh(pg, new THREE.MeshLambertMaterial({ vertexColors: true, side: THREE.DoubleSide }));
+    this.predicted.visible = false;
+    this.scene.add(this.predicted);
+    this.anterior = average.anterior;
+  }
+
+  /// The camera in front of the chest (the average chest's anterior direction), notch up.
+  frame(info) {
+    const box = new THREE.Box3().setFromObject(this.patient);
+    const centre = box.getCenter(new THREE.Vector3());
+    const a = this.anterior ?? [0, -1, 0];
+    const size = box.getSize(new THREE.Vector3()).length();
+    this.camera.position.set(centre.x + a[0] * size * 1.6, centre.y + a[1] * size * 1.6, centre.z + a[2] * size * 1.6);
+    this.camera.up.set(0, 0, 1);
+    this.controls.target.copy(centre);
+    this.controls.update();
+  }
+
+  /// The predicted chest of a plan's scenario: the average chest moved along its anterior direction by
+  /// the difference (the relative skin model, as `pectus plan` draws it), coloured on ±limit mm.
+  setPredicted(difference, limit, colormap) {
+    if (!this.predicted) return;
+    const p = this.predicted.geometry.attributes.position, c = this.predicted.geometry.attributes.color;
+    const a = this.anterior, rgb = [0, 0, 0];
+    for (let i = 0; i < difference.length; ++i) {
+      const d = difference[i];
+      const ok = d !== null && Number.isFinite(d);
+      for (let k = 0; k < 3; ++k) p.array[3 * i + k] = this.averageRest[3 * i + k] + (ok ? d * a[k] : 0);
+      if (ok) colour(colormap, 0.5 + d / (2 * limit), rgb);
+      else rgb.fill(0.75);
+      c.array.set(rgb, 3 * i);
+    }
+    p.needsUpdate = c.needsUpdate = true;
+    this.predicted.geometry.computeVertexNormals();
+  }
+
+  /// Moves the ribcage, skin, landmarks and bar to the displacements (mm) of the bar at `mm` from the notch.
+  applyDeformation(mm) {
+    const move = (mesh, rest, d) => {
+      const p = mesh.geometry.attributes.position;
+      for (let i = 0; i < d.length; ++i) p.array[i] = rest[i] + d[i];
+      p.needsUpdate = true;
+      mesh.geometry.computeVertexNormals();
+    };
+    move(this.bone, this.boneRest, this.boneDisplacement);
+    move(this.skin, this.skinRest, this.skinDisplacement);
+    this.landmarks.children.forEach((dot, i) => {
+      if (3 * i >= this.landmarkRest.length) return;
+      dot.position.set(...[0, 1, 2].map((k) => this.landmarkRest[3 * i + k] + this.landmarkDisplacement[3 * i + k]));
+    });
+    this.bar.position.set(this.notch.x, this.notch.y + 8, this.notch.z - mm);
+  }
+
+  /// Visibility and opacity from the state's view.
+  show(view) {
+    if (!this.bone) return;
+    this.bone.visible = view.bone;
+    this.skin.visible = view.skin;
+    this.skin.material.opacity = view.opacity;
+    this.landmarks.visible = view.landmarks;
+    if (this.average) this.average.visible = view.average;
+    if (this.predicted) this.predicted.visible = view.map && this.predicted.userData.ready === true;
+  }
+
+  render() {
+    this.renderer.render(this.scene, this.camera);
+  }
+}

@@ -1,0 +1,38 @@
+// The page's one state object (STYLE 12): every view draws from it, every control changes it through
+// set(); a test sets it and reads the figures the same way (window.pectus in main.js).
+export const state = {
+  patients: [],
+  patientId: null,
+  info: null, // /api/patients/ID: counts, landmarks, basis layout, T_average_patient
+  average: null, // /api/average plus its mesh arrays
+  bar: { position: 0.85, force: 200 }, // scenario A: fraction of the sternal length from the notch, N
+  compareMm: 20, // scenario B: this many mm nearer the notch
+  view: { bone: true, skin: true, average: false, landmarks: true, map: true, opacity: 0.45, colormap: 'cividis' },
+  live: null, // from the basis, every frame: { positionMm, liftMm, liftPerN, forceToLift, beyondLinear, updateMs }
+  plan: null, // the server's plan for `bar` (MakeNussPlan, the figures of `pectus plan --report`)
+  planFor: null, // the bar the plan was made for
+  search: null, // the server's best-placement search
+  busy: '',
+  error: '',
+};
+
+const listeners = [];
+/// Calls `view(state)` after every change.
+export function subscribe(view) {
+  listeners.push(view);
+}
+/// Merges `patch` into the state (one level deep for objects) and lets every view redraw.
+export function set(patch) {
+  for (const [key, value] of Object.entries(patch)) {
+    const old = state[key];
+    state[key] =
+      value && typeof value === 'object' && !Array.isArray(value) && old && typeof old === 'object' && !Array.isArray(old) && !(value instanceof ArrayBuffer)
+        ? { ...old, ...value }
+        : value;
+  }
+  for (const view of listeners) view(state);
+}
+/// The bar position in mm from the notch.
+export function positionMm(s = state) {
+  return s.bar.position * (s.info ? s.info.sternal_length_mm : 0);
+}

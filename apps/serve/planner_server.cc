@@ -1,0 +1,673 @@
+// pectus serve: see planner_server.h. Routes, step by step: every request passes the Host and token checks
+// (pre-routing), then one handler per route; a patient's planner, basis and binary arrays are made once
+// on first use and kept (PatientCache); a plan is MakeNussPlan, as `pectus plan` makes it.
+#include "apps/serve/planner_server.h"
+
+#include <Eigen/SVD>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <list>
+#include <map>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "apps/serve/planner_page_files.h"
+#include "planner_plugin/host/average_chest.h"
+#include "planner_plugin/host/chest_registration.h"
+#include "planner_plugin/host/nuss_plan.h"
+#include "planner_plugin/host/plan_scoring.h"
+#include "planner_plugin/host/planner_client.h"
+#include "planner_plugin/host/planner_plugin_loader.h"
+#include "shape/core/error.h"
+
+// clang-format off
+// Last: <resolv.h>, which httplib.h includes, defines _res, a name Eigen's headers use.
+#include <httplib.h>
+// clang-format on
+
+namespace pectus::serve {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using namespace pectus::planner;
+
+// A request the client got wrong: answered with `status` and {"error": message}.
+struct HttpError : std::runtime_error {
+  HttpError(int status_code, const std::string& message) : std::runtime_error(message), status(status_code) {}
+  int status;
+};
+
+void SendJson(httplib::Response& res, const json& body, int status = 200) {
+  res.status = status;
+  res.set_content(body.dump(-1, ' ', false, json::error_handler_t::replace), "application/json");
+}
+
+void SendError(httplib::Response& res, int status, const std::string& message) {
+  SendJson(res, {{"error", message}}, status);
+}
+
+// Little-endian float32 / uint32 arrays appended to a byte string.
+void AppendFloats(std::string* out, const double* values, std::size_t count) {
+  const std::size_t at = out->size();
+  out->resize(at + 4 * count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const auto f = static_cast<float>(values[i]);
+    std::memcpy(out->data() + at + 4 * i, &f, 4);
+  }
+}
+void AppendUints(std::string* out, const std::int32_t* values, std::size_t count) {
+  const std::size_t at = out->size();
+  out->resize(at + 4 * count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const auto u = static_cast<std::uint32_t>(values[i]);
+    std::memcpy(out->data() + at + 4 * i, &u, 4);
+  }
+}
+void AppendPoints(std::string* out, const Points3& points) {
+  // Points3 is #points by 3, row-major: x, y, z of each point in turn.
+  AppendFloats(out, points.data(), static_cast<std::size_t>(points.size()));
+}
+void AppendFaces(std::string* out, const TriangleMesh& mesh) {
+  AppendUints(out, mesh.faces.data(), static_cast<std::size_t>(mesh.faces.size()));  // row-major
+}
+
+json LandmarksJson(const LandmarkSet& set) {
+  json out = json::array();
+  for (const Landmark& l : set.items) {
+    out.push_back({{"label", l.label}, {"position", {l.position.x(), l.position.y(), l.position.z()}}});
+  }
+  return out;
+}
+
+Points3 Positions(const LandmarkSet& set) {
+  Points3 out(static_cast<Eigen::Index>(set.size()), 3);
+  for (std::size_t i = 0; i < set.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = set.items[i].position;
+  return out;
+}
+
+json TransformJson(const ChestRegistrationResult& r) {
+  const Eigen::Matrix4d M = r.T_target_source.Matrix();
+  json rows = json::array();
+  for (int i = 0; i < 4; ++i) rows.push_back({M(i, 0), M(i, 1), M(i, 2), M(i, 3)});
+  return rows;
+}
+
+// ---- request validation -------------------------------------------------------------------------------
+
+json ParseBody(const httplib::Request& req) {
+  try {
+    json body = json::parse(req.body);
+    if (!body.is_object()) throw HttpError(400, "the request body must be a JSON object");
+    return body;
+  } catch (const json::parse_error& e) {
+    throw HttpError(400, std::string("malformed JSON: ") + e.what());
+  }
+}
+
+double Number(const json& object, const char* key, double lo, double hi, const std::string& where) {
+  const auto it = object.find(key);
+  if (it == object.end()) throw HttpError(400, where + "." + key + " is missing");
+  if (!it->is_number()) throw HttpError(400, where + "." + key + " must be a number");
+  const double value = it->get<double>();
+  if (!std::isfinite(value) || value < lo || value > hi) {
+    std::ostringstream text;
+    text << where << "." << key << " = " << value << " is outside [" << lo << ", " << hi << "]";
+    throw HttpError(400, text.str());
+  }
+  return value;
+}
+
+int Integer(const json& object, const char* key, int lo, int hi, int fallback, const std::string& where) {
+  if (!object.contains(key)) return fallback;
+  const json& v = object.at(key);
+  if (!v.is_number_integer() || v.get<std::int64_t>() < lo || v.get<std::int64_t>() > hi) {
+    throw HttpError(400, where + "." + key + " must be an integer in [" + std::to_string(lo) + ", " +
+                             std::to_string(hi) + "]");
+  }
+  return v.get<int>();
+}
+
+// Longer than any sternum: bars in mm are checked against this before the patient's planner exists.
+constexpr double kLongestSternumMm = 1000.0;
+
+// {"position": 0.85, "position_in_mm": false, "force_n": 200}
+BarPlacement ParseBar(const json& body, const char* key, double sternal_length_mm) {
+  const auto it = body.find(key);
+  if (it == body.end() || !it->is_object()) throw HttpError(400, std::string(key) + " must be an object");
+  const json& bar = *it;
+  bool in_mm = false;
+  if (bar.contains("position_in_mm")) {
+    if (!bar.at("position_in_mm").is_boolean())
+      throw HttpError(400, std::string(key) + ".position_in_mm must be true or false");
+    in_mm = bar.at("position_in_mm").get<bool>();
+  }
+  const double position = Number(bar, "position", 0.0, in_mm ? sternal_length_mm : 1.0, key);
+  const double force = Number(bar, "force_n", 1e-3, 1e5, key);
+  return {position, in_mm, force};
+}
+
+// ---- the patients ---------------------------------------------------------------------------------------
+
+// The ids of a patient table: the first field of every row after the header.
+std::vector<std::string> TableIds(const fs::path& table) {
+  std::ifstream in(table);
+  if (!in) ThrowBadInput(table.string(), "cannot open the patient table");
+  std::vector<std::string> ids;
+  std::string line;
+  bool header = true;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || line[0] == '#') continue;
+    if (header) {
+      header = false;
+      continue;
+    }
+    std::string id = line.substr(0, line.find(','));
+    id.erase(0, id.find_first_not_of(" \t\""));
+    id.erase(id.find_last_not_of(" \t\"") + 1);
+    if (!id.empty()) ids.push_back(id);
+  }
+  return ids;
+}
+
+// One patient's planner, its response basis and what the page downloads, made once.
+struct PatientSession {
+  std::mutex mutex;  // the planner is used by one request at a time
+  std::unique_ptr<PlannerClient> planner;
+  ChestRegistrationResult registration;  // T_average_patient, as MakeNussPlan registers
+  json info;
+  std::string bone, skin, landmarks, basis;  // the binary arrays (docs/planner.md)
+  std::string failure;                       // why it could not be made (then every request says so)
+};
+
+}  // namespace
+
+bool ConstantTimeEquals(const std::string& a, const std::string& b) {
+  if (a.size() != b.size()) return false;
+  unsigned char diff = 0;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    diff |= static_cast<unsigned char>(static_cast<unsigned char>(a[i]) ^ static_cast<unsigned char>(b[i]));
+  return diff == 0;
+}
+
+bool PlannerServerOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& text) {
+    if (why) *why = text;
+    return false;
+  };
+  if (patient_table.empty()) return fail("--patient-table is required");
+  if (model.empty()) return fail("--model (the average chest) is required");
+  if (port < 0 || port > 65535) return fail("--port must be in [0, 65535]");
+  if (max_body_bytes < 1024) return fail("the request body limit must be at least 1024 bytes");
+  if (threads < 1 || threads > 64) return fail("threads must be in [1, 64]");
+  if (max_patients < 1) return fail("at least one patient must be kept in memory");
+  if (!(table_step_mm >= 0.01 && table_step_mm <= 2.0)) return fail("the table step must be in [0.01, 2] mm");
+  if (!token.empty() && token.size() < 16) return fail("a token must have at least 16 characters");
+  return true;
+}
+
+struct PlannerServer::State {
+  PlannerServerOptions options;
+  std::unique_ptr<PlannerPlugin> plugin;
+  PectusPlannerOptions planner_options{};
+  AverageChest average;
+  std::string average_mesh;  // binary
+  json average_info, patients_json;
+  std::map<std::string, PectusPlannerPatient> patients;
+  std::mutex cache_mutex;
+  std::list<std::pair<std::string, std::shared_ptr<PatientSession>>> cache;  // most recent first
+  httplib::Server http;
+  std::thread thread;
+  int port = 0;
+  std::mutex run_mutex;
+  std::condition_variable stopped_cv;
+  bool stopped = false;
+
+  std::shared_ptr<PatientSession> Session(const std::string& id);
+  void MakeSession(const std::string& id, PatientSession* s) const;
+  bool Allowed(const httplib::Request& req, httplib::Response& res) const;
+  void Routes();
+  json Plan(const json& body);
+};
+
+// ---- a patient's session: planner, registration, basis and the page's coefficient table ----------------
+
+void PlannerServer::State::MakeSession(const std::string& id, PatientSession* s) const {
+  using Clock = std::chrono::steady_clock;
+  auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+  json timings;
+  auto t = Clock::now();
+  const PectusPlannerPatient& patient = patients.at(id);
+  s->planner = std::make_unique<PlannerClient>(*plugin, patient, planner_options);
+  PlannerClient& p = *s->planner;
+  const PlanScoreOptions score;
+  s->registration = RegisterChestByLandmarks(
+      p.reference_landmarks(), AnteriorDirection(p.skin(), "patient skin"), average.landmarks,
+      AnteriorDirection(average.mesh, "average chest"), score.registration);
+  const PectusPlannerBasisSummary summary =
+      options.basis.empty() ? p.BuildBasis() : p.LoadBasis(options.basis);
+
+  // The page's coefficient table (docs/planner.md, "Planner in the browser"): the response to 1 N at bar
+  // levels every table_step_mm along the sternum, u_k (3 #points: bone vertices, skin vertices, skin
+  // landmarks), written as u_k = U c_k with U orthonormal modes spanning the responses (their SVD at
+  // 1.5 mm spacing, the plugin's own sampling) and c_k = U' u_k; the page interpolates c linearly between
+  // levels and multiplies by U.
+  const double length = p.measurements().sternal_length_mm;
+  const Points3& bone0 = p.bone().vertices.positions;
+  const Points3& skin0 = p.skin().vertices.positions;
+  const Points3 landmarks0 = Positions(p.skin_landmarks());
+  const Eigen::Index rows = 3 * (bone0.rows() + skin0.rows() + landmarks0.rows());
+  const double h = options.table_step_mm;
+  std::vector<double> levels, lift;
+  std::vector<Eigen::VectorXd> responses;
+  for (int k = 0; k * h <= length + 1e-9; ++k) {
+    std::vector<PlannedCase> c;
+    try {
+      c = p.Deform({{k * h, true, 1.0}}, true);
+    } catch (const Error&) {
+      if (!levels.empty()) break;  // past the sternum's end
+      continue;                    // not yet on it
+    }
+    const Points3 moved_landmarks = Positions(c[0].skin_landmarks);
+    Eigen::VectorXd u(rows);
+    Eigen::Index at = 0;
+    for (const auto& [moved, rest] :
+         {std::make_pair(&std::as_const(c[0].bone), &bone0),
+          std::make_pair(&std::as_const(c[0].skin), &skin0), std::make_pair(&moved_landmarks, &landmarks0)}) {
+      const Points3 d = *moved - *rest;  // row-major: x, y, z of each point
+      u.segment(at, d.size()) = Eigen::Map<const Eigen::VectorXd>(d.data(), d.size());
+      at += d.size();
+    }
+    levels.push_back(k * h);
+    lift.push_back(c[0].figures.sternum_lift_mm);
+    responses.push_back(std::move(u));
+  }
+  if (levels.size() < 2)
+    ThrowFailure("patient " + id + ": the bar reaches the sternum at fewer than 2 levels");
+  timings["levels"] = since(t);
+  t = Clock::now();
+  const auto every = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(1.5 / h)));
+  std::vector<std::size_t> picked;
+  for (std::size_t k = 0; k < responses.size(); k += every) picked.push_back(k);
+  if (picked.back() != responses.size() - 1) picked.push_back(responses.size() - 1);
+  Eigen::MatrixXd Y(rows, static_cast<Eigen::Index>(picked.size()));
+  for (std::size_t i = 0; i < picked.size(); ++i) Y.col(static_cast<Eigen::Index>(i)) = responses[picked[i]];
+  const Eigen::BDCSVD<Eigen::MatrixXd> svd(Y, Eigen::ComputeThinU);
+  // Modes down to 1e-9 of the largest singular value (the plugin's basis keeps those above its
+  // tolerance; the rest is round-off).
+  Eigen::Index rank = 0;
+  const Eigen::VectorXd& sigma = svd.singularValues();
+  while (rank < sigma.size() && sigma[rank] > 1e-9 * sigma[0]) ++rank;
+  const Eigen::MatrixXd U = svd.matrixU().leftCols(rank);
+  timings["modes"] = since(t);
+  t = Clock::now();
+  const auto K = static_cast<Eigen::Index>(responses.size());
+  Eigen::MatrixXd C(rank, K);
+  double residual_per_n = 0;           // largest coordinate the modes miss, mm per newton
+  constexpr Eigen::Index kBlock = 64;  // levels projected together: U is read once per block
+  for (Eigen::Index k0 = 0; k0 < K; k0 += kBlock) {
+    const Eigen::Index n = std::min(kBlock, K - k0);
+    Eigen::MatrixXd block(rows, n);
+    for (Eigen::Index j = 0; j < n; ++j) block.col(j) = responses[static_cast<std::size_t>(k0 + j)];
+    C.middleCols(k0, n).noalias() = U.transpose() * block;
+    block.noalias() -= U * C.middleCols(k0, n);
+    residual_per_n = std::max(residual_per_n, block.cwiseAbs().maxCoeff());
+  }
+  timings["projection"] = since(t);
+  s->basis.clear();
+  AppendFloats(&s->basis, lift.data(), lift.size());
+  const Eigen::MatrixXd coefficients = C;  // column k: level k (column-major: c_k contiguous)
+  AppendFloats(&s->basis, coefficients.data(), static_cast<std::size_t>(coefficients.size()));
+  const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> modes = U;
+  AppendFloats(&s->basis, modes.data(), static_cast<std::size_t>(modes.size()));
+
+  s->bone.clear();
+  AppendPoints(&s->bone, bone0);
+  AppendFaces(&s->bone, p.bone());
+  const Eigen::Matrix<std::int32_t, Eigen::Dynamic, 1> regions = p.bone_regions().cast<std::int32_t>();
+  AppendUints(&s->bone, regions.data(), static_cast<std::size_t>(regions.size()));
+  s->skin.clear();
+  AppendPoints(&s->skin, skin0);
+  AppendPoints(&s->skin, p.reference_skin());
+  AppendFaces(&s->skin, p.skin());
+  s->landmarks.clear();
+  AppendPoints(&s->landmarks, landmarks0);
+  AppendPoints(&s->landmarks, Positions(p.bone_landmarks()));
+
+  const PectusPlannerMeasurements& m = p.measurements();
+  json labels = json::array(), bone_labels = json::array();
+  for (const Landmark& l : p.skin_landmarks().items) labels.push_back(l.label);
+  for (const Landmark& l : p.bone_landmarks().items) bone_labels.push_back(l.label);
+  s->info = {{"id", id},
+             {"sternal_length_mm", length},
+             {"depression_mm", m.depression_mm},
+             {"linear_range_lift_mm", LinearRangeLiftMm(m.depression_mm)},
+             {"haller_index", m.haller_index},
+             {"bone",
+              {{"vertices", bone0.rows()},
+               {"faces", p.bone().faces.rows()},
+               {"regions", {"sternum", "rib", "costal_cartilage"}}}},
+             {"skin", {{"vertices", skin0.rows()}, {"faces", p.skin().faces.rows()}}},
+             {"landmarks", {{"skin", labels}, {"bone", bone_labels}}},
+             {"T_average_patient", TransformJson(s->registration)},
+             {"basis",
+              {{"levels", K},
+               {"rank", rank},
+               {"first_mm", levels.front()},
+               {"step_mm", h},
+               {"rows", rows},
+               {"projection_residual_mm_per_n", residual_per_n},
+               {"plugin_rank", summary.rank},
+               {"from", options.basis.empty() ? "built" : options.basis.string()},
+               {"seconds", summary.seconds}}},
+             {"timings_s", timings}};
+}
+
+std::shared_ptr<PatientSession> PlannerServer::State::Session(const std::string& id) {
+  if (!patients.count(id))
+    throw HttpError(404, "no patient '" + id + "' in " + options.patient_table.string());
+  std::shared_ptr<PatientSession> s;
+  {
+    std::lock_guard<std::mutex> lock(cache_mutex);
+    for (auto it = cache.begin(); it != cache.end(); ++it) {
+      if (it->first == id) {
+        s = it->second;
+        cache.splice(cache.begin(), cache, it);
+        break;
+      }
+    }
+    if (!s) {
+      s = std::make_shared<PatientSession>();
+      cache.emplace_front(id, s);
+      while (static_cast<int>(cache.size()) > options.max_patients)
+        cache.pop_back();  // in-flight users keep theirs
+    }
+  }
+  std::unique_lock<std::mutex> lock(s->mutex);
+  if (!s->planner && s->failure.empty()) {
+    try {
+      MakeSession(id, s.get());
+    } catch (const std::exception& e) {
+      s->planner.reset();
+      s->failure = e.what();
+    }
+  }
+  if (!s->failure.empty()) throw HttpError(500, "patient " + id + ": " + s->failure);
+  return s;
+}
+
+// ---- a plan, as `pectus plan` makes it
+// ---------------------------------------------------------------------
+
+json PlannerServer::State::Plan(const json& body) {
+  // Step 1: the request checked in full before any work (a bar in mm against the sternum's length below).
+  const auto it = body.find("patient");
+  if (it == body.end() || !it->is_string())
+    throw HttpError(400, "patient must be a string (an id of the table)");
+  NussPlanOptions options;
+  options.scenario_a = ParseBar(body, "bar", kLongestSternumMm);
+  if (body.contains("compare")) options.scenario_b = ParseBar(body, "compare", kLongestSternumMm);
+  options.search = false;
+  if (body.contains("search")) {
+    const json& search = body.at("search");
+    if (!search.is_object()) throw HttpError(400, "search must be an object ({} for the defaults)");
+    options.search = true;
+    PlacementSearchOptions& o = options.search_options;
+    o.positions = Integer(search, "positions", 2, 40, 10, "search");
+    o.forces = Integer(search, "forces", 2, 61, 31, "search");
+    o.golden_iterations = Integer(search, "refinements", 0, 30, 16, "search");
+    if (search.contains("from")) o.position_from = Number(search, "from", 0.0, 1.0, "search");
+    if (search.contains("to")) o.position_to = Number(search, "to", 0.0, 1.0, "search");
+    if (search.contains("max_force_n")) o.force_max_n = Number(search, "max_force_n", 1.0, 1e5, "search");
+    std::string why;
+    if (!o.IsValid(&why)) throw HttpError(400, "search: " + why);
+  }
+  // Step 2: the patient's planner (made on first use), then the bars against its sternum.
+  const std::shared_ptr<PatientSession> s = Session(it->get<std::string>());
+  std::lock_guard<std::mutex> lock(s->mutex);
+  const PlannerClient& p = *s->planner;
+  const double length = p.measurements().sternal_length_mm;
+  options.scenario_a = ParseBar(body, "bar", length);
+  if (body.contains("compare")) options.scenario_b = ParseBar(body, "compare", length);
+  // Step 3: the plan, as `pectus plan` makes it.
+  NussPlan plan;
+  try {
+    plan = MakeNussPlan(p, average, options);
+  } catch (const Error& e) {
+    throw HttpError(e.kind() == ErrorKind::kFailure ? 500 : 400, e.what());
+  }
+  json out = plan.ToJson();
+  out["patient"] = it->get<std::string>();
+  // The difference to the average chest per average-chest vertex (mm; null outside the region), for the
+  // page's colour map, and the average chest's anterior direction it is measured along.
+  for (std::size_t i = 0; i < plan.scenarios.size(); ++i) {
+    const Eigen::VectorXd& d = plan.scenarios[i].score.difference_mm;
+    out["scenarios"][i]["difference_mm"] = std::vector<double>(d.data(), d.data() + d.size());
+  }
+  const Eigen::VectorXd& d = plan.before.difference_mm;
+  out["before"]["difference_mm"] = std::vector<double>(d.data(), d.data() + d.size());
+  return out;
+}
+
+// ---- checks every request passes --------------------------------------------------------------------------
+
+bool PlannerServer::State::Allowed(const httplib::Request& req, httplib::Response& res) const {
+  const std::string host = req.get_header_value("Host");
+  const std::string p = std::to_string(port);
+  if (host != "127.0.0.1:" + p && host != "localhost:" + p) {
+    SendError(res, 403, "the Host header must be 127.0.0.1:" + p + " or localhost:" + p);
+    return false;
+  }
+  std::string given = req.get_param_value("token");
+  if (given.empty()) given = req.get_header_value("X-Pectus-Token");
+  if (given.empty()) {
+    const std::string cookie = req.get_header_value("Cookie");
+    const auto at = cookie.find("pectus_token=");
+    if (at != std::string::npos) given = cookie.substr(at + 13, cookie.find(';', at) - at - 13);
+  }
+  if (!ConstantTimeEquals(given, options.token)) {
+    SendError(res, 403, given.empty() ? "no token: open the URL `pectus serve` printed" : "wrong token");
+    return false;
+  }
+  return true;
+}
+
+void PlannerServer::State::Routes() {
+  http.set_payload_max_length(options.max_body_bytes);
+  http.set_read_timeout(5, 0);
+  http.set_write_timeout(10, 0);
+  http.set_keep_alive_timeout(5);
+  const int threads = options.threads;
+  http.new_task_queue = [threads] { return new httplib::ThreadPool(static_cast<std::size_t>(threads)); };
+  http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+    return Allowed(req, res) ? httplib::Server::HandlerResponse::Unhandled
+                             : httplib::Server::HandlerResponse::Handled;
+  });
+  http.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
+    try {
+      std::rethrow_exception(ep);
+    } catch (const HttpError& e) {
+      SendError(res, e.status, e.what());
+    } catch (const std::exception& e) {
+      SendError(res, 500, e.what());
+    } catch (...) {
+      SendError(res, 500, "unknown failure");
+    }
+  });
+  http.set_error_handler([](const httplib::Request& req, httplib::Response& res) {
+    if (!res.body.empty()) return;
+    const std::string message = res.status == 413   ? "request body too large"
+                                : res.status == 404 ? "no such path: " + req.path
+                                : res.status == 400 ? "malformed request"
+                                                    : "error " + std::to_string(res.status);
+    SendError(res, res.status, message);
+  });
+
+  http.Get("/api/patients",
+           [this](const httplib::Request&, httplib::Response& res) { SendJson(res, patients_json); });
+  http.Get(R"(/api/patients/([^/]+))", [this](const httplib::Request& req, httplib::Response& res) {
+    SendJson(res, Session(req.matches[1])->info);
+  });
+  http.Get(R"(/api/patients/([^/]+)/(bone|skin|landmarks|basis))",
+           [this](const httplib::Request& req, httplib::Response& res) {
+             const auto s = Session(req.matches[1]);
+             const std::string what = req.matches[2];
+             const std::string& bytes = what == "bone"        ? s->bone
+                                        : what == "skin"      ? s->skin
+                                        : what == "landmarks" ? s->landmarks
+                                                              : s->basis;
+             res.set_content(bytes, "application/octet-stream");
+           });
+  // The C++ deform call itself, for checking the page's deformation from the coefficient table.
+  http.Post("/api/deform", [this](const httplib::Request& req, httplib::Response& res) {
+    const json body = ParseBody(req);
+    const auto id = body.find("patient");
+    if (id == body.end() || !id->is_string())
+      throw HttpError(400, "patient must be a string (an id of the table)");
+    ParseBar(body, "bar", kLongestSternumMm);  // checked before any work
+    const auto s = Session(id->get<std::string>());
+    std::lock_guard<std::mutex> lock(s->mutex);
+    const BarPlacement bar = ParseBar(body, "bar", s->planner->measurements().sternal_length_mm);
+    std::vector<PlannedCase> c;
+    try {
+      c = s->planner->Deform({bar}, false);
+    } catch (const Error& e) {
+      throw HttpError(400, e.what());
+    }
+    const Points3& skin = c[0].skin;
+    SendJson(res, {{"sternum_lift_mm", c[0].figures.sternum_lift_mm},
+                   {"skin", std::vector<double>(skin.data(), skin.data() + skin.size())}});
+  });
+  http.Get("/api/average",
+           [this](const httplib::Request&, httplib::Response& res) { SendJson(res, average_info); });
+  http.Get("/api/average/mesh", [this](const httplib::Request&, httplib::Response& res) {
+    res.set_content(average_mesh, "application/octet-stream");
+  });
+  http.Post("/api/plan", [this](const httplib::Request& req, httplib::Response& res) {
+    SendJson(res, Plan(ParseBody(req)));
+  });
+  // The page: only the embedded files, by exact path.
+  http.Get(R"(/[A-Za-z0-9_./-]*)", [this](const httplib::Request& req, httplib::Response& res) {
+    const std::string path = req.path == "/" ? "/index.html" : req.path;
+    for (std::size_t i = 0; i < kPlannerPageFileCount; ++i) {
+      const EmbeddedFile& f = kPlannerPageFiles[i];
+      if (path == f.path) {
+        res.set_content(reinterpret_cast<const char*>(f.data), f.size, f.mime);
+        res.set_header("Cache-Control", "no-store");
+        res.set_header("X-Content-Type-Options", "nosniff");
+        if (path == "/index.html" && req.has_param("token")) {
+          res.set_header("Set-Cookie",
+                         "pectus_token=" + options.token + "; Path=/; HttpOnly; SameSite=Strict");
+        }
+        return;
+      }
+    }
+    if (req.path.rfind("/api/", 0) == 0) throw HttpError(404, "no such API path: " + req.path);
+    throw HttpError(404, "no such file: " + req.path);
+  });
+  // Any other method or path: JSON 404 (through the error handler). The page's route comes last: the first
+  // pattern that matches answers.
+}
+
+// ---- the server
+// ----------------------------------------------------------------------------------------------
+
+PlannerServer::PlannerServer(PlannerServerOptions options) : state_(std::make_unique<State>()) {
+  State& s = *state_;
+  std::string why;
+  if (!options.IsValid(&why)) ThrowUsage(why);
+  if (options.token.empty()) {
+    std::random_device random;
+    static const char kHex[] = "0123456789abcdef";
+    for (int i = 0; i < 32; ++i) options.token += kHex[random() % 16];
+  }
+  s.options = std::move(options);
+  s.plugin = std::make_unique<PlannerPlugin>(PlannerPlugin::Find(s.options.plugin.string()));
+  s.planner_options = PluginDefaultOptions(*s.plugin);
+  if (s.options.cartilage_mpa > 0) s.planner_options.cartilage_youngs_modulus_mpa = s.options.cartilage_mpa;
+  if (s.options.cell_mm > 0) s.planner_options.rib_cell_length_mm = s.options.cell_mm;
+  if (s.options.soft_tissue_mm >= 0) s.planner_options.soft_tissue_mm = s.options.soft_tissue_mm;
+  // Step 1: the average chest (a bad model fails before the server starts).
+  s.average = LoadAverageChest(s.options.model, s.options.model_landmarks);
+  AppendPoints(&s.average_mesh, s.average.mesh.vertices.positions);
+  AppendFaces(&s.average_mesh, s.average.mesh);
+  const Eigen::Vector3d anterior = AnteriorDirection(s.average.mesh, "average chest");
+  s.average_info = {{"model", s.options.model.string()},
+                    {"vertices", s.average.mesh.num_vertices()},
+                    {"faces", s.average.mesh.faces.rows()},
+                    {"landmarks", LandmarksJson(s.average.landmarks)},
+                    {"anterior", {anterior.x(), anterior.y(), anterior.z()}},
+                    {"grid", {{"columns", s.average.grid_columns}, {"rows", s.average.grid_rows}}}};
+  // Step 2: the patients of the table, read through the plugin as `pectus plan` reads one.
+  s.patients_json = json::array();
+  for (const std::string& id : TableIds(s.options.patient_table)) {
+    const PectusPlannerPatient p = ReadPlannerPatient(*s.plugin, s.options.patient_table, id);
+    s.patients.emplace(id, p);
+    s.patients_json.push_back({{"id", id},
+                               {"width_mm", p.width_mm / p.magnification},
+                               {"depth_mm", p.depth_mm / p.magnification},
+                               {"sternal_length_mm", p.sternal_length_mm},
+                               {"depression_mm", p.depression_mm / p.magnification},
+                               {"haller_index", p.ct_haller_index}});
+  }
+  if (s.patients.empty()) ThrowBadInput(s.options.patient_table.string(), "the table has no patient");
+  s.Routes();
+}
+
+PlannerServer::~PlannerServer() { Stop(); }
+
+void PlannerServer::Start() {
+  State& s = *state_;
+  if (s.options.port == 0) {
+    s.port = s.http.bind_to_any_port(s.options.host);
+  } else {
+    s.port = s.http.bind_to_port(s.options.host, s.options.port) ? s.options.port : -1;
+  }
+  if (s.port <= 0) {
+    ThrowFailure("cannot listen on " + s.options.host + ":" + std::to_string(s.options.port) +
+                 " (in use? --port 0 picks a free one)");
+  }
+  s.thread = std::thread([&s] {
+    s.http.listen_after_bind();
+    std::lock_guard<std::mutex> lock(s.run_mutex);
+    s.stopped = true;
+    s.stopped_cv.notify_all();
+  });
+  // Answering before Start() returns: a Stop() before the thread listens would not stop it.
+  std::unique_lock<std::mutex> lock(s.run_mutex);
+  while (!s.http.is_running() && !s.stopped) {
+    lock.unlock();
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    lock.lock();
+  }
+}
+
+void PlannerServer::Wait() {
+  std::unique_lock<std::mutex> lock(state_->run_mutex);
+  state_->stopped_cv.wait(lock, [this] { return state_->stopped; });
+}
+
+void PlannerServer::Stop() {
+  if (!state_) return;
+  state_->http.stop();
+  if (state_->thread.joinable()) state_->thread.join();
+}
+
+int PlannerServer::port() const { return state_->port; }
+const std::string& PlannerServer::token() const { return state_->options.token; }
+std::string PlannerServer::url() const {
+  return "http://127.0.0.1:" + std::to_string(state_->port) + "/?token=" + state_->options.token;
+}
+
+}  // namespace pectus::serve
