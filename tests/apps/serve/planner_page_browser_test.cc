@@ -10,6 +10,7 @@
 #include <filesystem>
 
 #include "apps/serve/planner_server.h"
+#include "tests/apps/serve/test_server_options.h"
 #include "tests/planner_plugin/host/analytic_chest.h"
 #include "tests/planner_plugin/host/average_model_file.h"
 #include "tests/support/cli_run.h"
@@ -21,10 +22,8 @@ namespace fs = std::filesystem;
 
 TEST(PlannerPageBrowserTest, FiguresDeformationControlsSearchRoundTripAndScreenshot) {
   PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
-  if (!fs::exists("/usr/bin/chromium")) {
-    if (testing_support::UnderCi()) FAIL() << "/usr/bin/chromium is missing (scripts/bootstrap installs it)";
-    GTEST_SKIP() << "/usr/bin/chromium is missing: install Debian's chromium (scripts/bootstrap)";
-  }
+  ASSERT_TRUE(fs::exists("/usr/bin/chromium"))
+      << "/usr/bin/chromium is missing: Debian's chromium is a dependency (scripts/bootstrap installs it)";
   const fs::path page_dir = fs::path(PECTUS_SOURCE_DIR) / "apps/planner_page";
   ASSERT_TRUE(fs::exists(page_dir / "node_modules/playwright-core")) << "npm ci in " << page_dir;
   const fs::path dir = fs::temp_directory_path() / ("pectus_planner_page_" + std::to_string(::getpid()));
@@ -39,12 +38,7 @@ TEST(PlannerPageBrowserTest, FiguresDeformationControlsSearchRoundTripAndScreens
       "' --report '" + (dir / "r.json").string() + "' --threads 1");
   ASSERT_EQ(plan.code, 0) << plan.output;
 
-  PlannerServerOptions options;
-  options.patient_table = table;
-  options.model = dir / "average.h5";
-  options.plugin = PECTUS_PLANNER_PLUGIN_PATH;
-  options.port = 0;
-  options.cell_mm = 10;
+  PlannerServerOptions options = testing::TestServerOptions(table, dir / "average.h5");
   options.table_step_mm = 0.5;  // half the levels of the default (the test asserts its error: <= 0.01 mm)
   PlannerServer server(options);
   server.Start();

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/apps/serve/test_server_options.h"
 #include "tests/planner_plugin/host/analytic_chest.h"
 #include "tests/planner_plugin/host/average_model_file.h"
 #include "tests/support/require_shared_data.h"
@@ -40,12 +41,7 @@ class PlannerServerTest : public ::testing::Test {
     dir_ = fs::temp_directory_path() / ("pectus_planner_server_" + std::to_string(::getpid()));
     fs::create_directories(dir_);
     planner::testing::WriteAverageModel(dir_ / "average.h5", planner::testing::AnalyticChestGrid(31, 41));
-    PlannerServerOptions options;
-    options.patient_table = kTable;
-    options.model = dir_ / "average.h5";
-    options.plugin = PECTUS_PLANNER_PLUGIN_PATH;
-    options.port = 0;
-    options.cell_mm = 10;
+    PlannerServerOptions options = testing::TestServerOptions(kTable, dir_ / "average.h5");
     options.max_body_bytes = 64 * 1024;
     server_ = new PlannerServer(options);
     server_->Start();
