@@ -36,6 +36,8 @@ class ServeCommand : public Command {
     app->add_option("--basis", options_.basis,
                     "Take the patients' response bases from this file (`pectus surrogate build`) instead of "
                     "building them (2-3 s per patient, once)");
+    app->add_option("--patient", patient_,
+                    "The patient the page opens on, made as the server starts (default: the table's first)");
     app->add_option("--port", options_.port, "Port on 127.0.0.1; 0 picks a free one")->default_val(8765);
     app->add_option("--max-body-bytes", options_.max_body_bytes, "Larger request bodies get 413")
         ->default_val(1 << 20);
@@ -65,9 +67,25 @@ class ServeCommand : public Command {
     sigaddset(&signals, SIGTERM);
     pthread_sigmask(SIG_BLOCK, &signals, nullptr);
     serve::PlannerServer server(options_);
+    const std::string patient = patient_.empty() ? server.patient_ids().front() : patient_;
     server.Start();
-    std::printf("pectus serve: the planner is at %s\n", server.url().c_str());
+    // The page opens on `patient`: made now, while the user opens the page.
+    server.Prepare(patient);
+    std::printf("pectus serve: the planner is at %s%s\n", server.url().c_str(),
+                patient_.empty() ? "" : ("&patient=" + patient).c_str());
+    std::printf("pectus serve: making patient %s (its ribcage and response basis: seconds)...\n",
+                patient.c_str());
     std::fflush(stdout);
+    std::thread announcer([&] {
+      std::string failure;
+      if (server.WaitUntilPrepared(&failure)) {
+        std::printf("pectus serve: patient %s is ready\n", patient.c_str());
+      } else {
+        std::fprintf(stderr, "pectus serve: patient %s could not be made: %s\n", patient.c_str(),
+                     failure.c_str());
+      }
+      std::fflush(stdout);
+    });
     std::thread waiter([&] {
       int signal = 0;
       sigwait(&signals, &signal);
@@ -76,12 +94,14 @@ class ServeCommand : public Command {
     server.Wait();
     // Stopped by a signal: the waiter has returned.
     waiter.join();
+    announcer.join();
     context->report["port"] = server.port();
   }
 
  private:
   serve::PlannerServerOptions options_;
   std::string plugin_;
+  std::string patient_;
 };
 
 }  // namespace

@@ -3,7 +3,6 @@
 // on first use and kept (PatientCache); a plan is MakeNussPlan, as `pectus plan` makes it.
 #include "apps/serve/planner_server.h"
 
-#include <Eigen/SVD>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -103,6 +102,15 @@ json TransformJson(const ChestRegistrationResult& r) {
   return rows;
 }
 
+// A difference map (mm per average-chest vertex; NaN, written null, outside the region) to 0.1 µm: a
+// third of the bytes of full doubles, and far finer than the 0.01 mm any figure is held to.
+json DifferenceJson(const Eigen::VectorXd& d) {
+  json out = json::array();
+  for (Eigen::Index i = 0; i < d.size(); ++i)
+    out.push_back(std::isfinite(d[i]) ? std::round(d[i] * 1e4) / 1e4 : d[i]);
+  return out;
+}
+
 // ---- request validation -------------------------------------------------------------------------------
 
 json ParseBody(const httplib::Request& req) {
@@ -186,6 +194,8 @@ struct PatientSession {
   std::mutex mutex;  // the planner is used by one request at a time
   std::unique_ptr<PlannerClient> planner;
   ChestRegistrationResult registration;  // T_average_patient, as MakeNussPlan registers
+  std::unique_ptr<PlanScorer> scorer;    // the patient's chests against the average, in that frame
+  PlanScore before;                      // the unoperated chest's score
   json info;
   std::string bone, skin, landmarks, basis;  // the binary arrays (docs/planner.md)
   std::string failure;                       // why it could not be made (then every request says so)
@@ -229,6 +239,9 @@ struct PlannerServer::State {
   std::list<std::pair<std::string, std::shared_ptr<PatientSession>>> cache;  // most recent first
   httplib::Server http;
   std::thread thread;
+  std::vector<std::string> ids;  // the table's, in its order
+  std::thread prepare;           // Prepare()'s
+  std::string prepare_failure;   // its reason if it could not (read after prepare is joined)
   int port = 0;
   std::mutex run_mutex;
   std::condition_variable stopped_cv;
@@ -239,6 +252,7 @@ struct PlannerServer::State {
   bool Allowed(const httplib::Request& req, httplib::Response& res) const;
   void Routes();
   json Plan(const json& body);
+  json Score(const json& body);
 };
 
 // ---- a patient's session: planner, registration, basis and the page's coefficient table ----------------
@@ -251,86 +265,57 @@ void PlannerServer::State::MakeSession(const std::string& id, PatientSession* s)
   const PectusPlannerPatient& patient = patients.at(id);
   s->planner = std::make_unique<PlannerClient>(*plugin, patient, planner_options);
   PlannerClient& p = *s->planner;
+  timings["planner"] = since(t);
+  t = Clock::now();
   const PlanScoreOptions score;
   s->registration = RegisterChestByLandmarks(
       p.reference_landmarks(), AnteriorDirection(p.skin(), "patient skin"), average.landmarks,
       AnteriorDirection(average.mesh, "average chest"), score.registration);
+  s->scorer = std::make_unique<PlanScorer>(p.skin(), p.reference_skin(), s->registration, average, score);
+  s->before = s->scorer->Score(p.skin().vertices.positions);
+  timings["scorer"] = since(t);
+  t = Clock::now();
   const PectusPlannerBasisSummary summary =
       options.basis.empty() ? p.BuildBasis() : p.LoadBasis(options.basis);
+  timings["basis"] = since(t);
+  t = Clock::now();
 
-  // The page's coefficient table (docs/planner.md, "Planner in the browser"): the response to 1 N at bar
-  // levels every table_step_mm along the sternum, u_k (3 #points: bone vertices, skin vertices, skin
-  // landmarks), written as u_k = U c_k with U orthonormal modes spanning the responses (their SVD at
-  // 1.5 mm spacing, the plugin's own sampling) and c_k = U' u_k; the page interpolates c linearly between
-  // levels and multiplies by U.
+  // The page's coefficient table (docs/planner.md, "Planner in the browser"): the plugin's own basis
+  // (interface version 4), its modes U_r (3 #points: bone vertices, skin vertices, skin landmarks) and
+  // its coefficients per newton c_k at bar levels every table_step_mm along the sternum; the page
+  // interpolates c linearly between levels and multiplies by U_r, as the plugin's deform call does at
+  // the level itself.
   const double length = p.measurements().sternal_length_mm;
   const Points3& bone0 = p.bone().vertices.positions;
   const Points3& skin0 = p.skin().vertices.positions;
   const Points3 landmarks0 = Positions(p.skin_landmarks());
-  const Eigen::Index rows = 3 * (bone0.rows() + skin0.rows() + landmarks0.rows());
   const double h = options.table_step_mm;
-  std::vector<double> levels, lift;
-  std::vector<Eigen::VectorXd> responses;
+  std::vector<double> levels, lift, coefficients;
+  Eigen::VectorXd c;
   for (int k = 0; k * h <= length + 1e-9; ++k) {
-    std::vector<PlannedCase> c;
-    try {
-      c = p.Deform({{k * h, true, 1.0}}, true);
-    } catch (const Error&) {
+    double per_n = 0;
+    if (!p.BasisCoefficients({k * h, true, 1.0}, &c, &per_n)) {
       if (!levels.empty()) break;  // past the sternum's end
       continue;                    // not yet on it
     }
-    const Points3 moved_landmarks = Positions(c[0].skin_landmarks);
-    Eigen::VectorXd u(rows);
-    Eigen::Index at = 0;
-    for (const auto& [moved, rest] :
-         {std::make_pair(&std::as_const(c[0].bone), &bone0),
-          std::make_pair(&std::as_const(c[0].skin), &skin0), std::make_pair(&moved_landmarks, &landmarks0)}) {
-      const Points3 d = *moved - *rest;  // row-major: x, y, z of each point
-      u.segment(at, d.size()) = Eigen::Map<const Eigen::VectorXd>(d.data(), d.size());
-      at += d.size();
-    }
     levels.push_back(k * h);
-    lift.push_back(c[0].figures.sternum_lift_mm);
-    responses.push_back(std::move(u));
+    lift.push_back(per_n);
+    coefficients.insert(coefficients.end(), c.data(), c.data() + c.size());
   }
   if (levels.size() < 2)
     ThrowFailure("patient " + id + ": the bar reaches the sternum at fewer than 2 levels");
-  timings["levels"] = since(t);
-  t = Clock::now();
-  const auto every = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(1.5 / h)));
-  std::vector<std::size_t> picked;
-  for (std::size_t k = 0; k < responses.size(); k += every) picked.push_back(k);
-  if (picked.back() != responses.size() - 1) picked.push_back(responses.size() - 1);
-  Eigen::MatrixXd Y(rows, static_cast<Eigen::Index>(picked.size()));
-  for (std::size_t i = 0; i < picked.size(); ++i) Y.col(static_cast<Eigen::Index>(i)) = responses[picked[i]];
-  const Eigen::BDCSVD<Eigen::MatrixXd> svd(Y, Eigen::ComputeThinU);
-  // Modes down to 1e-9 of the largest singular value (the plugin's basis keeps those above its
-  // tolerance; the rest is round-off).
-  Eigen::Index rank = 0;
-  const Eigen::VectorXd& sigma = svd.singularValues();
-  while (rank < sigma.size() && sigma[rank] > 1e-9 * sigma[0]) ++rank;
-  const Eigen::MatrixXd U = svd.matrixU().leftCols(rank);
-  timings["modes"] = since(t);
-  t = Clock::now();
-  const auto K = static_cast<Eigen::Index>(responses.size());
-  Eigen::MatrixXd C(rank, K);
-  double residual_per_n = 0;           // largest coordinate the modes miss, mm per newton
-  constexpr Eigen::Index kBlock = 64;  // levels projected together: U is read once per block
-  for (Eigen::Index k0 = 0; k0 < K; k0 += kBlock) {
-    const Eigen::Index n = std::min(kBlock, K - k0);
-    Eigen::MatrixXd block(rows, n);
-    for (Eigen::Index j = 0; j < n; ++j) block.col(j) = responses[static_cast<std::size_t>(k0 + j)];
-    C.middleCols(k0, n).noalias() = U.transpose() * block;
-    block.noalias() -= U * C.middleCols(k0, n);
-    residual_per_n = std::max(residual_per_n, block.cwiseAbs().maxCoeff());
-  }
-  timings["projection"] = since(t);
+  const auto modes = p.BasisModes();
+  const Eigen::Index rows = modes.rows(), rank = modes.cols();
+  if (rows != 3 * (bone0.rows() + skin0.rows() + landmarks0.rows()))
+    ThrowFailure("patient " + id + ": the basis has " + std::to_string(rows) +
+                 " rows, not 3 per output point");
+  timings["table"] = since(t);
   s->basis.clear();
   AppendFloats(&s->basis, lift.data(), lift.size());
-  const Eigen::MatrixXd coefficients = C;  // column k: level k (column-major: c_k contiguous)
-  AppendFloats(&s->basis, coefficients.data(), static_cast<std::size_t>(coefficients.size()));
-  const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> modes = U;
-  AppendFloats(&s->basis, modes.data(), static_cast<std::size_t>(modes.size()));
+  AppendFloats(&s->basis, coefficients.data(), coefficients.size());  // level after level
+  s->basis.append(reinterpret_cast<const char*>(modes.data()),
+                  sizeof(float) * static_cast<std::size_t>(modes.size()));
+  const auto K = static_cast<Eigen::Index>(levels.size());
 
   s->bone.clear();
   AppendPoints(&s->bone, bone0);
@@ -367,7 +352,6 @@ void PlannerServer::State::MakeSession(const std::string& id, PatientSession* s)
                {"first_mm", levels.front()},
                {"step_mm", h},
                {"rows", rows},
-               {"projection_residual_mm_per_n", residual_per_n},
                {"plugin_rank", summary.rank},
                {"from", options.basis.empty() ? "built" : options.basis.string()},
                {"seconds", summary.seconds}}},
@@ -451,12 +435,55 @@ json PlannerServer::State::Plan(const json& body) {
   out["patient"] = it->get<std::string>();
   // The difference to the average chest per average-chest vertex (mm; null outside the region), for the
   // page's colour map, and the average chest's anterior direction it is measured along.
-  for (std::size_t i = 0; i < plan.scenarios.size(); ++i) {
-    const Eigen::VectorXd& d = plan.scenarios[i].score.difference_mm;
-    out["scenarios"][i]["difference_mm"] = std::vector<double>(d.data(), d.data() + d.size());
+  for (std::size_t i = 0; i < plan.scenarios.size(); ++i)
+    out["scenarios"][i]["difference_mm"] = DifferenceJson(plan.scenarios[i].score.difference_mm);
+  out["before"]["difference_mm"] = DifferenceJson(plan.before.difference_mm);
+  return out;
+}
+
+// ---- a live score: the scenarios from the exact basis --------------------------------------------------
+
+json PlannerServer::State::Score(const json& body) {
+  // Step 1: the request checked in full before any work.
+  const auto it = body.find("patient");
+  if (it == body.end() || !it->is_string())
+    throw HttpError(400, "patient must be a string (an id of the table)");
+  ParseBar(body, "bar", kLongestSternumMm);
+  if (body.contains("compare")) ParseBar(body, "compare", kLongestSternumMm);
+  bool difference = true;
+  if (body.contains("difference")) {
+    if (!body.at("difference").is_boolean()) throw HttpError(400, "difference must be true or false");
+    difference = body.at("difference").get<bool>();
   }
-  const Eigen::VectorXd& d = plan.before.difference_mm;
-  out["before"]["difference_mm"] = std::vector<double>(d.data(), d.data() + d.size());
+  // Step 2: the chests of scenarios A and B from the patient's basis (the deformer is the session's: one
+  // request at a time, a fraction of a millisecond), then scored without the lock.
+  const std::shared_ptr<PatientSession> s = Session(it->get<std::string>());
+  std::vector<PlannedCase> cases;
+  double depression = 0;
+  {
+    std::lock_guard<std::mutex> lock(s->mutex);
+    const PlannerClient& p = *s->planner;
+    const double length = p.measurements().sternal_length_mm;
+    depression = p.measurements().depression_mm;
+    const BarPlacement a = ParseBar(body, "bar", length);
+    const double a_mm = a.position_in_mm ? a.position : a.position * length;
+    const BarPlacement b = body.contains("compare")
+                               ? ParseBar(body, "compare", length)
+                               : BarPlacement{std::max(0.0, a_mm - 20.0), true, a.force_n};
+    try {
+      cases = p.Deform({a, b}, false);
+    } catch (const Error& e) {
+      throw HttpError(400, e.what());
+    }
+  }
+  json out = {{"patient", it->get<std::string>()}, {"from_basis", true}, {"before", s->before.ToJson()}};
+  out["scenarios"] = json::array();
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    const PlanScenario scenario{i == 0 ? "A" : "B", cases[i], s->scorer->Score(cases[i].skin)};
+    json j = ScenarioJson(scenario, depression, false);
+    if (difference) j["difference_mm"] = DifferenceJson(scenario.score.difference_mm);
+    out["scenarios"].push_back(std::move(j));
+  }
   return out;
 }
 
@@ -488,6 +515,9 @@ void PlannerServer::State::Routes() {
   http.set_read_timeout(5, 0);
   http.set_write_timeout(10, 0);
   http.set_keep_alive_timeout(5);
+  // Answers go out at once: without it, Nagle's algorithm holds a body back until the client acknowledges
+  // the headers, which it delays by 40 ms.
+  http.set_tcp_nodelay(true);
   const int threads = options.threads;
   http.new_task_queue = [threads] { return new httplib::ThreadPool(static_cast<std::size_t>(threads)); };
   http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
@@ -557,6 +587,9 @@ void PlannerServer::State::Routes() {
   http.Post("/api/plan", [this](const httplib::Request& req, httplib::Response& res) {
     SendJson(res, Plan(ParseBody(req)));
   });
+  http.Post("/api/score", [this](const httplib::Request& req, httplib::Response& res) {
+    SendJson(res, Score(ParseBody(req)));
+  });
   // The page: only the embedded files, by exact path.
   http.Get(R"(/[A-Za-z0-9_./-]*)", [this](const httplib::Request& req, httplib::Response& res) {
     const std::string path = req.path == "/" ? "/index.html" : req.path;
@@ -614,6 +647,7 @@ PlannerServer::PlannerServer(PlannerServerOptions options) : state_(std::make_un
   for (const std::string& id : TableIds(s.options.patient_table)) {
     const PectusPlannerPatient p = ReadPlannerPatient(*s.plugin, s.options.patient_table, id);
     s.patients.emplace(id, p);
+    s.ids.push_back(id);
     s.patients_json.push_back({{"id", id},
                                {"width_mm", p.width_mm / p.magnification},
                                {"depth_mm", p.depth_mm / p.magnification},
@@ -622,6 +656,7 @@ PlannerServer::PlannerServer(PlannerServerOptions options) : state_(std::make_un
                                {"haller_index", p.ct_haller_index}});
   }
   if (s.patients.empty()) ThrowBadInput(s.options.patient_table.string(), "the table has no patient");
+
   s.Routes();
 }
 
@@ -658,10 +693,33 @@ void PlannerServer::Wait() {
   state_->stopped_cv.wait(lock, [this] { return state_->stopped; });
 }
 
+const std::vector<std::string>& PlannerServer::patient_ids() const { return state_->ids; }
+
+void PlannerServer::Prepare(const std::string& id) {
+  State& s = *state_;
+  if (!s.patients.count(id)) ThrowUsage("no patient '" + id + "' in " + s.options.patient_table.string());
+  WaitUntilPrepared();
+  s.prepare_failure.clear();
+  s.prepare = std::thread([&s, id] {
+    try {
+      s.Session(id);
+    } catch (const std::exception& e) {
+      s.prepare_failure = e.what();
+    }
+  });
+}
+
+bool PlannerServer::WaitUntilPrepared(std::string* why) {
+  if (state_->prepare.joinable()) state_->prepare.join();
+  if (why != nullptr) *why = state_->prepare_failure;
+  return state_->prepare_failure.empty();
+}
+
 void PlannerServer::Stop() {
   if (!state_) return;
   state_->http.stop();
   if (state_->thread.joinable()) state_->thread.join();
+  if (state_->prepare.joinable()) state_->prepare.join();
 }
 
 int PlannerServer::port() const { return state_->port; }

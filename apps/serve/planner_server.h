@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace pectus::serve {
 
@@ -30,8 +31,10 @@ struct PlannerServerOptions {
   int port = 8765;                       ///< 0: a free port, told by port() and url()
   std::string token;                     ///< empty: 32 random hex characters (std::random_device)
   std::size_t max_body_bytes = 1 << 20;  ///< larger request bodies get 413. Default 1 MiB
-  int threads = 8;                       ///< worker threads answering requests
-  int max_patients = 4;                  ///< patients kept in memory (planner + basis), least recent out
+  /// Worker threads answering requests. A keep-alive connection holds one while it is open (a browser
+  /// keeps up to 6 per page), so there are more than clients expected at once. Default 32
+  int threads = 32;
+  int max_patients = 4;  ///< patients kept in memory (planner + basis), least recent out
   /// The planner's mesh and materials, as `pectus plan`'s options (0 or < 0: the plugin's defaults).
   double cell_mm = 0, cartilage_mpa = 0, soft_tissue_mm = -1;
   /// Bar levels of the page's coefficient table, mm apart along the sternum (docs/planner.md). 0.25.
@@ -55,6 +58,14 @@ class PlannerServer {
   void Start();
   /// Blocks until the server stops (Stop() from another thread, or a signal handler calling it).
   void Wait();
+  /// The table's patient ids, in its order.
+  const std::vector<std::string>& patient_ids() const;
+  /// Starts making patient `id` (planner, basis, the page's arrays) in the background, so that the page
+  /// opens on it without waiting; after Start(). Throws Error(kUsage) for an id not in the table.
+  void Prepare(const std::string& id);
+  /// Blocks until what Prepare() started is made (at once if nothing); false, with the reason, if it could
+  /// not be made.
+  bool WaitUntilPrepared(std::string* why = nullptr);
   /// Stops answering; idempotent.
   void Stop();
 

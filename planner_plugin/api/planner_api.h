@@ -21,6 +21,8 @@
  * once per thread (create_deformer) evaluates the chest for any bar position and force without
  * allocation, lock, exception or I/O, at haptic rates (docs/planner.md, "The exact response basis").
  * Version 3 added the learned emulator's leave-one-patient-out evaluation (evaluate_emulator).
+ * Version 4 added the basis as a table for a host that evaluates it itself, such as the planner page in a
+ * browser: its modes (basis_modes) and a bar position's coefficients (basis_coefficients).
  */
 #ifndef PECTUS_PLANNER_API_H_
 #define PECTUS_PLANNER_API_H_
@@ -33,7 +35,7 @@ extern "C" {
 #endif
 
 /** The interface version this header describes. Any change to a struct or function below bumps it. */
-#define PECTUS_PLANNER_INTERFACE_VERSION 3u
+#define PECTUS_PLANNER_INTERFACE_VERSION 4u
 /** The name of the one exported symbol (for dlsym). */
 #define PECTUS_PLANNER_ENTRY_POINT "pectus_planner_interface"
 
@@ -320,6 +322,21 @@ typedef struct PectusPlannerInterface {
                                void* progress_user, PectusPlannerEmulatorEvaluation* out,
                                PectusPlannerEmulatorPatient* per_patient, int64_t capacity,
                                PectusPlannerStatus* status);
+
+  /* ---- version 4: the basis as a table, for a host that evaluates it itself ---- */
+
+  /** The basis's modes U_r (orthonormal columns, to about 1e-3): `rows` = 3 x (bone vertices + skin vertices
+   * + skin landmarks), the output points of deform() in its order (x, y, z of each); `rank` columns. Always
+   *  gives the sizes (each may be NULL); writes the modes row after row (rows x rank, float32) into
+   *  `modes` when it is not NULL, or USAGE if `capacity` (floats) is smaller. Needs build_basis() or
+   *  load_basis(). */
+  int32_t (*basis_modes)(const PectusPlanner* planner, float* modes, int64_t capacity, int64_t* rows,
+                         int64_t* rank, PectusPlannerStatus* status);
+  /** The coefficients per newton c (rank values; NULL if not wanted) and the sternal lift per newton (mm/N;
+   *  NULL if not wanted) of a bar at `bar->position` (bar->force_n is ignored): deform() gives the rest
+   *  positions plus force_n x U_r c. Real time, as deform(): USAGE, outputs untouched, off the sternum. */
+  int32_t (*basis_coefficients)(PectusPlannerDeformer* deformer, const PectusPlannerBar* bar,
+                                double* coefficients, double* lift_per_n, PectusPlannerStatus* status);
 } PectusPlannerInterface;
 
 /** The one exported symbol: the plugin's function table (static storage; never NULL). */

@@ -36,6 +36,21 @@ nlohmann::json BarJson(const BarPlacement& bar) {
 
 }  // namespace
 
+nlohmann::json ScenarioJson(const PlanScenario& s, double depression_mm, bool solved) {
+  const double lift = s.solved.figures.sternum_lift_mm;
+  nlohmann::json j = {{"name", s.name},
+                      {"bar", BarJson(s.solved.bar)},
+                      {"sternum_lift_mm", lift},
+                      {"beyond_linear_range", lift > LinearRangeLiftMm(depression_mm)}};
+  if (solved) {
+    j["max_displacement_mm"] = s.solved.figures.max_displacement_mm;
+    j["bar_level_z_mm"] = s.solved.figures.bar_level_z_mm;
+    j["contact_area_mm2"] = s.solved.figures.contact_area_mm2;
+  }
+  j["score"] = s.score.ToJson();
+  return j;
+}
+
 std::string NussPlan::BriefReport() const {
   if (scenarios.empty()) return "no scenario";
   const PlanScenario& a = scenarios.front();
@@ -73,17 +88,7 @@ nlohmann::json NussPlan::ToJson() const {
   j["before"] = before.ToJson();
   j["depression_mm"] = depression_mm;
   j["linear_range_lift_mm"] = LinearRangeLiftMm(depression_mm);
-  for (const PlanScenario& s : scenarios) {
-    const double lift = s.solved.figures.sternum_lift_mm;
-    j["scenarios"].push_back({{"name", s.name},
-                              {"bar", BarJson(s.solved.bar)},
-                              {"sternum_lift_mm", lift},
-                              {"beyond_linear_range", lift > LinearRangeLiftMm(depression_mm)},
-                              {"max_displacement_mm", s.solved.figures.max_displacement_mm},
-                              {"bar_level_z_mm", s.solved.figures.bar_level_z_mm},
-                              {"contact_area_mm2", s.solved.figures.contact_area_mm2},
-                              {"score", s.score.ToJson()}});
-  }
+  for (const PlanScenario& s : scenarios) j["scenarios"].push_back(ScenarioJson(s, depression_mm, true));
   if (search) j["search"] = search->ToJson();
   j["common_scale_mm"] = common_limit_mm;
   return j;

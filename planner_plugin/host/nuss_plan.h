@@ -55,6 +55,10 @@ struct NussPlan {
   std::string BriefReport() const;
 };
 
+/// One scenario of NussPlan::ToJson(): name, bar, sternal lift, the linear-range flag, the score and, if
+/// `solved` (a direct solve, not the basis), the solve's figures (largest displacement, bar level, contact).
+nlohmann::json ScenarioJson(const PlanScenario& scenario, double depression_mm, bool solved);
+
 /// Makes the plan; stages are timed into `report` if not null. Throws pectus::Error.
 NussPlan MakeNussPlan(const PlannerClient& planner, const AverageChest& average,
                       const NussPlanOptions& options, Report* report = nullptr);

@@ -114,6 +114,28 @@ std::vector<PlannedCase> PlannerClient::Deform(const std::vector<BarPlacement>& 
   return out;
 }
 
+Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> PlannerClient::BasisModes() const {
+  if (!deformer_) ThrowUsage("planner: no response basis; BuildBasis() first");
+  PectusPlannerStatus status{};
+  std::int64_t rows = 0, rank = 0;
+  ThrowIfFailed(api_->basis_modes(planner_, nullptr, 0, &rows, &rank, &status), status);
+  Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> modes(rows, rank);
+  ThrowIfFailed(api_->basis_modes(planner_, modes.data(), modes.size(), &rows, &rank, &status), status);
+  return modes;
+}
+
+bool PlannerClient::BasisCoefficients(const BarPlacement& bar, Eigen::VectorXd* coefficients,
+                                      double* lift_per_n) const {
+  if (!deformer_) ThrowUsage("planner: no response basis; BuildBasis() first");
+  std::int64_t rank = 0;
+  PectusPlannerStatus status{};
+  ThrowIfFailed(api_->basis_modes(planner_, nullptr, 0, nullptr, &rank, &status), status);
+  coefficients->resize(rank);
+  const PectusPlannerBar b = ToBar(bar);
+  return api_->basis_coefficients(deformer_.get(), &b, coefficients->data(), lift_per_n, &status) ==
+         PECTUS_PLANNER_OK;
+}
+
 LandmarkSet PlannerClient::Landmarks(int which) const {
   PectusPlannerStatus status{};
   std::int32_t count = 0;

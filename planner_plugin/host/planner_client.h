@@ -87,6 +87,13 @@ class PlannerClient {
   /// `with_bone`, and of the figures only the sternal lift (the others 0). Throws Error(kUsage) for a
   /// bar off the sternum.
   std::vector<PlannedCase> Deform(const std::vector<BarPlacement>& bars, bool with_bone = true) const;
+  /// The basis as a table (interface version 4), for a host that evaluates it itself: the modes U_r,
+  /// 3 #points by rank (Deform()'s points: bone vertices, skin vertices, skin landmarks; x, y, z of each).
+  Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> BasisModes() const;
+  /// The coefficients per newton (rank values) of a bar at `bar`'s position into `coefficients` and the
+  /// sternal lift per newton (mm/N) into `lift_per_n`: Deform() is the rest plus force U_r c. False off
+  /// the sternum; throws Error(kUsage) without a basis.
+  bool BasisCoefficients(const BarPlacement& bar, Eigen::VectorXd* coefficients, double* lift_per_n) const;
 
  private:
   LandmarkSet Landmarks(int set) const;

@@ -32,14 +32,16 @@ std::vector<fs::path> PlannerPluginCandidates(const fs::path& explicit_path) {
 void CheckPlannerInterface(const PectusPlannerInterface* api, const fs::path& path) {
   if (api == nullptr) ThrowBadInput(path.string(), "the planner plugin returned no interface table");
   if (api->version != PECTUS_PLANNER_INTERFACE_VERSION) {
-    ThrowBadInput(path.string(),
-                  "the planner plugin implements interface version " + std::to_string(api->version) +
-                      ", but this pectus needs version " + std::to_string(PECTUS_PLANNER_INTERFACE_VERSION) +
-                      (api->version < PECTUS_PLANNER_INTERFACE_VERSION
-                           ? " (the plugin is older: it lacks the calls added since, such as the real-time "
-                             "deform call of version 2 and the emulator's evaluation of version 3)"
-                           : " (the plugin is newer than this pectus)") +
-                      "; use a plugin built with this pectus (or the pectus it was built with)");
+    ThrowBadInput(
+        path.string(),
+        "the planner plugin implements interface version " + std::to_string(api->version) +
+            ", but this pectus needs version " + std::to_string(PECTUS_PLANNER_INTERFACE_VERSION) +
+            (api->version < PECTUS_PLANNER_INTERFACE_VERSION
+                 ? " (the plugin is older: it lacks the calls added since, such as the real-time "
+                   "deform call of version 2, the emulator's evaluation of version 3 and the basis table of "
+                   "version 4)"
+                 : " (the plugin is newer than this pectus)") +
+            "; use a plugin built with this pectus (or the pectus it was built with)");
   }
   if (api->struct_size < sizeof(PectusPlannerInterface)) {
     ThrowBadInput(path.string(), "the planner plugin's interface table has " +

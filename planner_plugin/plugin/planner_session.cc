@@ -245,7 +245,8 @@ std::vector<NodeTies> PlannerSession::OutputPoints() const {
   for (const SkinPoint& landmark : skin_.landmark_points) {
     NodeTies ties;
     for (const auto& [vertex, w] : landmark.weights) {
-      for (const auto& [node, tie] : skin_.ties[static_cast<std::size_t>(vertex)]) ties.emplace_back(node, w * tie);
+      for (const auto& [node, tie] : skin_.ties[static_cast<std::size_t>(vertex)])
+        ties.emplace_back(node, w * tie);
     }
     points.push_back(std::move(ties));
   }
@@ -295,15 +296,18 @@ void PlannerSession::LoadBasis(const StoredResponseBasis& stored, const std::str
   if (!(std::abs(direct - from_basis) <= 1e-6 * std::abs(direct))) {
     ThrowBadInput(source, "the response basis of patient " + ribcage_.patient +
                               " was built with other materials (its sternal lift per newton at 0.8 of the "
-                              "sternum is " + std::to_string(from_basis) + " mm, this planner's " +
-                              std::to_string(direct) + " mm)");
+                              "sternum is " +
+                              std::to_string(from_basis) + " mm, this planner's " + std::to_string(direct) +
+                              " mm)");
   }
   basis_ = std::move(basis);
   rest_positions_ = std::move(rest);
 }
 
-SessionDeformer::SessionDeformer(const PlannerSession& session) : session_(&session), basis_(session.basis()) {
-  if (basis_ == nullptr) ThrowUsage("deformer: the planner has no response basis yet; build it first (build_basis)");
+SessionDeformer::SessionDeformer(const PlannerSession& session)
+    : session_(&session), basis_(session.basis()) {
+  if (basis_ == nullptr)
+    ThrowUsage("deformer: the planner has no response basis yet; build it first (build_basis)");
   workspace_ = basis_->MakeWorkspace();
   displacement_.resize(3 * basis_->num_points());
 }
@@ -315,13 +319,16 @@ bool SessionDeformer::Deform(const BarLoad& bar, double* bone_positions, double*
     return false;
   }
   const double level = basis_->LevelZ(bar);
-  if (!basis_->Evaluate(level, bar.force_n, &workspace_, displacement_.data())) {
+  const Eigen::Index nb = 3 * session_->num_bone_vertices(), ns = 3 * session_->num_skin_vertices(),
+                     nl = 3 * session_->num_skin_landmarks();
+  // Only the rows asked for: the skin alone is a third of the work of bone and skin.
+  const Eigen::Index from = bone_positions ? 0 : skin_positions ? nb : nb + ns;
+  const Eigen::Index to = skin_landmarks ? nb + ns + nl : skin_positions ? nb + ns : bone_positions ? nb : 0;
+  if (!basis_->Evaluate(level, bar.force_n, &workspace_, displacement_.data(), from, to)) {
     *why = "the bar is off the sternum (its contact profile touches no face of the sternum's back)";
     return false;
   }
   const Eigen::VectorXd& rest = session_->rest_positions();
-  const Eigen::Index nb = 3 * session_->num_bone_vertices(), ns = 3 * session_->num_skin_vertices(),
-                     nl = 3 * session_->num_skin_landmarks();
   auto write = [&](double* out, Eigen::Index first, Eigen::Index count) {
     if (out == nullptr) return;
     for (Eigen::Index i = 0; i < count; ++i) out[i] = rest[first + i] + displacement_[first + i];
@@ -340,11 +347,30 @@ double SessionDeformer::LiftForce(const BarLoad& bar, double lift_mm, const char
   }
   const double per_newton = basis_->LiftPerNewton(basis_->LevelZ(bar));
   if (!(per_newton > 0)) {
-    *why = "a bar there does not lift the sternum at its deepest level (off the sternum, or so near the notch "
-           "that it tilts the sternum back)";
+    *why =
+        "a bar there does not lift the sternum at its deepest level (off the sternum, or so near the notch "
+        "that it tilts the sternum back)";
     return std::numeric_limits<double>::quiet_NaN();
   }
   return lift_mm / per_newton;
+}
+
+bool SessionDeformer::CoefficientsPerNewton(const BarLoad& bar, double* coefficients, double* lift_per_n,
+                                            const char** why) noexcept {
+  if (!std::isfinite(bar.position)) {
+    *why = "the bar's position must be finite";
+    return false;
+  }
+  const double level = basis_->LevelZ(bar);
+  if (!basis_->CoefficientsPerNewton(level, &workspace_)) {
+    *why = "the bar is off the sternum (its contact profile touches no face of the sternum's back)";
+    return false;
+  }
+  if (coefficients != nullptr) {
+    for (Eigen::Index j = 0; j < basis_->rank(); ++j) coefficients[j] = workspace_.coefficients[j];
+  }
+  if (lift_per_n != nullptr) *lift_per_n = basis_->LiftPerNewton(level);
+  return true;
 }
 
 }  // namespace pectus::planner

@@ -57,7 +57,8 @@ class PlannerSession {
   /// Fits, meshes, factorises and builds the skin. Throws pectus::Error.
   PlannerSession(const PatientMeasurements& patient, const PlannerSettings& settings);
   /// The same from a generic ribcage already built with settings.generic (a cohort's, built once).
-  PlannerSession(const GenericRibcage& generic, const PatientMeasurements& patient, const PlannerSettings& settings);
+  PlannerSession(const GenericRibcage& generic, const PatientMeasurements& patient,
+                 const PlannerSettings& settings);
 
   /// The basis as the FE dataset stores it: its arrays, which points it answers for, and this planner's
   /// fingerprint (BuildBasis() first; throws Error(kUsage) otherwise).
@@ -107,7 +108,7 @@ class PlannerSession {
   BoneSurface bone_;
   Timings timings_s_;  // "assembly_and_factorisation", s
   std::unique_ptr<BarResponseBasis> basis_;
-  Eigen::VectorXd rest_positions_;  // of OutputPoints(), with basis_
+  Eigen::VectorXd rest_positions_;        // of OutputPoints(), with basis_
   Eigen::VectorXd RestPositions() const;  // the undeformed OutputPoints(), 3 #points
 };
 
@@ -127,6 +128,12 @@ class SessionDeformer {
   /// The force that lifts the sternum by `lift_mm` with the bar at `bar`'s position (its force ignored),
   /// N; NaN, with `why`, off the sternum or for a non-finite value.
   double LiftForce(const BarLoad& bar, double lift_mm, const char** why) const noexcept;
+  /// The basis's coefficients per newton at `bar`'s position (its force ignored) into `coefficients`
+  /// (rank values; the displacement of the output points under force F is F U_r c) and the sternal lift
+  /// per newton into `lift_per_n` (either nullptr if not wanted). False, with the outputs untouched and
+  /// `why` set, for a non-finite position or a bar off the sternum.
+  bool CoefficientsPerNewton(const BarLoad& bar, double* coefficients, double* lift_per_n,
+                             const char** why) noexcept;
 
  private:
   const PlannerSession* session_;

@@ -285,6 +285,36 @@ std::int32_t LiftForce(PectusPlannerDeformer* deformer, const PectusPlannerBar* 
   return RealTimeOk(status);
 }
 
+std::int32_t BasisModes(const PectusPlanner* planner, float* modes, std::int64_t capacity, std::int64_t* rows,
+                        std::int64_t* rank, PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(planner, "planner");
+    const pectus::planner::BarResponseBasis* basis = planner->session.basis();
+    if (basis == nullptr)
+      pectus::ThrowUsage("basis_modes: the planner has no response basis yet; build it first (build_basis)");
+    const std::int64_t n = 3 * basis->num_points(), r = basis->rank();
+    if (rows != nullptr) *rows = n;
+    if (rank != nullptr) *rank = r;
+    if (modes == nullptr) return;
+    if (capacity < n * r) {
+      pectus::ThrowUsage("basis_modes: the modes need " + std::to_string(n * r) + " floats, capacity is " +
+                         std::to_string(capacity));
+    }
+    basis->CopyModes(modes);
+  });
+}
+
+std::int32_t BasisCoefficients(PectusPlannerDeformer* deformer, const PectusPlannerBar* bar,
+                               double* coefficients, double* lift_per_n,
+                               PectusPlannerStatus* status) noexcept {
+  if (deformer == nullptr || bar == nullptr)
+    return RealTimeFailure(status, "deformer and bar must not be NULL");
+  const char* why = "";
+  if (!deformer->deformer.CoefficientsPerNewton(LoadOf(*bar), coefficients, lift_per_n, &why))
+    return RealTimeFailure(status, why);
+  return RealTimeOk(status);
+}
+
 PectusPlannerEmulatorFigures FiguresOf(const pectus::planner::EmulatorErrors& errors) {
   const auto s = errors.Summarise();
   return {s.cases,
@@ -422,6 +452,8 @@ const PectusPlannerInterface kInterface = {
     Deform,
     LiftForce,
     EvaluateEmulator,
+    BasisModes,
+    BasisCoefficients,
 };
 
 }  // namespace

@@ -37,16 +37,17 @@ namespace {
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
 __attribute__((target_clones("avx2", "default")))
 #endif
-void PanelsTimesVector(const float* panels, const double* c, Eigen::Index rows, Eigen::Index r, double* out) noexcept {
+void PanelsTimesVector(const float* panels, const double* c, Eigen::Index begin, Eigen::Index end, Eigen::Index r,
+                       double* out) noexcept {
   constexpr int P = 8;
-  for (Eigen::Index first = 0; first < rows; first += P) {
+  for (Eigen::Index first = begin - begin % P; first < end; first += P) {
     const float* panel = panels + first * r;
     double sum[P] = {};
     for (Eigen::Index j = 0; j < r; ++j) {
       for (int k = 0; k < P; ++k) sum[k] += static_cast<double>(panel[j * P + k]) * c[j];
     }
-    const Eigen::Index count = std::min<Eigen::Index>(P, rows - first);
-    for (Eigen::Index k = 0; k < count; ++k) out[first + k] = sum[k];
+    for (Eigen::Index k = std::max<Eigen::Index>(0, begin - first); k < P && first + k < end; ++k)
+      out[first + k] = sum[k];
   }
 }
 
@@ -314,19 +315,33 @@ bool BarResponseBasis::Weights(double level_z_mm, BarResponseWorkspace* ws) cons
   return true;
 }
 
-bool BarResponseBasis::Evaluate(double level_z_mm, double force_n, BarResponseWorkspace* ws,
-                                double* out) const noexcept {
+bool BarResponseBasis::CoefficientsPerNewton(double level_z_mm, BarResponseWorkspace* ws) const noexcept {
   Eigen::Index first = 0, last = 0;
   double c = 0.0, s = 0.0;
   if (!Window(level_z_mm, &first, &last, &c, &s)) return false;
   const double area = WindowSum(prefix_area_, first, last, c, s);
   if (!(area > kLeastArea * prefix_area_[0][z_.size()])) return false;
-  const double scale = 0.5 * force_n / area;
+  const double scale = 0.5 / area;
   ws->coefficients.noalias() = scale * ((prefix_mixing_[0].col(last) - prefix_mixing_[0].col(first)) +
                                         c * (prefix_mixing_[1].col(last) - prefix_mixing_[1].col(first)) +
                                         s * (prefix_mixing_[2].col(last) - prefix_mixing_[2].col(first)));
-  PanelsTimesVector(panels_.data(), ws->coefficients.data(), rows_, rank_, out);
   return true;
+}
+
+bool BarResponseBasis::Evaluate(double level_z_mm, double force_n, BarResponseWorkspace* ws, double* out,
+                                Eigen::Index first_row, Eigen::Index end_row) const noexcept {
+  if (!CoefficientsPerNewton(level_z_mm, ws)) return false;
+  ws->coefficients *= force_n;
+  const Eigen::Index begin = std::clamp<Eigen::Index>(first_row, 0, rows_);
+  const Eigen::Index end = end_row < 0 ? rows_ : std::clamp<Eigen::Index>(end_row, begin, rows_);
+  PanelsTimesVector(panels_.data(), ws->coefficients.data(), begin, end, rank_, out);
+  return true;
+}
+
+void BarResponseBasis::CopyModes(float* out) const noexcept {
+  for (Eigen::Index i = 0; i < rows_; ++i) {
+    for (Eigen::Index j = 0; j < rank_; ++j) out[i * rank_ + j] = Mode(i, j);
+  }
 }
 
 double BarResponseBasis::LiftPerNewton(double level_z_mm) const noexcept {
@@ -372,8 +387,7 @@ BarResponseBasis::Stored BarResponseBasis::ToStored() const {
   }
   out.modes.resize(rows_, rank_);
   for (Eigen::Index i = 0; i < rows_; ++i) {
-    for (Eigen::Index j = 0; j < rank_; ++j)
-      out.modes(i, j) = panels_[static_cast<std::size_t>((i / kPanel) * kPanel * rank_ + j * kPanel + i % kPanel)];
+    for (Eigen::Index j = 0; j < rank_; ++j) out.modes(i, j) = Mode(i, j);
   }
   out.mixing = mixing_;
   out.lift = lift_;
@@ -390,21 +404,24 @@ BarResponseBasis::BarResponseBasis(Stored stored, const std::string& source) {
         std::to_string(stored.num_points) + " points (3 per point)");
   if (J == 0 || Q == 0) bad("no contact nodes or no quadrature points");
   if (stored.quadrature_weight.size() != Q || stored.quadrature_contact.rows() != Q ||
-      stored.quadrature_contact.cols() != 6 || stored.quadrature_N.rows() != Q || stored.quadrature_N.cols() != 6)
+      stored.quadrature_contact.cols() != 6 || stored.quadrature_N.rows() != Q ||
+      stored.quadrature_N.cols() != 6)
     bad("the quadrature's arrays differ in length (or are not 6 per point)");
   if (stored.mixing.rows() != r || stored.mixing.cols() != J || stored.lift.size() != J)
     bad("the mixing is not rank by #contact nodes, or the lift not one per contact node");
   if (!(stored.contact_width_mm > 0 && std::isfinite(stored.contact_width_mm)) ||
-      !std::isfinite(stored.notch_z_mm) || !(stored.sternal_length_mm > 0 && std::isfinite(stored.sternal_length_mm)) ||
+      !std::isfinite(stored.notch_z_mm) ||
+      !(stored.sternal_length_mm > 0 && std::isfinite(stored.sternal_length_mm)) ||
       !(stored.truncation_bound_mm_per_n >= 0 && std::isfinite(stored.truncation_bound_mm_per_n)))
     bad("the contact width, sternal length and truncation bound must be positive and finite");
   if (!stored.modes.allFinite() || !stored.mixing.allFinite() || !stored.lift.allFinite() ||
-      !stored.quadrature_z.allFinite() || !stored.quadrature_weight.allFinite() || !stored.quadrature_N.allFinite() ||
-      !stored.singular_values.allFinite())
+      !stored.quadrature_z.allFinite() || !stored.quadrature_weight.allFinite() ||
+      !stored.quadrature_N.allFinite() || !stored.singular_values.allFinite())
     bad("holds a non-finite number");
   if ((stored.quadrature_weight.array() < 0).any()) bad("a quadrature weight is negative");
   for (Eigen::Index q = 0; q + 1 < Q; ++q) {
-    if (stored.quadrature_z[q + 1] < stored.quadrature_z[q]) bad("the quadrature points are not in ascending z");
+    if (stored.quadrature_z[q + 1] < stored.quadrature_z[q])
+      bad("the quadrature points are not in ascending z");
   }
   if ((stored.quadrature_contact.array() < 0).any() || (stored.quadrature_contact.array() >= J).any())
     bad("a quadrature point refers to a contact node beyond the " + std::to_string(J));

@@ -101,7 +101,18 @@ class BarResponseBasis {
   /// with `force_n` into `out` (3 #points doubles): the r coefficients from prefix sums over the contact
   /// profile's quadrature (two binary searches), then one product with the modes. False, with `out`
   /// untouched, if the bar is off the sternum. No allocation, lock or throw: callable from a 1 kHz thread.
-  bool Evaluate(double level_z_mm, double force_n, BarResponseWorkspace* ws, double* out) const noexcept;
+  /// Only rows [first_row, end_row) of `out` are written if given (end_row < 0: to the last), the
+  /// others untouched: the time is that share of the whole.
+  bool Evaluate(double level_z_mm, double force_n, BarResponseWorkspace* ws, double* out,
+                Eigen::Index first_row = 0, Eigen::Index end_row = -1) const noexcept;
+
+  /// The r coefficients per newton of a bar at `level_z_mm` into `ws->coefficients`: the displacement
+  /// under force F is F U_r c (CopyModes()). False, with the coefficients untouched, off the sternum. No
+  /// allocation, lock or throw. For a host that evaluates the basis itself (the planner page).
+  bool CoefficientsPerNewton(double level_z_mm, BarResponseWorkspace* ws) const noexcept;
+
+  /// The modes U_r, 3 #points by rank, row after row (the rows of Evaluate()'s output), into `out`.
+  void CopyModes(float* out) const noexcept;
 
   /// Sternal lift per newton of a bar at `level_z_mm` (mm/N), 0 if off the sternum; the force for a
   /// wanted lift is lift / this. O(log #quadrature points), no allocation.
@@ -151,6 +162,10 @@ class BarResponseBasis {
   // tolerance), summed in double.
   static constexpr int kPanel = 8;
   std::vector<float> panels_;
+  // U_r(i, j) from the panels.
+  float Mode(Eigen::Index i, Eigen::Index j) const noexcept {
+    return panels_[static_cast<std::size_t>((i / kPanel) * kPanel * rank_ + j * kPanel + i % kPanel)];
+  }
   Eigen::Index rows_ = 0, rank_ = 0;
   Eigen::VectorXd lift_;    // per contact node: sternal lift per newton (exact, uncompressed)
   Eigen::MatrixXd mixing_;  // rank by #contact nodes (kept to store the basis)

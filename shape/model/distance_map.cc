@@ -10,6 +10,7 @@
 #include "registration/kdtree.h"
 #include "shape/core/enum_names.h"
 #include "shape/core/error.h"
+#include "shape/core/sample_statistics.h"
 
 namespace pectus {
 namespace {
@@ -73,14 +74,6 @@ struct PseudoNormals {
   }
 };
 
-double Percentile(std::vector<double>& sorted, double q) {
-  if (sorted.empty()) return 0.0;
-  const double pos = q * static_cast<double>(sorted.size() - 1);
-  const auto lo = static_cast<std::size_t>(std::floor(pos));
-  const std::size_t hi = std::min(sorted.size() - 1, lo + 1);
-  return sorted[lo] + (pos - static_cast<double>(lo)) * (sorted[hi] - sorted[lo]);
-}
-
 constexpr EnumNames<DistanceKind, 2> kKindNames{
     {{DistanceKind::kNearestPoint, "nearest"}, {DistanceKind::kSignedSurface, "signed"}}};
 }  // namespace
@@ -109,13 +102,13 @@ DistanceStats SummarizeDistances(const Eigen::VectorXd& d) {
   s.mean = d.mean();
   s.mean_abs = d.cwiseAbs().mean();
   s.rms = std::sqrt(d.squaredNorm() / static_cast<double>(d.size()));
-  std::vector<double> a(d.size());
-  for (Eigen::Index k = 0; k < d.size(); ++k) a[k] = std::abs(d[k]);
-  std::sort(a.begin(), a.end());
-  s.p50 = Percentile(a, 0.50);
-  s.p90 = Percentile(a, 0.90);
-  s.p95 = Percentile(a, 0.95);
-  s.p99 = Percentile(a, 0.99);
+  std::vector<double> a(static_cast<std::size_t>(d.size()));
+  for (Eigen::Index k = 0; k < d.size(); ++k) a[static_cast<std::size_t>(k)] = std::abs(d[k]);
+  const std::vector<double> q = Quantiles(std::move(a), {0.50, 0.90, 0.95, 0.99});
+  s.p50 = q[0];
+  s.p90 = q[1];
+  s.p95 = q[2];
+  s.p99 = q[3];
   return s;
 }
 

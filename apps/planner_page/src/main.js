@@ -16,25 +16,30 @@ let drawnBar = null; // the bar the scene shows
 let planTimer = 0, planSerial = 0;
 
 // ---- data ----------------------------------------------------------------------------------------------
+// When the page's start steps ended, ms after the page started loading (performance.now()'s origin).
+const startTimings = {};
 async function loadPatient(id) {
   set({ busy: `loading patient ${id} (its response basis takes a few seconds the first time)…`, error: '' });
   const path = `/api/patients/${encodeURIComponent(id)}`;
   const info = await getJson(path);
   const [bone, skin, landmarks, table] = await Promise.all(['bone', 'skin', 'landmarks', 'basis'].map((w) => getBinary(`${path}/${w}`)));
+  startTimings.patient_downloaded ??= performance.now();
   basis = makeBasis(info, table);
   scene.setPatient(info, bone, skin, landmarks);
+  startTimings.scene_built ??= performance.now();
   drawnBar = null;
   set({ patientId: id, info, plan: null, planFor: null, search: null, busy: '' });
 }
 
-/// The server's plan for the current bar (debounced; only the latest answer is kept).
-function requestPlan(delay = 120) {
+/// The server's exact figures for the current bar (/api/score: scenarios A and B from the patient's exact
+/// basis, scored by pectus plan's C++; milliseconds), debounced; only the latest answer is kept.
+function requestPlan(delay = 40) {
   clearTimeout(planTimer);
   planTimer = setTimeout(async () => {
     const serial = ++planSerial;
     const bar = { ...state.bar };
     try {
-      const plan = await postJson('/api/plan', planBody(bar));
+      const plan = await postJson('/api/score', planBody(bar));
       if (serial === planSerial) set({ plan, planFor: bar, error: '' });
     } catch (e) {
       if (serial === planSerial) set({ error: e.message });
@@ -154,16 +159,24 @@ window.addEventListener('keydown', (e) => {
     if (ray.intersectObject(scene.bar).length === 0 && !e.shiftKey) return;
     drag = { y: e.clientY, position: state.bar.position, mmPerPixel: (scene.camera.position.distanceTo(scene.controls.target) * Math.tan((scene.camera.fov * Math.PI) / 360) * 2) / r.height };
     scene.controls.enabled = false;
+    scene.setMoving(true);
     canvas.setPointerCapture(e.pointerId);
   });
+  // The bar follows the pointer once per frame (loop()), however many moves arrive in between.
   canvas.addEventListener('pointermove', (e) => {
     if (!drag) return;
-    setBar({ position: drag.position + ((e.clientY - drag.y) * drag.mmPerPixel) / state.info.sternal_length_mm });
+    draggedTo = drag.position + ((e.clientY - drag.y) * drag.mmPerPixel) / state.info.sternal_length_mm;
   });
   canvas.addEventListener('pointerup', () => {
+    if (draggedTo !== null) setBar({ position: draggedTo });
+    draggedTo = null;
+    if (drag && scene.setMoving(false)) dirty = true;
     drag = null;
     scene.controls.enabled = true;
   });
+  // Turning the camera: the same lighter frames while it moves.
+  scene.controls.addEventListener('start', () => scene.setMoving(true));
+  scene.controls.addEventListener('end', () => scene.setMoving(false) && (dirty = true));
 }
 
 // ---- export and load -------------------------------------------------------------------------------------
@@ -174,16 +187,26 @@ function download(name, blob) {
   a.click();
   setTimeout(() => URL.revokeObjectURL(a.href), 1000);
 }
-/// The plan as JSON: the figures of `pectus plan --report` (the server's MakeNussPlan) with the patient.
-function planJson() {
-  if (!state.plan) return null;
-  const { before, scenarios, ...rest } = state.plan;
-  const strip = ({ difference_mm, ...keep }) => keep;
-  return JSON.stringify({ ...rest, before: strip(before), scenarios: scenarios.map(strip), patient: state.patientId }, null, 1);
+/// The plan of the bar shown as JSON: `pectus plan --report`'s figures, made by the server's MakeNussPlan
+/// (direct solves, force to lift, registration) for scenarios A and B, with the patient.
+async function planJson() {
+  if (!state.info) return null;
+  set({ busy: 'making the plan…' });
+  try {
+    const { before, scenarios, ...rest } = await postJson('/api/plan', planBody(state.bar));
+    const strip = ({ difference_mm, ...keep }) => keep;
+    return JSON.stringify({ ...rest, before: strip(before), scenarios: scenarios.map(strip), patient: state.patientId }, null, 1);
+  } finally {
+    set({ busy: '' });
+  }
 }
-function exportPlan() {
-  const text = planJson();
-  if (text) download(`plan_${state.patientId}.json`, new Blob([text], { type: 'application/json' }));
+async function exportPlan() {
+  try {
+    const text = await planJson();
+    if (text) download(`plan_${state.patientId}.json`, new Blob([text], { type: 'application/json' }));
+  } catch (e) {
+    set({ error: e.message });
+  }
 }
 function exportPng() {
   scene.render();
@@ -217,9 +240,11 @@ async function loadPlan(text) {
 // ---- start ---------------------------------------------------------------------------------------------
 async function start() {
   try {
+    startTimings.script = performance.now();
     const [patients, average] = await Promise.all([getJson('/api/patients'), getJson('/api/average')]);
     scene.anterior = average.anterior;
     scene.setAverage(average, await getBinary('/api/average/mesh'));
+    startTimings.average = performance.now();
     set({ patients, average });
     const wanted = new URLSearchParams(location.search).get('patient');
     await loadPatient(patients.some((p) => p.id === wanted) ? wanted : patients[0].id);
@@ -231,10 +256,15 @@ async function start() {
 // Frames are drawn when something changed (the state, the camera, the size), not continuously: an idle
 // page costs nothing.
 let dirty = true, renders = 0;
+let draggedTo = null; // where the pointer has dragged the bar since the last frame (fraction), or null
 subscribe(() => (dirty = true));
 scene.controls.addEventListener('change', () => (dirty = true));
 new ResizeObserver(() => (dirty = true)).observe(document.getElementById('scene'));
 function loop() {
+  if (draggedTo !== null) {
+    setBar({ position: draggedTo });
+    draggedTo = null;
+  }
   update();
   if (dirty) {
     dirty = false;
@@ -253,8 +283,34 @@ start().then(() => {
 requestAnimationFrame(loop);
 
 // For tests and for a user's console: the state, the actions, the basis evaluation and the exports.
-window.pectus = { state, set, setBar, setLift, loadPatient, loadPlan, planJson, plyText, runSearch,
+window.pectus = { state, set, scene, setBar, setLift, loadPatient, loadPlan, planJson, plyText, runSearch,
   firstFrameMs: () => firstFrameMs,
+  startTimings: () => ({ ...startTimings, first_frame: firstFrameMs }),
+  /// Mean times of a frame whose bar moved, ms: the deformation from the basis, moving the meshes (and
+  /// their normals), and drawing (to the end of the GPU's work).
+  timeFrames: (n) => {
+    const gl = scene.renderer.getContext();
+    const t = { deform: 0, apply: 0, draw: 0 };
+    const mm = positionMm();
+    for (let i = 0; i < n; ++i) {
+      const at = mm + (i % 10) * 0.05;
+      let t0 = performance.now();
+      deform(basis, at, state.bar.force, 0, scene.boneDisplacement);
+      deform(basis, at, state.bar.force, basis.boneRows, scene.skinDisplacement);
+      deform(basis, at, state.bar.force, basis.boneRows + basis.skinRows, scene.landmarkDisplacement);
+      let t1 = performance.now();
+      t.deform += t1 - t0;
+      scene.applyDeformation(at);
+      t0 = performance.now();
+      t.apply += t0 - t1;
+      scene.render();
+      gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4));
+      t.draw += performance.now() - t0;
+    }
+    drawnBar = null;
+    return Object.fromEntries(Object.entries(t).map(([k, v]) => [k, v / n]));
+  },
+  setMoving: (moving) => scene.setMoving(moving),
   renders: () => renders,
   deformSkin: (mm, force) => {
     const out = new Float32Array(basis.skinRows);

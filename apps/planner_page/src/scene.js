@@ -8,10 +8,28 @@ import { colour } from './colormap.js';
 
 const materialColours = [0xd9c9a3, 0xf2ead8, 0x7fb3d5]; // sternum, rib, costal cartilage
 
+/// Whether WebGL draws in software here (SwiftShader, llvmpipe: no GPU, as in a headless browser or a
+/// virtual machine): the view then trades multisampling and, while something moves, resolution for frame
+/// rate.
+function softwareWebGl() {
+  try {
+    const gl = document.createElement('canvas').getContext('webgl2') ?? document.createElement('canvas').getContext('webgl');
+    const info = gl?.getExtension('WEBGL_debug_renderer_info');
+    const name = info ? gl.getParameter(info.UNMASKED_RENDERER_WEBGL) : gl?.getParameter(gl.RENDERER) ?? '';
+    gl?.getExtension('WEBGL_lose_context')?.loseContext();
+    return /swiftshader|llvmpipe|softpipe|software/i.test(String(name));
+  } catch {
+    return false;
+  }
+}
+
 export class Scene {
   constructor(element) {
-    this.renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+    this.software = softwareWebGl();
+    this.renderer = new THREE.WebGLRenderer({ antialias: !this.software, preserveDrawingBuffer: true });
     this.renderer.setPixelRatio(1);
+    // While the bar or the camera moves: this fraction of the resolution (1 on a GPU); full again at rest.
+    this.movingPixelRatio = this.software ? 0.5 : 1;
     this.renderer.setClearColor(0xf4f4f4);
     element.prepend(this.renderer.domElement);
     this.renderer.domElement.tabIndex = 0;
@@ -63,7 +81,8 @@ export class Scene {
       start += count;
     }
     g.computeVertexNormals();
-    this.bone = new THREE.Mesh(g, materialColours.map((c) => new THREE.MeshLambertMaterial({ color: c, side: THREE.DoubleSide })));
+    // The bone surface is closed and faces outwards: its back faces are never seen (half the drawing).
+    this.bone = new THREE.Mesh(g, materialColours.map((c) => new THREE.MeshLambertMaterial({ color: c })));
     this.patient.add(this.bone);
     // Skin, translucent.
     const ns = info.skin.vertices, fs = info.skin.faces;
@@ -178,6 +197,16 @@ export class Scene {
     this.landmarks.visible = view.landmarks;
     if (this.average) this.average.visible = view.average;
     if (this.predicted) this.predicted.visible = view.map && this.predicted.userData.ready === true;
+  }
+
+  /// Something moves (true: dragging the bar or the camera) or came to rest (false): the resolution
+  /// follows (movingPixelRatio). Returns whether it changed, so that the caller draws again.
+  setMoving(moving) {
+    const ratio = moving ? this.movingPixelRatio : 1;
+    if (this.renderer.getPixelRatio() === ratio) return false;
+    this.renderer.setPixelRatio(ratio);
+    this.resize();
+    return true;
   }
 
   render() {

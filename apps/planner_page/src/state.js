@@ -9,7 +9,7 @@ export const state = {
   compareMm: 20, // scenario B: this many mm nearer the notch
   view: { bone: true, skin: true, average: false, landmarks: true, map: true, opacity: 0.45, colormap: 'cividis' },
   live: null, // from the basis, every frame: { positionMm, liftMm, liftPerN, forceToLift, beyondLinear, updateMs }
-  plan: null, // the server's plan for `bar` (MakeNussPlan, the figures of `pectus plan --report`)
+  plan: null, // the server's exact figures for `bar` (/api/score: scenarios A and B as `pectus plan --report` scores them)
   planFor: null, // the bar the plan was made for
   search: null, // the server's best-placement search
   busy: '',
@@ -21,15 +21,10 @@ const listeners = [];
 export function subscribe(view) {
   listeners.push(view);
 }
-/// Merges `patch` into the state (one level deep for objects) and lets every view redraw.
+/// Puts `patch` into the state (`view` is merged: a control changes one of its switches) and lets every
+/// view redraw.
 export function set(patch) {
-  for (const [key, value] of Object.entries(patch)) {
-    const old = state[key];
-    state[key] =
-      value && typeof value === 'object' && !Array.isArray(value) && old && typeof old === 'object' && !Array.isArray(old) && !(value instanceof ArrayBuffer)
-        ? { ...old, ...value }
-        : value;
-  }
+  for (const [key, value] of Object.entries(patch)) state[key] = key === 'view' ? { ...state.view, ...value } : value;
   for (const view of listeners) view(state);
 }
 /// The bar position in mm from the notch.

@@ -42,6 +42,11 @@ TEST(PlannerPageBrowserTest, FiguresDeformationControlsSearchRoundTripAndScreens
   options.table_step_mm = 0.5;  // half the levels of the default (the test asserts its error: <= 0.01 mm)
   PlannerServer server(options);
   server.Start();
+  // As `pectus serve` does: the patient the page opens on is made as the server starts (the page's first
+  // frame is then timed from opening it).
+  server.Prepare("57");
+  std::string why;
+  ASSERT_TRUE(server.WaitUntilPrepared(&why)) << why;
   const fs::path script = fs::path(PECTUS_SOURCE_DIR) / "tests/apps/serve/planner_page_test.mjs";
   const fs::path reference = fs::path(PECTUS_SOURCE_DIR) / "tests/apps/serve/planner_page_reference.png";
   const std::string command = "PECTUS_PAGE_DIR='" + page_dir.string() + "' " + PECTUS_NODE + " '" +

@@ -29,7 +29,8 @@ void pectus_planner_api_layout_from_c(size_t* out, int capacity) {
                            sizeof(PectusPlannerEmulatorPatient),
                            sizeof(PectusPlannerEmulatorEvaluation),
                            offsetof(PectusPlannerEmulatorFigures, worst_lift_patient),
-                           offsetof(PectusPlannerInterface, evaluate_emulator)};
+                           offsetof(PectusPlannerInterface, evaluate_emulator),
+                           offsetof(PectusPlannerInterface, basis_coefficients)};
   int i;
   for (i = 0; i < capacity && i < (int)(sizeof(values) / sizeof(values[0])); ++i) out[i] = values[i];
 }

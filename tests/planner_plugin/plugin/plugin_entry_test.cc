@@ -4,6 +4,7 @@
 #include <dlfcn.h>
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -56,9 +57,9 @@ TEST_F(PluginEntry, ExportsOneVersionedTableThatCAndCppLayOutAlike) {
   EXPECT_EQ(api_->version, PECTUS_PLANNER_INTERFACE_VERSION);
   EXPECT_EQ(api_->struct_size, sizeof(PectusPlannerInterface));
   EXPECT_NE(std::string(api_->description).find("pectus planner"), std::string::npos);
-  size_t c[24] = {};
-  pectus_planner_api_layout_from_c(c, 24);
-  const size_t cpp[24] = {sizeof(PectusPlannerStatus),
+  size_t c[25] = {};
+  pectus_planner_api_layout_from_c(c, 25);
+  const size_t cpp[25] = {sizeof(PectusPlannerStatus),
                           sizeof(PectusPlannerPatient),
                           sizeof(PectusPlannerOptions),
                           sizeof(PectusPlannerMeasurements),
@@ -81,8 +82,9 @@ TEST_F(PluginEntry, ExportsOneVersionedTableThatCAndCppLayOutAlike) {
                           sizeof(PectusPlannerEmulatorPatient),
                           sizeof(PectusPlannerEmulatorEvaluation),
                           offsetof(PectusPlannerEmulatorFigures, worst_lift_patient),
-                          offsetof(PectusPlannerInterface, evaluate_emulator)};
-  for (int i = 0; i < 24; ++i) EXPECT_EQ(c[i], cpp[i]) << "layout item " << i;
+                          offsetof(PectusPlannerInterface, evaluate_emulator),
+                          offsetof(PectusPlannerInterface, basis_coefficients)};
+  for (int i = 0; i < 25; ++i) EXPECT_EQ(c[i], cpp[i]) << "layout item " << i;
   // Nothing but the entry point is visible: not even the engine's functions (which this test binary
   // links itself, so the name below is the real one).
   EXPECT_EQ(dlsym(handle_, "_ZN6pectus7planner19BuildGenericRibcageERKNS0_21GenericRibcageOptionsE"),
@@ -294,6 +296,54 @@ TEST_F(PluginEntry, TheDeformCallGivesTheSolvesAnswerInRealTime) {
   EXPECT_TRUE(std::all_of(untouched.begin(), untouched.end(), [](double v) { return v == -7.0; }));
   EXPECT_EQ(api_->deform(nullptr, &bars[0], nullptr, nullptr, nullptr, nullptr, &status),
             PECTUS_PLANNER_USAGE);
+
+  // The basis as a table (version 4): orthonormal modes, and coefficients that give deform()'s answer:
+  // the difference between two forces at one position is their difference times U_r c.
+  std::int64_t rows = 0, rank = 0;
+  ASSERT_EQ(api_->basis_modes(planner, nullptr, 0, &rows, &rank, &status), PECTUS_PLANNER_OK)
+      << status.message;
+  EXPECT_EQ(rows, 3 * summary.points);
+  EXPECT_EQ(rank, summary.rank);
+  std::vector<float> modes(static_cast<std::size_t>(rows * rank));
+  EXPECT_EQ(api_->basis_modes(planner, modes.data(), rows * rank - 1, &rows, &rank, &status),
+            PECTUS_PLANNER_USAGE);
+  ASSERT_EQ(api_->basis_modes(planner, modes.data(), rows * rank, &rows, &rank, &status), PECTUS_PLANNER_OK);
+  const Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> U(
+      modes.data(), rows, rank);
+  const Eigen::MatrixXd gram = U.cast<double>().transpose() * U.cast<double>();
+  // Orthonormal as the Gram route makes them (U = Y V / sigma: the weakest modes to about 1e-3).
+  EXPECT_LT((gram - Eigen::MatrixXd::Identity(rank, rank)).cwiseAbs().maxCoeff(), 2e-3);
+  Eigen::VectorXd c(rank);
+  double lift_per_n = 0.0;
+#ifdef PECTUS_COUNT_ALLOCATIONS
+  const std::size_t before_coefficients = pectus::testing_support::AllocationCount();
+#endif
+  ASSERT_EQ(api_->basis_coefficients(deformer, &bars[2], c.data(), &lift_per_n, &status), PECTUS_PLANNER_OK)
+      << status.message;
+#ifdef PECTUS_COUNT_ALLOCATIONS
+  EXPECT_EQ(pectus::testing_support::AllocationCount(), before_coefficients)
+      << "basis_coefficients allocated";
+#endif
+  std::vector<double> all_high(3 * static_cast<std::size_t>(summary.points)), all_low(all_high.size());
+  const PectusPlannerBar low = {bars[2].position, bars[2].position_in_mm, bars[2].force_n - 1000.0};
+  double lift_high = 0.0;
+  ASSERT_EQ(api_->deform(deformer, &bars[2], all_high.data(), all_high.data() + 3 * nb,
+                         all_high.data() + 3 * (nb + ns), &lift_high, &status),
+            PECTUS_PLANNER_OK);
+  ASSERT_EQ(api_->deform(deformer, &low, all_low.data(), all_low.data() + 3 * nb,
+                         all_low.data() + 3 * (nb + ns), nullptr, &status),
+            PECTUS_PLANNER_OK);
+  const Eigen::VectorXd table = 1000.0 * U.cast<double>() * c;
+  double table_worst = 0.0;
+  for (std::int64_t i = 0; i < rows; ++i)
+    table_worst = std::max(table_worst, std::abs(all_high[i] - all_low[i] - table[i]));
+  EXPECT_LT(table_worst, 1e-6) << "mm, 1000 N";
+  EXPECT_GT(table.cwiseAbs().maxCoeff(), 1.0);  // the bar moves the chest: not two equal chests
+  EXPECT_NEAR(lift_per_n * bars[2].force_n, lift_high, 1e-9);
+  Eigen::VectorXd kept = Eigen::VectorXd::Constant(rank, -7.0);
+  EXPECT_EQ(api_->basis_coefficients(deformer, &off, kept.data(), nullptr, &status), PECTUS_PLANNER_USAGE);
+  EXPECT_NE(std::string(status.message).find("off the sternum"), std::string::npos) << status.message;
+  EXPECT_TRUE((kept.array() == -7.0).all());
   api_->destroy_deformer(deformer);
   api_->destroy_deformer(nullptr);
   api_->destroy(planner);

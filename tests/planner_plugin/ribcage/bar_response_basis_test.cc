@@ -97,6 +97,15 @@ TEST_F(BarResponseBasisTest, ABarOffTheSternumIsReportedAndWritesNothing) {
   EXPECT_EQ(basis_->LiftPerNewton(above_the_notch), 0.0);
   // Usable again afterwards.
   EXPECT_TRUE(basis_->Evaluate(basis_->LevelZ({0.7, false, 1.0}), 100.0, &ws, out.data()));
+  // Rows 5 to 22 alone (not on the 8-row panels' edges): the same values there, nothing else written.
+  std::vector<double> part(out.size(), 7.0);
+  EXPECT_TRUE(basis_->Evaluate(basis_->LevelZ({0.7, false, 1.0}), 100.0, &ws, part.data(), 5, 23));
+  for (std::size_t i = 0; i < part.size(); ++i) {
+    if (i >= 5 && i < 23)
+      EXPECT_EQ(part[i], out[i]) << i;
+    else
+      EXPECT_EQ(part[i], 7.0) << i;
+  }
 }
 
 TEST_F(BarResponseBasisTest, BadTiesAndOptionsAreRefused) {
