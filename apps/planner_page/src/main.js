@@ -10,14 +10,15 @@ import { renderPanel } from './panel.js';
 import { Scene } from './scene.js';
 import { positionMm, set, state, subscribe } from './state.js';
 
+// When the page's start steps ended, ms after the page started loading (performance.now()'s origin).
+const startTimings = { module: performance.now() };
 const scene = new Scene(document.getElementById('scene'));
+startTimings.webgl = performance.now();
 let basis = null;
 let drawnBar = null; // the bar the scene shows
 let planTimer = 0, planSerial = 0;
 
 // ---- data ----------------------------------------------------------------------------------------------
-// When the page's start steps ended, ms after the page started loading (performance.now()'s origin).
-const startTimings = {};
 async function loadPatient(id) {
   set({ busy: `loading patient ${id} (its response basis takes a few seconds the first time)…`, error: '' });
   const path = `/api/patients/${encodeURIComponent(id)}`;

@@ -69,27 +69,27 @@ export function renderPanel(element, actions) {
     }
     $('patient').value = s.patientId ?? '';
     const p = s.patients.find((q) => q.id === s.patientId);
-    $('patient-figures').textContent = p ? `Haller ${f(p.haller_index)}, depression ${f(p.depression_mm, 1)} mm` : '';
+    setText($('patient-figures'), p ? `Haller ${f(p.haller_index)}, depression ${f(p.depression_mm, 1)} mm` : '');
     const mm = positionMm(s);
-    $('position-text').textContent = `${f(s.bar.position, 3)} L = ${f(mm, 1)} mm`;
+    setText($('position-text'), `${f(s.bar.position, 3)} L = ${f(mm, 1)} mm`);
     if (document.activeElement !== $('position')) $('position').value = s.bar.position;
     if (document.activeElement !== $('position-mm')) $('position-mm').value = f(mm, 1);
-    $('force-text').textContent = `${f(s.bar.force, 0)} N`;
+    setText($('force-text'), `${f(s.bar.force, 0)} N`);
     if (document.activeElement !== $('force')) $('force').value = s.bar.force;
     if (document.activeElement !== $('compare')) $('compare').value = s.compareMm;
     for (const key of ['bone', 'skin', 'average', 'map', 'landmarks']) $(`view-${key}`).checked = s.view[key];
     $('opacity').value = s.view.opacity;
     $('colormap').value = s.view.colormap;
     const l = s.live;
-    $('live').innerHTML = l
+    setHtml($('live'), l
       ? html`<tr><td>sternal lift</td><td id="live-lift">${f(l.liftMm)} mm</td></tr>
           <tr><td>force to lift by the depression (${f(s.info.depression_mm, 1)} mm)</td><td>${f(l.forceToLift, 0)} N</td></tr>
           <tr><td>linear range (lift ≤ ${f(s.info.linear_range_lift_mm, 0)} mm)</td><td id="live-range" class="${l.beyondLinear ? 'flag' : ''}">${l.beyondLinear ? 'beyond' : 'within'}</td></tr>
           <tr><td>update</td><td>${f(l.updateMs, 2)} ms</td></tr>`
-      : '';
+      : '');
     const plan = s.plan;
     const current = plan && s.planFor && s.planFor.position === s.bar.position && s.planFor.force === s.bar.force;
-    $('exact').innerHTML = plan
+    setHtml($('exact'), plan
       ? html`<tr><th></th>${plan.scenarios.map((c) => `<th>${c.name}</th>`).join('')}<th>before</th></tr>
           <tr><td>bar</td>${plan.scenarios.map((c) => `<td>${f(c.bar.position_in_mm ? c.bar.position : c.bar.position * s.info.sternal_length_mm, 1)} mm, ${f(c.bar.force_n, 0)} N</td>`).join('')}<td></td></tr>
           <tr><td>sternal lift, mm</td>${plan.scenarios.map((c, i) => `<td id="exact-lift-${i}">${f(c.sternum_lift_mm)}</td>`).join('')}<td></td></tr>
@@ -98,9 +98,20 @@ export function renderPanel(element, actions) {
           <tr><td>central RMS, mm</td>${plan.scenarios.map((c, i) => `<td id="exact-central-${i}">${f(c.score.central.rms_mm)}</td>`).join('')}<td>${f(plan.before.central.rms_mm)}</td></tr>
           <tr><td>linear range</td>${plan.scenarios.map((c) => `<td class="${c.beyond_linear_range ? 'flag' : ''}">${c.beyond_linear_range ? 'beyond' : 'within'}</td>`).join('')}<td></td></tr>
           <tr><td colspan="4" style="text-align:left;color:#777">${current ? 'for the bar shown' : 'updating…'}</td></tr>`
-      : '';
+      : '');
     drawSearch($('search-map'), $('search-best'), s, actions);
   });
+}
+
+// Views redraw on every change of the state (every frame while the bar moves): the document changes only
+// where the text does, so that the browser lays out and paints no more than that.
+function setText(element, text) {
+  if (element.textContent !== text) element.textContent = text;
+}
+function setHtml(element, text) {
+  if (element.pectusHtml === text) return;
+  element.pectusHtml = text;
+  element.innerHTML = text;
 }
 
 function drawSearch(element, best, s, actions) {
