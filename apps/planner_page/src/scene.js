@@ -141,15 +141,22 @@ export class Scene {
     this.anterior = average.anterior;
   }
 
-  /// The camera in front of the chest (the average chest's anterior direction), notch up.
+  /// The camera in front of the chest (the average chest's anterior direction), the patient's head up
+  /// (the patient's cranial axis, z, in the average chest's frame, made square to the view).
   frame(info) {
     const box = new THREE.Box3().setFromObject(this.patient);
     const centre = box.getCenter(new THREE.Vector3());
-    const a = this.anterior ?? [0, -1, 0];
+    const a = new THREE.Vector3(...(this.anterior ?? [0, -1, 0])).normalize();
+    const up = new THREE.Vector3(0, 0, 1).transformDirection(this.patient.matrix);
+    up.addScaledVector(a, -up.dot(a)).normalize();
     const size = box.getSize(new THREE.Vector3()).length();
-    this.camera.position.set(centre.x + a[0] * size * 1.6, centre.y + a[1] * size * 1.6, centre.z + a[2] * size * 1.6);
-    this.camera.up.set(0, 0, 1);
+    this.camera.position.copy(centre).addScaledVector(a, size * 1.6);
+    this.camera.up.copy(up);
     this.controls.target.copy(centre);
+    // OrbitControls turns about the up axis it read when it was made (three 0.187 keeps it in _quat): told
+    // the new one.
+    this.controls._quat.setFromUnitVectors(up, new THREE.Vector3(0, 1, 0));
+    this.controls._quatInverse.copy(this.controls._quat).invert();
     this.controls.update();
   }
 
