@@ -54,7 +54,8 @@ TEST(PlannerPageBrowserTest, FiguresDeformationControlsSearchRoundTripAndScreens
                               script.string() + "' '" + server.url() + "' 57 '" + (dir / "r.json").string() +
                               "' '" + reference.string() + "' '" + (dir / "page").string() + "'" +
                               // After a change to what the page draws: the stored screenshot made again.
-                              (std::getenv("PECTUS_UPDATE_PAGE_REFERENCE") ? " --update-reference" : "") + " 2>&1";
+                              (std::getenv("PECTUS_UPDATE_PAGE_REFERENCE") ? " --update-reference" : "") +
+                              " 2>&1";
   std::string output;
   FILE* pipe = ::popen(command.c_str(), "r");
   ASSERT_NE(pipe, nullptr);

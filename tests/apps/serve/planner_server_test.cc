@@ -230,6 +230,21 @@ TEST_F(PlannerServerTest, MalformedJsonIs400WithAMessage) {
     EXPECT_EQ(r->status, 400) << body << ": " << r->body;
     EXPECT_NE(ErrorOf(r).find(message), std::string::npos) << body << ": " << r->body;
   }
+  // The live score checks its request the same way, before any work.
+  const std::pair<std::string, std::string> score_cases[] = {
+      {"{bad", "malformed JSON"},
+      {R"({"patient": "57"})", "bar must be an object"},
+      {R"({"patient": "57", "bar": {"position": 0.85, "force_n": 200}, "difference": 1})",
+       "difference must be true or false"},
+      {R"({"patient": "57", "bar": {"position": 0.85, "force_n": 200}, "compare": {"position": 2}})",
+       "compare.position = 2 is outside [0, 1]"},
+  };
+  for (const auto& [body, message] : score_cases) {
+    const auto r = client.Post("/api/score", Token(), body, "application/json");
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 400) << body << ": " << r->body;
+    EXPECT_NE(ErrorOf(r).find(message), std::string::npos) << body << ": " << r->body;
+  }
   const auto unknown =
       client.Post("/api/plan", Token(),
                   R"({"patient": "no such", "bar": {"position": 0.85, "force_n": 200}})", "application/json");
