@@ -87,16 +87,18 @@ function setLift(liftMm) {
 // The live figures and the deformation, from the basis: only when the bar moved since the last frame.
 function update() {
   if (!basis || !state.info) return;
-  const bar = state.bar;
-  if (drawnBar && drawnBar.position === bar.position && drawnBar.force === bar.force) return;
+  const bar = state.bar, view = state.view;
+  // The ribcage and the skin are deformed while shown (a part shown again is brought up to date).
+  const d = drawnBar;
+  if (d && d.position === bar.position && d.force === bar.force && (d.bone || !view.bone) && (d.skin || !view.skin)) return;
   const mm = positionMm();
   const t0 = performance.now();
-  const lift = deform(basis, mm, bar.force, 0, scene.boneDisplacement);
-  deform(basis, mm, bar.force, basis.boneRows, scene.skinDisplacement);
-  deform(basis, mm, bar.force, basis.boneRows + basis.skinRows, scene.landmarkDisplacement);
+  const lift = deform(basis, mm, bar.force, basis.boneRows + basis.skinRows, scene.landmarkDisplacement);
+  if (view.bone) deform(basis, mm, bar.force, 0, scene.boneDisplacement);
+  if (view.skin) deform(basis, mm, bar.force, basis.boneRows, scene.skinDisplacement);
   const updateMs = performance.now() - t0;
-  scene.applyDeformation(mm);
-  drawnBar = { ...bar };
+  scene.applyDeformation(mm, view);
+  drawnBar = { ...bar, bone: view.bone, skin: view.skin };
   const perN = lift / bar.force;
   set({
     live: {

@@ -178,16 +178,17 @@ export class Scene {
     this.predicted.geometry.computeVertexNormals();
   }
 
-  /// Moves the ribcage, skin, landmarks and bar to the displacements (mm) of the bar at `mm` from the notch.
-  applyDeformation(mm) {
+  /// Moves the ribcage (if `parts.bone`), skin (if `parts.skin`), landmarks and bar to the displacements
+  /// (mm) of the bar at `mm` from the notch.
+  applyDeformation(mm, parts = { bone: true, skin: true }) {
     const move = (mesh, rest, d) => {
       const p = mesh.geometry.attributes.position;
       for (let i = 0; i < d.length; ++i) p.array[i] = rest[i] + d[i];
       p.needsUpdate = true;
       mesh.geometry.computeVertexNormals();
     };
-    move(this.bone, this.boneRest, this.boneDisplacement);
-    move(this.skin, this.skinRest, this.skinDisplacement);
+    if (parts.bone) move(this.bone, this.boneRest, this.boneDisplacement);
+    if (parts.skin) move(this.skin, this.skinRest, this.skinDisplacement);
     this.landmarks.children.forEach((dot, i) => {
       if (3 * i >= this.landmarkRest.length) return;
       dot.position.set(...[0, 1, 2].map((k) => this.landmarkRest[3 * i + k] + this.landmarkDisplacement[3 * i + k]));
