@@ -49,7 +49,11 @@ struct HttpError : std::runtime_error {
 
 void SendJson(httplib::Response& res, const json& body, int status = 200) {
   res.status = status;
-  res.set_content(body.dump(-1, ' ', false, json::error_handler_t::replace), "application/json");
+  // With its parameter, cpp-httplib sends it as it is: it would compress plain application/json for a
+  // browser with brotli at its slowest setting (tens of ms for a score's maps; nothing gained on the
+  // loopback). apps/planner_page/embed.mjs does the same for the page's files.
+  res.set_content(body.dump(-1, ' ', false, json::error_handler_t::replace),
+                  "application/json; charset=utf-8");
 }
 
 void SendError(httplib::Response& res, int status, const std::string& message) {
