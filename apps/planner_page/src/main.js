@@ -29,23 +29,36 @@ async function loadPatient(id) {
   scene.setPatient(info, bone, skin, landmarks);
   startTimings.scene_built ??= performance.now();
   drawnBar = null;
+  ++planSerial; // an answer still coming is for the patient before
   set({ patientId: id, info, plan: null, planFor: null, search: null, busy: '' });
 }
 
 /// The server's exact figures for the current bar (/api/score: scenarios A and B from the patient's exact
-/// basis, scored by pectus plan's C++; milliseconds), debounced; only the latest answer is kept.
-function requestPlan(delay = 40) {
+/// basis, scored by pectus plan's C++; milliseconds). One request at a time: while the bar moves, the next
+/// goes out as soon as the last answer is in, for where the bar is then, so the colour map and the figures
+/// follow a drag at the server's pace; only the latest answer is kept.
+let planInFlight = false, planWanted = false;
+function requestPlan(delay = 0) {
   clearTimeout(planTimer);
-  planTimer = setTimeout(async () => {
-    const serial = ++planSerial;
-    const bar = { ...state.bar };
-    try {
-      const plan = await postJson('/api/score', planBody(bar));
-      if (serial === planSerial) set({ plan, planFor: bar, error: '' });
-    } catch (e) {
-      if (serial === planSerial) set({ error: e.message });
-    }
-  }, delay);
+  if (delay > 0) {
+    planTimer = setTimeout(() => requestPlan(0), delay);
+    return;
+  }
+  if (planInFlight) {
+    planWanted = true;
+    return;
+  }
+  planInFlight = true;
+  planWanted = false;
+  const serial = ++planSerial;
+  const bar = { ...state.bar };
+  postJson('/api/score', planBody(bar))
+    .then((plan) => serial === planSerial && set({ plan, planFor: bar, error: '' }))
+    .catch((e) => serial === planSerial && set({ error: e.message }))
+    .finally(() => {
+      planInFlight = false;
+      if (planWanted) requestPlan(0);
+    });
 }
 function planBody(bar, search) {
   const mm = bar.position * state.info.sternal_length_mm;
