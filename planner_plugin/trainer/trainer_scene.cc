@@ -304,6 +304,7 @@ TrainerScene BuildTrainerScene(const planner::PatientRibcage& ribcage, const Tra
     for (std::size_t i = 0; i + 1 < crossings.size(); ++i) {
       if (crossings[i + 1].first != crossings[i].first + 1) continue;
       const Eigen::Vector3d c = 0.5 * (crossings[i].second + crossings[i + 1].second);
+      scene.ports.push_back({{side, crossings[i].first}, c});
       if (std::abs(c.z() - z_t) < best) {
         best = std::abs(c.z() - z_t);
         ports[s] = c;

@@ -85,6 +85,8 @@ struct TrainerScene {
       0;                       ///< y of the sternum's posterior surface on the midline at the tunnel's level
   double chest_axis_y_mm = 0;  ///< y of the chest's vertical axis (middle of the ribcage's depth there)
   PlannedTunnel tunnel;
+  /// Every intercostal space's centre at the port azimuth, both sides (what a port could be).
+  std::vector<std::pair<IntercostalSpace, Eigen::Vector3d>> ports;
   /// Every collision triangle (bones, pericardium, lungs) in one grid, with each face's organ.
   Points3 collision_vertices;
   Faces3 collision_faces;

@@ -159,6 +159,9 @@ bool TriangleGrid::Nearest(const Eigen::Vector3d& p, double radius_mm, SurfaceHi
   std::int32_t best_face = -1;
   Eigen::Vector3d best_point = p;
   ForCells(p.array() - radius_mm, p.array() + radius_mm, [&](std::int32_t f) {
+    const Eigen::Vector3d v0 = vertices_.row(faces_(f, 0));
+    const double plane = normals_.row(f).dot(p - v0);
+    if (plane * plane > best) return true;  // its plane alone is farther than the best so far
     const Eigen::Vector3d q = ClosestPointOnTriangle(
         p, vertices_.row(faces_(f, 0)), vertices_.row(faces_(f, 1)), vertices_.row(faces_(f, 2)));
     const double d2 = (q - p).squaredNorm();
