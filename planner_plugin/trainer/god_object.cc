@@ -19,7 +19,8 @@ struct Plane {
 
 // The point nearest `goal` on every plane of planes[0 .. count) (Ruspini et al. 1997: the Lagrange
 // multipliers of the equality-constrained least squares, x = goal - sum lambda_i n_i). Planes that the goal
-// does not press into (lambda_i > 0) are dropped from the set, newest first. Returns false if the planes are degenerate.
+// does not press into (lambda_i > 0) are dropped from the set, newest first. Returns false if the planes are
+// degenerate.
 bool ProjectOntoPlanes(const Eigen::Vector3d& goal, Plane* planes, int* count, Eigen::Vector3d* x) noexcept {
   while (*count > 0) {
     const int k = *count;
@@ -72,7 +73,8 @@ bool ProxyOptions::IsValid(std::string* why) const {
     return fail("friction: 0 <= dynamic <= static");
   if (!(damping_n_s_per_mm >= 0)) return fail("damping must be >= 0");
   if (!(max_force_n > 0)) return fail("max_force_n must be > 0");
-  if (!(surface_offset_mm > 0 && surface_offset_mm < 0.01)) return fail("surface_offset_mm must be in (0, 0.01)");
+  if (!(surface_offset_mm > 0 && surface_offset_mm < 0.01))
+    return fail("surface_offset_mm must be in (0, 0.01)");
   if (!(shaft_sample_spacing_mm > 0.5)) return fail("shaft_sample_spacing_mm must be > 0.5");
   if (!(shaft_collision_length_mm >= 0)) return fail("shaft_collision_length_mm must be >= 0");
   return true;
@@ -82,7 +84,8 @@ GodObject::GodObject(const TrainerScene& scene, const Introducer& introducer, co
     : scene_(&scene), introducer_(introducer), options_(options) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage("haptic proxy: " + why);
-  if (!(introducer.diameter_mm > 0 && introducer.shaft_length_mm > 0)) ThrowUsage("haptic proxy: bad introducer");
+  if (!(introducer.diameter_mm > 0 && introducer.shaft_length_mm > 0))
+    ThrowUsage("haptic proxy: bad introducer");
   vertex_normals_ = PerVertexNormals(scene.collision_vertices, scene.collision_faces);
 }
 
@@ -171,7 +174,8 @@ const ProxyContact& GodObject::Update(const Eigen::Vector3d& tip_mm, const Eigen
     Eigen::Vector3d n = n_face;
     if (options_.force_shading && c.num_planes == 1) {
       const auto f = scene_->collision.faces().row(c.faces[0]);
-      const Eigen::Vector3d a = scene_->collision_vertices.row(f(0)), b = scene_->collision_vertices.row(f(1)),
+      const Eigen::Vector3d a = scene_->collision_vertices.row(f(0)),
+                            b = scene_->collision_vertices.row(f(1)),
                             cc = scene_->collision_vertices.row(f(2));
       const Eigen::Vector3d area = (b - a).cross(cc - a);
       const double area2 = area.squaredNorm();
@@ -202,9 +206,11 @@ const ProxyContact& GodObject::Update(const Eigen::Vector3d& tip_mm, const Eigen
     const Eigen::Vector3d away = centre - hit.point;
     const bool outside = away.dot(hit.normal) >= 0;
     const double penetration = outside ? radius - hit.distance_mm : radius + hit.distance_mm;
-    const Eigen::Vector3d dir = outside && hit.distance_mm > 1e-9 ? Eigen::Vector3d(away / hit.distance_mm) : hit.normal;
+    const Eigen::Vector3d dir =
+        outside && hit.distance_mm > 1e-9 ? Eigen::Vector3d(away / hit.distance_mm) : hit.normal;
     const int organ = scene_->collision_organ(hit.face);
-    const Eigen::Vector3d f = options_.stiffness_n_per_mm[static_cast<std::size_t>(organ)] * penetration * dir;
+    const Eigen::Vector3d f =
+        options_.stiffness_n_per_mm[static_cast<std::size_t>(organ)] * penetration * dir;
     force += f;
     c.torque_nmm += (centre - tip_mm).cross(f);
     c.organs_touched |= 1u << organ;

@@ -40,26 +40,27 @@ struct ProxyOptions {
   /// penalty adds stiffness, and press-release cycles on the sternum gained energy at k T (0.002):
   /// the default is 2 k T, which measured passive (tests/planner_plugin/trainer/god_object_test.cc).
   double damping_n_s_per_mm = 0.004;
-  double max_force_n = 8.5;             ///< the device's limit (the force is scaled down to it)
-  double surface_offset_mm = 1e-4;      ///< the proxy rests this far in front of a surface
-  double shaft_sample_spacing_mm = 4;   ///< shaft capsule tested at points this far apart
-  /// The part of the shaft behind the tip that collides: the introducer's curved distal end, 40 mm; the
-  /// shaft behind it lies in the tunnel the tip has made.
-  double shaft_collision_length_mm = 40;
+  double max_force_n = 8.5;            ///< the device's limit (the force is scaled down to it)
+  double surface_offset_mm = 1e-4;     ///< the proxy rests this far in front of a surface
+  double shaft_sample_spacing_mm = 4;  ///< shaft capsule tested at points this far apart
+  /// The part of the shaft behind the tip that collides, mm: the introducer's curved distal end, taken
+  /// straight along the tool's axis for 20 mm (3 mm off a curve of 60 mm radius); the shaft behind it lies
+  /// in the tunnel the tip has made. Default 20.
+  double shaft_collision_length_mm = 20;
   bool IsValid(std::string* why) const;
 };
 
 /// One tick's outcome.
 struct ProxyContact {
-  Eigen::Vector3d proxy_mm = Eigen::Vector3d::Zero();  ///< where the tip is drawn
-  Eigen::Vector3d goal_mm = Eigen::Vector3d::Zero();   ///< the device's tip
-  Eigen::Vector3d force_n = Eigen::Vector3d::Zero();   ///< to the device (tip and shaft)
+  Eigen::Vector3d proxy_mm = Eigen::Vector3d::Zero();    ///< where the tip is drawn
+  Eigen::Vector3d goal_mm = Eigen::Vector3d::Zero();     ///< the device's tip
+  Eigen::Vector3d force_n = Eigen::Vector3d::Zero();     ///< to the device (tip and shaft)
   Eigen::Vector3d torque_nmm = Eigen::Vector3d::Zero();  ///< of the shaft's forces about the tip
-  int num_planes = 0;                   ///< constraint planes holding the proxy (0-3)
-  std::int32_t faces[3] = {-1, -1, -1};  ///< their faces
-  std::uint32_t organs_touched = 0;     ///< bit Organ: the tip or the shaft touches it
-  double pericardium_force_n = 0;       ///< magnitude of the force the pericardium takes
-  bool stuck = false;                   ///< held by static friction
+  int num_planes = 0;                                    ///< constraint planes holding the proxy (0-3)
+  std::int32_t faces[3] = {-1, -1, -1};                  ///< their faces
+  std::uint32_t organs_touched = 0;                      ///< bit Organ: the tip or the shaft touches it
+  double pericardium_force_n = 0;                        ///< magnitude of the force the pericardium takes
+  bool stuck = false;                                    ///< held by static friction
 };
 
 /// The god-object of one introducer in one scene (which must outlive it).
@@ -85,7 +86,8 @@ class GodObject {
   double last_depth_mm_ = 0;
 
   /// Moves from `from` towards `target` along the surfaces (at most three planes); returns where it ends.
-  Eigen::Vector3d Slide(const Eigen::Vector3d& from, const Eigen::Vector3d& target, ProxyContact* c) const noexcept;
+  Eigen::Vector3d Slide(const Eigen::Vector3d& from, const Eigen::Vector3d& target,
+                        ProxyContact* c) const noexcept;
 };
 
 }  // namespace pectus::trainer

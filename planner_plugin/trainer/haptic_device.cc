@@ -43,8 +43,8 @@ Trajectory ParseTrajectory(const std::string& text, const std::string& source) {
     DeviceState s;
     double q[4];
     long long buttons = 0;
-    if (!(fields >> s.time_s >> s.position_mm.x() >> s.position_mm.y() >> s.position_mm.z() >> q[0] >> q[1] >> q[2] >>
-          q[3] >> buttons)) {
+    if (!(fields >> s.time_s >> s.position_mm.x() >> s.position_mm.y() >> s.position_mm.z() >> q[0] >> q[1] >>
+          q[2] >> q[3] >> buttons)) {
       ThrowBadInput(source, "expected 't_s x_mm y_mm z_mm qw qx qy qz buttons'", number);
     }
     std::string rest;
@@ -87,7 +87,8 @@ std::string FormatTrajectory(const Trajectory& trajectory) {
   for (const DeviceState& s : trajectory.samples) {
     const Eigen::Quaterniond& q = s.orientation;
     std::snprintf(line, sizeof(line), "%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %u\n", s.time_s,
-                  s.position_mm.x(), s.position_mm.y(), s.position_mm.z(), q.w(), q.x(), q.y(), q.z(), s.buttons);
+                  s.position_mm.x(), s.position_mm.y(), s.position_mm.z(), q.w(), q.x(), q.y(), q.z(),
+                  s.buttons);
     out += line;
   }
   return out;
@@ -99,7 +100,8 @@ void WriteTrajectory(const std::filesystem::path& path, const Trajectory& trajec
 
 bool SimulatedHandOptions::IsValid(std::string* why) const {
   const bool ok = mass_kg > 0 && grip_n_per_mm > 0 && damping_n_s_per_mm >= 0 && step_s > 0 && step_s <= 0.01;
-  if (!ok && why != nullptr) *why = "simulated hand: mass, grip and step must be > 0 (step <= 10 ms), damping >= 0";
+  if (!ok && why != nullptr)
+    *why = "simulated hand: mass, grip and step must be > 0 (step <= 10 ms), damping >= 0";
   return ok;
 }
 

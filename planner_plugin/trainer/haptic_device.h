@@ -26,8 +26,8 @@ struct DeviceState {
 /// What a device can do (CHAI3D's cHapticDeviceInfo, in part).
 struct DeviceInfo {
   std::string model;
-  double max_force_n = 8.5;               ///< Phantom Premium 1.5/6DOF (dissertation §4.4)
-  double max_stiffness_n_per_mm = 3.5;    ///< the stiffest wall it renders stably
+  double max_force_n = 8.5;             ///< Phantom Premium 1.5/6DOF (dissertation §4.4)
+  double max_stiffness_n_per_mm = 3.5;  ///< the stiffest wall it renders stably
   bool has_torque = false;
 };
 
@@ -40,7 +40,8 @@ class HapticDevice {
   /// The device's state at time `time_s` (s since the session's start; never decreasing).
   virtual DeviceState Read(double time_s) noexcept = 0;
   /// The force (N) and torque (N mm) to render until the next tick.
-  virtual void SetForceAndTorque(const Eigen::Vector3d& force_n, const Eigen::Vector3d& torque_nmm) noexcept = 0;
+  virtual void SetForceAndTorque(const Eigen::Vector3d& force_n,
+                                 const Eigen::Vector3d& torque_nmm) noexcept = 0;
 };
 
 /// A timed sequence of device states: the trajectory file's content.

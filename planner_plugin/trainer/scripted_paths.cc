@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "shape/core/error.h"
@@ -11,12 +12,12 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// 1 under the sternum (|x| < 20 mm), falling as cos^2 to 0 at |x| = 60 mm.
-double UnderSternum(double x) {
-  const double a = std::abs(x);
-  if (a <= 20) return 1;
-  if (a >= 60) return 0;
-  const double c = std::cos(0.5 * kPi * (a - 20) / 40);
+// The middle of the tunnel: 1 where |x| is within 35 % of the port's, falling as cos^2 to 0 at 70 %.
+double MiddleWeight(double x, double port_x) {
+  const double u = std::abs(x / port_x);
+  if (u <= 0.35) return 1;
+  if (u >= 0.7) return 0;
+  const double c = std::cos(0.5 * kPi * (u - 0.35) / 0.35);
   return c * c;
 }
 
@@ -33,8 +34,8 @@ const char* PathKindName(PathKind kind) {
 }
 
 bool ScriptedPathOptions::IsValid(std::string* why) const {
-  const bool ok = speed_mm_s > 0 && wobble_mm >= 0 && outside_mm >= 0 && sample_s > 0 && too_deep_mm >= 0 &&
-                  onto_pericardium_mm >= 0 && std::isfinite(wobble_phase_rad);
+  const bool ok = speed_mm_s > 0 && wobble_mm >= 0 && outside_mm >= 0 && sample_s > 0 &&
+                  too_deep_clearance_mm >= 0 && onto_pericardium_mm >= 0 && std::isfinite(wobble_phase_rad);
   if (!ok && why != nullptr) *why = "scripted path: speed and sample step must be > 0, lengths >= 0";
   return ok;
 }
@@ -60,14 +61,32 @@ Trajectory MakeScriptedPath(const TrainerScene& scene, const ScriptedPathOptions
     }
     if (!found) ThrowFailure("scripted path: no intercostal space beside the planned one");
   }
+  // A deeper path: each point of the tunnel's middle moves towards its nearest point of the pericardium,
+  // by as much as brings the tunnel's nearest approach to the wanted clearance (negative: into it).
+  const bool deeper = options.kind == PathKind::kTooDeep || options.kind == PathKind::kOntoPericardium;
+  const double clearance =
+      options.kind == PathKind::kTooDeep ? options.too_deep_clearance_mm : -options.onto_pericardium_mm;
+  auto middle = [&](const Eigen::Vector3d& p) {
+    return MiddleWeight(p.x(), p.x() < 0 ? tunnel.entry_port.x() : tunnel.exit_port.x());
+  };
+  double nearest_approach = std::numeric_limits<double>::infinity();
+  for (Eigen::Index i = 0; i < tunnel.points.rows() && deeper; ++i) {
+    const Eigen::Vector3d p = tunnel.points.row(i).transpose();
+    if (middle(p) == 1) nearest_approach = std::min(nearest_approach, scene.DistanceToPericardium(p));
+  }
   // The path's knots: outside the right port, the tunnel (changed by the kind), outside the left port.
   std::vector<Eigen::Vector3d> knots;
   knots.push_back(tunnel.entry_port + entry_shift + options.outside_mm * outward(tunnel.entry_port));
   for (Eigen::Index i = 0; i < tunnel.points.rows(); ++i) {
     Eigen::Vector3d p = tunnel.points.row(i).transpose();
-    if (options.kind == PathKind::kTooDeep) p.y() += options.too_deep_mm * UnderSternum(p.x());
-    if (options.kind == PathKind::kOntoPericardium) p.y() += options.onto_pericardium_mm * UnderSternum(p.x());
-    if (options.kind == PathKind::kWrongSpace && p.x() < 0) p += std::clamp(p.x() / tunnel.entry_port.x(), 0.0, 1.0) * entry_shift;
+    SurfaceHit nearest;
+    if (deeper && std::isfinite(nearest_approach) && scene.pericardium_grid.Nearest(p, 400, &nearest) &&
+        nearest.distance_mm > 0) {
+      p += (nearest_approach - clearance) * middle(p) * (nearest.point - p) / nearest.distance_mm;
+    }
+    if (options.kind == PathKind::kWrongSpace && p.x() < 0) {
+      p += std::clamp(p.x() / tunnel.entry_port.x(), 0.0, 1.0) * entry_shift;
+    }
     knots.push_back(p);
   }
   knots.push_back(tunnel.exit_port + options.outside_mm * outward(tunnel.exit_port));
@@ -98,7 +117,8 @@ Trajectory MakeScriptedPath(const TrainerScene& scene, const ScriptedPathOptions
   for (std::size_t i = 0; i < out.samples.size(); ++i) {
     const DeviceState& a = out.samples[i == 0 ? 0 : i - 1];
     const DeviceState& b = out.samples[std::min(i + 1, out.samples.size() - 1)];
-    if (b.time_s > a.time_s) out.samples[i].velocity_mm_s = (b.position_mm - a.position_mm) / (b.time_s - a.time_s);
+    if (b.time_s > a.time_s)
+      out.samples[i].velocity_mm_s = (b.position_mm - a.position_mm) / (b.time_s - a.time_s);
   }
   return out;
 }

@@ -17,11 +17,12 @@ bool ServoLoopOptions::IsValid(std::string* why) const {
 
 std::string ServoLoopStatistics::BriefReport() const {
   char text[300];
-  std::snprintf(text, sizeof(text),
-                "%lld ticks; period mean %.4f ms, p50 %.4f, p99 %.4f, max %.3f; tick p50 %.1f us, p99 %.1f, max "
-                "%.1f; %lld late",
-                static_cast<long long>(ticks), period_mean_ms, period_p50_ms, period_p99_ms, period_max_ms, tick_p50_us,
-                tick_p99_us, tick_max_us, static_cast<long long>(late_ticks));
+  std::snprintf(
+      text, sizeof(text),
+      "%lld ticks; period mean %.4f ms, p50 %.4f, p99 %.4f, max %.3f; tick p50 %.1f us, p99 %.1f, max "
+      "%.1f; %lld late",
+      static_cast<long long>(ticks), period_mean_ms, period_p50_ms, period_p99_ms, period_max_ms, tick_p50_us,
+      tick_p99_us, tick_max_us, static_cast<long long>(late_ticks));
   return text;
 }
 
@@ -41,7 +42,8 @@ void ServoLoop::Start(std::function<void(double)> tick) {
   running_.store(true);
   thread_ = std::thread([this, tick = std::move(tick)] {
     using Clock = std::chrono::steady_clock;
-    const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / options_.rate_hz));
+    const auto period =
+        std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / options_.rate_hz));
     const Clock::time_point start = Clock::now();
     Clock::time_point deadline = start, last = start;
     std::int64_t n = 0;
@@ -72,7 +74,8 @@ ServoLoopStatistics ServoLoop::Statistics() const {
   ServoLoopStatistics s;
   s.ticks = count_;
   s.late_ticks = late_;
-  const std::size_t n = static_cast<std::size_t>(std::clamp<std::int64_t>(count_ - 1, 0, options_.max_records));
+  const std::size_t n =
+      static_cast<std::size_t>(std::clamp<std::int64_t>(count_ - 1, 0, options_.max_records));
   std::vector<double> periods(periods_s_.begin(), periods_s_.begin() + static_cast<std::ptrdiff_t>(n));
   std::vector<double> ticks(ticks_s_.begin(), ticks_s_.begin() + static_cast<std::ptrdiff_t>(n));
   if (n == 0) return s;

@@ -14,7 +14,7 @@
 namespace pectus::trainer {
 
 struct ServoLoopOptions {
-  double rate_hz = 1000.0;        ///< ticks per second (1 kHz: the Phantom's servo rate)
+  double rate_hz = 1000.0;            ///< ticks per second (1 kHz: the Phantom's servo rate)
   std::int64_t max_records = 120000;  ///< periods kept for the statistics (2 minutes at 1 kHz)
   bool IsValid(std::string* why) const;
 };

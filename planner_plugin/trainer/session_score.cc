@@ -19,23 +19,26 @@ bool SessionScoreOptions::IsValid(std::string* why) const {
 
 std::string SessionScore::BriefReport() const {
   char text[400];
-  std::snprintf(text, sizeof(text),
-                "score %.1f: pericardium %.2f mm at nearest, %.2f s within reach, %d contacts (peak %.2f N); path "
-                "%.0f mm, %.2f mm RMS off the tunnel; entry %s%s, exit %s%s; %.1f s",
-                score, min_pericardium_distance_mm, time_near_pericardium_s, pericardial_contacts,
-                peak_pericardium_force_n, path_length_mm, rms_tunnel_deviation_mm, entry.Name().c_str(),
-                entry_as_planned ? "" : " (planned other)", exit.Name().c_str(), exit_as_planned ? "" : " (planned other)",
-                total_time_s);
+  std::snprintf(
+      text, sizeof(text),
+      "score %.1f: pericardium %.2f mm at nearest, %.2f s within reach, %d contacts (peak %.2f N); path "
+      "%.0f mm, %.2f mm RMS off the tunnel; entry %s%s, exit %s%s; %.1f s",
+      score, min_pericardium_distance_mm, time_near_pericardium_s, pericardial_contacts,
+      peak_pericardium_force_n, path_length_mm, rms_tunnel_deviation_mm, entry.Name().c_str(),
+      entry_as_planned ? "" : " (planned other)", exit.Name().c_str(),
+      exit_as_planned ? "" : " (planned other)", total_time_s);
   return text;
 }
 
-SessionScore ScoreSession(const TrainerScene& scene, const SessionRecord& record, const SessionScoreOptions& options) {
+SessionScore ScoreSession(const TrainerScene& scene, const SessionRecord& record,
+                          const SessionScoreOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage(why);
   if (record.samples.size() < 2) ThrowBadInput("session record", "fewer than two ticks");
   SessionScore s;
   s.min_pericardium_distance_mm = std::numeric_limits<double>::infinity();
   double sum_sq = 0;
+  std::size_t inside = 0;
   double nearest_entry = std::numeric_limits<double>::infinity(), nearest_exit = nearest_entry;
   Eigen::Vector3d at_entry = record.samples.front().proxy_mm, at_exit = record.samples.back().proxy_mm;
   bool touching = false;
@@ -50,14 +53,15 @@ SessionScore ScoreSession(const TrainerScene& scene, const SessionRecord& record
     s.peak_pericardium_force_n = std::max(s.peak_pericardium_force_n, t.pericardium_force_n);
     s.peak_force_n = std::max(s.peak_force_n, t.force_n.norm());
     if (i > 0) s.path_length_mm += (t.proxy_mm - record.samples[i - 1].proxy_mm).norm();
-    const double dev = DistanceToPolyline(scene.tunnel.points, t.proxy_mm);
-    sum_sq += dev * dev;
+    bool outside = false;
+    const double dev = DistanceToPolyline(scene.tunnel.points, t.proxy_mm, &outside);
+    if (!outside) sum_sq += dev * dev, ++inside;
     const double to_entry = (t.proxy_mm - scene.tunnel.entry_port).norm();
     const double to_exit = (t.proxy_mm - scene.tunnel.exit_port).norm();
     if (t.proxy_mm.x() < 0 && to_entry < nearest_entry) nearest_entry = to_entry, at_entry = t.proxy_mm;
     if (t.proxy_mm.x() > 0 && to_exit < nearest_exit) nearest_exit = to_exit, at_exit = t.proxy_mm;
   }
-  s.rms_tunnel_deviation_mm = std::sqrt(sum_sq / static_cast<double>(record.samples.size()));
+  s.rms_tunnel_deviation_mm = inside > 0 ? std::sqrt(sum_sq / static_cast<double>(inside)) : 0.0;
   s.entry = scene.SpaceAt(at_entry);
   s.exit = scene.SpaceAt(at_exit);
   s.entry_as_planned = s.entry == scene.tunnel.entry;
@@ -67,7 +71,8 @@ SessionScore ScoreSession(const TrainerScene& scene, const SessionRecord& record
   if (s.pericardial_contacts > 0) {
     penalty += options.contact_points + options.extra_contact_points * (s.pericardial_contacts - 1);
   }
-  penalty += options.shortfall_points_per_mm * std::max(0.0, options.near_pericardium_mm - s.min_pericardium_distance_mm);
+  penalty += options.shortfall_points_per_mm *
+             std::max(0.0, options.near_pericardium_mm - s.min_pericardium_distance_mm);
   penalty += options.near_points_per_s * s.time_near_pericardium_s;
   if (!s.entry_as_planned) penalty += options.wrong_space_points;
   if (!s.exit_as_planned) penalty += options.wrong_space_points;

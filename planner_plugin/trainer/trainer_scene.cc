@@ -139,15 +139,23 @@ TriangleMesh MakeEllipsoidMesh(const Eigen::Vector3d& centre, const Eigen::Vecto
   return mesh;
 }
 
-double DistanceToPolyline(const Points3& points, const Eigen::Vector3d& p) {
+double DistanceToPolyline(const Points3& points, const Eigen::Vector3d& p, bool* beyond_ends) {
   double best = std::numeric_limits<double>::infinity();
-  for (Eigen::Index i = 0; i + 1 < points.rows(); ++i) {
+  bool beyond = false;
+  const Eigen::Index last = points.rows() - 1;
+  for (Eigen::Index i = 0; i < last; ++i) {
     const Eigen::Vector3d a = points.row(i), b = points.row(i + 1), d = b - a;
     const double len2 = d.squaredNorm();
-    const double t = len2 > 0 ? std::clamp((p - a).dot(d) / len2, 0.0, 1.0) : 0.0;
-    best = std::min(best, (a + t * d - p).squaredNorm());
+    const double raw = len2 > 0 ? (p - a).dot(d) / len2 : 0.0;
+    const double t = std::clamp(raw, 0.0, 1.0);
+    const double dist2 = (a + t * d - p).squaredNorm();
+    if (dist2 < best) {
+      best = dist2;
+      beyond = (i == 0 && raw < 0) || (i + 1 == last && raw > 1);
+    }
   }
-  if (points.rows() == 1) best = (points.row(0).transpose() - p).squaredNorm();
+  if (points.rows() == 1) best = (points.row(0).transpose() - p).squaredNorm(), beyond = true;
+  if (beyond_ends != nullptr) *beyond_ends = beyond;
   return std::sqrt(best);
 }
 
@@ -178,7 +186,7 @@ IntercostalSpace TrainerScene::SpaceAt(const Eigen::Vector3d& p) const {
 
 double TrainerScene::DistanceToPericardium(const Eigen::Vector3d& p) const {
   SurfaceHit hit;
-  double reach = 16.0;
+  double reach = 20.0;
   while (!pericardium_grid.Nearest(p, reach, &hit)) reach *= 4;
   return hit.distance_mm;
 }
@@ -238,9 +246,8 @@ TrainerScene BuildTrainerScene(const planner::PatientRibcage& ribcage, const Tra
   // From touching the sternum's back, step back until the gap holds, then bisect the last step; a heart
   // that finds no such place between the sternum and the spine is made 5 % smaller and tried again.
   double y_ok = std::numeric_limits<double>::quiet_NaN();
-  for (int shrink = 0; shrink < 12 && !std::isfinite(y_ok); ++shrink) {
-    const double first = y_back + heart_axes.y() * 0.5,
-                 last = y_back + m.sternum_to_spine_mm + heart_axes.y();
+  for (int shrink = 0; shrink < 20 && !std::isfinite(y_ok); ++shrink) {
+    const double first = y_back + heart_axes.y() * 0.5, last = y_back + m.depth_mm;
     for (double y = first; y <= last; y += 2.0) {
       if (clearance_at(y) >= gap) {
         double lo = y - 2.0, hi = y;

@@ -47,8 +47,8 @@ struct OrganPlacement {
 /// Placement rules (docs/trainer.md, "Scene"). Lengths in mm.
 struct TrainerSceneOptions {
   /// Anterior mediastinum: the pericardium's nearest approach to any bone (sternum, cartilage, rib),
-  /// mm. Default 10.
-  double mediastinal_gap_mm = 10.0;
+  /// mm. Default 12: the tunnel then passes 6 mm from it, 2 mm clear of the medium introducer's shaft.
+  double mediastinal_gap_mm = 12.0;
   /// The pericardium's centre lies this far left of the midline in a chest without depression, mm
   /// (default 15), plus `heart_shift_per_depression` times the sternal depression (default 1.0).
   double heart_shift_mm = 15.0;
@@ -92,7 +92,8 @@ struct TrainerScene {
   Faces3 collision_faces;
   Eigen::VectorXi collision_organ;
   TriangleGrid collision;
-  TriangleGrid bone_grid, pericardium_grid;
+  TriangleGrid bone_grid;
+  TriangleGrid pericardium_grid;  ///< coarse cells (15 mm): for distances (scores), not for collisions
 
   /// The intercostal space that p lies in: p's side, and the two ribs whose local heights (within 12 mm
   /// of p horizontally) bracket p's height, if they are consecutive.
@@ -110,7 +111,8 @@ TrainerScene BuildTrainerScene(const planner::PatientRibcage& ribcage,
 TriangleMesh MakeEllipsoidMesh(const Eigen::Vector3d& centre, const Eigen::Vector3d& semi_axes,
                                int subdivisions);
 
-/// The distance from p to the polyline `points` (#points by 3), mm.
-double DistanceToPolyline(const Points3& points, const Eigen::Vector3d& p);
+/// The distance from p to the polyline `points` (#points by 3), mm; `beyond_ends` (if given) is set when
+/// the nearest point is an end of the polyline and p lies beyond it.
+double DistanceToPolyline(const Points3& points, const Eigen::Vector3d& p, bool* beyond_ends = nullptr);
 
 }  // namespace pectus::trainer

@@ -34,8 +34,8 @@ void TrainerSession::Tick(double time_s) noexcept {
     ++dropped_;
     return;
   }
-  record_.samples.push_back({time_s, state.position_mm, state.orientation, c.proxy_mm, c.force_n, c.organs_touched,
-                             c.pericardium_force_n});
+  record_.samples.push_back({time_s, state.position_mm, state.orientation, c.proxy_mm, c.force_n,
+                             c.organs_touched, c.pericardium_force_n});
   const std::uint32_t changed = c.organs_touched ^ last_organs_;
   for (int organ = 0; organ < kNumOrgans; ++organ) {
     if ((changed >> organ & 1u) && record_.events.size() < record_.events.capacity()) {
@@ -60,7 +60,8 @@ const Introducer& IntroducerNamed(const std::string& name) {
   ThrowBadInput("session record", "unknown introducer '" + name + "' (small, medium or large)");
 }
 
-SessionRecord ReplaySession(const TrainerScene& scene, const SessionRecord& record, const ProxyOptions& options) {
+SessionRecord ReplaySession(const TrainerScene& scene, const SessionRecord& record,
+                            const ProxyOptions& options) {
   Trajectory t;
   t.samples.reserve(record.samples.size());
   for (const SessionSample& s : record.samples) {
@@ -83,15 +84,18 @@ std::string FormatSessionRecord(const SessionRecord& r) {
   std::snprintf(line, sizeof(line), "patient %s\nintroducer %s\nperiod_s %.17g\n", r.patient.c_str(),
                 r.introducer.c_str(), r.period_s);
   out += line;
-  out += "# tick t_s device_x device_y device_z qw qx qy qz proxy_x proxy_y proxy_z force_x force_y force_z organs "
-         "pericardium_force_n\n";
+  out +=
+      "# tick t_s device_x device_y device_z qw qx qy qz proxy_x proxy_y proxy_z force_x force_y force_z "
+      "organs "
+      "pericardium_force_n\n";
   for (const SessionSample& s : r.samples) {
     const Eigen::Quaterniond& q = s.orientation;
-    std::snprintf(line, sizeof(line),
-                  "tick %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %u %.17g\n",
-                  s.time_s, s.device_mm.x(), s.device_mm.y(), s.device_mm.z(), q.w(), q.x(), q.y(), q.z(),
-                  s.proxy_mm.x(), s.proxy_mm.y(), s.proxy_mm.z(), s.force_n.x(), s.force_n.y(), s.force_n.z(),
-                  s.organs_touched, s.pericardium_force_n);
+    std::snprintf(
+        line, sizeof(line),
+        "tick %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %u %.17g\n",
+        s.time_s, s.device_mm.x(), s.device_mm.y(), s.device_mm.z(), q.w(), q.x(), q.y(), q.z(),
+        s.proxy_mm.x(), s.proxy_mm.y(), s.proxy_mm.z(), s.force_n.x(), s.force_n.y(), s.force_n.z(),
+        s.organs_touched, s.pericardium_force_n);
     out += line;
   }
   out += "# event t_s organ (0 bone, 1 pericardium, 2 lung) begins (1) or ends (0)\n";
@@ -125,9 +129,10 @@ SessionRecord ParseSessionRecord(const std::string& text, const std::string& sou
     } else if (key == "tick") {
       SessionSample s;
       double q[4];
-      ok = static_cast<bool>(f >> s.time_s >> s.device_mm.x() >> s.device_mm.y() >> s.device_mm.z() >> q[0] >> q[1] >>
-                             q[2] >> q[3] >> s.proxy_mm.x() >> s.proxy_mm.y() >> s.proxy_mm.z() >> s.force_n.x() >>
-                             s.force_n.y() >> s.force_n.z() >> s.organs_touched >> s.pericardium_force_n);
+      ok = static_cast<bool>(f >> s.time_s >> s.device_mm.x() >> s.device_mm.y() >> s.device_mm.z() >> q[0] >>
+                             q[1] >> q[2] >> q[3] >> s.proxy_mm.x() >> s.proxy_mm.y() >> s.proxy_mm.z() >>
+                             s.force_n.x() >> s.force_n.y() >> s.force_n.z() >> s.organs_touched >>
+                             s.pericardium_force_n);
       s.orientation = Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
       if (ok) r.samples.push_back(s);
     } else if (key == "event") {

@@ -69,7 +69,8 @@ class TrainerSession {
 SessionRecord RunSession(const TrainerScene& scene, HapticDevice* device, const Introducer& introducer,
                          const ProxyOptions& options, double duration_s, double period_s = 0.001);
 /// Replays a record: its device states through a ScriptedDevice at its own tick times.
-SessionRecord ReplaySession(const TrainerScene& scene, const SessionRecord& record, const ProxyOptions& options = {});
+SessionRecord ReplaySession(const TrainerScene& scene, const SessionRecord& record,
+                            const ProxyOptions& options = {});
 
 /// The introducer of that name (Error(kBadInput) if none).
 const Introducer& IntroducerNamed(const std::string& name);

@@ -185,10 +185,7 @@ void TriangleGrid::AllHits(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                            std::vector<SurfaceHit>* hits) const {
   const Eigen::Vector3d d = b - a;
   std::vector<SurfaceHit> found;
-  std::vector<char> seen(static_cast<std::size_t>(faces_.rows()), 0);
   ForCells(a.cwiseMin(b), a.cwiseMax(b), [&](std::int32_t f) {
-    if (seen[static_cast<std::size_t>(f)]) return true;
-    seen[static_cast<std::size_t>(f)] = 1;
     double t;
     if (LineTriangle(a, d, vertices_.row(faces_(f, 0)), vertices_.row(faces_(f, 1)),
                      vertices_.row(faces_(f, 2)), &t) &&
@@ -203,6 +200,12 @@ void TriangleGrid::AllHits(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
     }
     return true;
   });
+  // A face binned in several cells is met once per cell: keep one.
+  std::sort(found.begin(), found.end(),
+            [](const SurfaceHit& x, const SurfaceHit& y) { return x.face < y.face; });
+  found.erase(std::unique(found.begin(), found.end(),
+                          [](const SurfaceHit& x, const SurfaceHit& y) { return x.face == y.face; }),
+              found.end());
   std::sort(found.begin(), found.end(), [](const SurfaceHit& x, const SurfaceHit& y) { return x.t < y.t; });
   hits->insert(hits->end(), found.begin(), found.end());
 }

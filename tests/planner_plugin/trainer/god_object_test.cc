@@ -22,11 +22,13 @@ TrainerScene BoxScene(Organ organ, const std::vector<std::pair<Eigen::Vector3d, 
   Points3 v(8 * static_cast<Eigen::Index>(boxes.size()), 3);
   Faces3 f(12 * static_cast<Eigen::Index>(boxes.size()), 3);
   Faces3 one(12, 3);
-  one << 0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5;
+  one << 0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3,
+      7, 5;
   for (std::size_t b = 0; b < boxes.size(); ++b) {
     const auto& [lo, hi] = boxes[b];
     const auto k = static_cast<Eigen::Index>(b);
-    for (int i = 0; i < 8; ++i) v.row(8 * k + i) << (i & 1 ? hi : lo).x(), (i & 2 ? hi : lo).y(), (i & 4 ? hi : lo).z();
+    for (int i = 0; i < 8; ++i)
+      v.row(8 * k + i) << (i & 1 ? hi : lo).x(), (i & 2 ? hi : lo).y(), (i & 4 ? hi : lo).z();
     f.middleRows(12 * k, 12) = one.array() + static_cast<std::int32_t>(8 * k);
   }
   s.collision_vertices = v;
@@ -39,12 +41,13 @@ TrainerScene BoxScene(Organ organ, const std::vector<std::pair<Eigen::Vector3d, 
 TEST(GodObject, ProxyStaysOnTheSurfaceAndTheSpringPushesBackWithTheTissuesStiffness) {
   const TrainerScene box = BoxScene(kBone);
   ProxyOptions options;
-  options.damping_n_s_per_mm = 0;     // the spring alone
+  options.damping_n_s_per_mm = 0;         // the spring alone
   options.shaft_collision_length_mm = 0;  // the tip alone
   options.force_shading = false;          // a box's corner normals are not its faces'
   options.max_force_n = 100;              // no clamping
   GodObject proxy(box, IntroducerSizes()[1], options);
-  const Eigen::Quaterniond up = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitZ());
+  const Eigen::Quaterniond up =
+      Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitZ());
   proxy.Reset({1, 2, 10});
   proxy.Update({1, 2, 5}, up, 0.001);  // free: the proxy is the tip
   EXPECT_EQ(proxy.contact().num_planes, 0);
@@ -66,7 +69,8 @@ TEST(GodObject, ProxyStaysOnTheSurfaceAndTheSpringPushesBackWithTheTissuesStiffn
   EXPECT_FALSE(slid.stuck);
   EXPECT_NEAR(5 - slid.proxy_mm.x(), options.dynamic_friction * (2 + options.surface_offset_mm), 1e-6);
   // Into a concave corner (a wall standing on the floor): two planes hold the proxy in the corner's edge.
-  const TrainerScene corner_scene = BoxScene(kBone, {{{-20, -20, -20}, {20, 20, 0}}, {{10, -20, 0}, {20, 20, 20}}});
+  const TrainerScene corner_scene =
+      BoxScene(kBone, {{{-20, -20, -20}, {20, 20, 0}}, {{10, -20, 0}, {20, 20, 20}}});
   GodObject in_corner(corner_scene, IntroducerSizes()[1], options);
   in_corner.Reset({0, 0, 5});
   const ProxyContact& corner = in_corner.Update({15, 0, -3}, up, 0.001);
@@ -79,7 +83,8 @@ TEST(GodObject, ProxyStaysOnTheSurfaceAndTheSpringPushesBackWithTheTissuesStiffn
   GodObject on_heart(soft, IntroducerSizes()[1], options);
   on_heart.Reset({0, 0, 5});
   const ProxyContact& h = on_heart.Update({0, 0, -3}, up, 0.001);
-  EXPECT_NEAR(h.force_n.z(), options.stiffness_n_per_mm[kPericardium] * (3 + options.surface_offset_mm), 1e-9);
+  EXPECT_NEAR(h.force_n.z(), options.stiffness_n_per_mm[kPericardium] * (3 + options.surface_offset_mm),
+              1e-9);
   EXPECT_NE(h.organs_touched & (1u << kPericardium), 0u);
 }
 
@@ -92,7 +97,8 @@ TEST(GodObject, ShaftCollidesAsACapsuleOfTheIntroducersRadius) {
     GodObject proxy(box, size, unlimited);
     // The tip above the box, the shaft lying along x 1 mm above the top face: it touches the box only if
     // its radius exceeds 1 mm, pushed up by k (r - 1).
-    const Eigen::Quaterniond along_x = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitX());
+    const Eigen::Quaterniond along_x =
+        Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitX());
     proxy.Reset({18, 0, 1});
     const ProxyContact& c = proxy.Update({18, 0, 1}, along_x, 0.001);
     const double r = 0.5 * size.diameter_mm;
@@ -126,7 +132,8 @@ TEST(GodObject, PressAndReleaseCyclesGainNoEnergy) {
   scene.collision.AllHits(heart_out, heart_in, &hits);
   ASSERT_FALSE(hits.empty());
   const Eigen::Vector3d heart = hits.front().point;
-  for (const auto& [surface, inward] : {std::pair{bone, Eigen::Vector3d(0, 1, 0)}, std::pair{heart, Eigen::Vector3d(0, 0, -1)}}) {
+  for (const auto& [surface, inward] :
+       {std::pair{bone, Eigen::Vector3d(0, 1, 0)}, std::pair{heart, Eigen::Vector3d(0, 0, -1)}}) {
     Trajectory target;
     for (int k = 0; k <= 500; ++k) {  // 5 cycles of 1 s, 10 ms samples: from 5 mm outside to 6 mm inside
       DeviceState s;
@@ -144,8 +151,8 @@ TEST(GodObject, PressAndReleaseCyclesGainNoEnergy) {
       return m;
     }();
     const double w = EnergyGiven(r);
-    std::printf("press-release at (%.0f, %.0f, %.0f): peak %.2f N, energy given to the hand %.3g N mm\n", surface.x(),
-                surface.y(), surface.z(), peak, w);
+    std::printf("press-release at (%.0f, %.0f, %.0f): peak %.2f N, energy given to the hand %.3g N mm\n",
+                surface.x(), surface.y(), surface.z(), peak, w);
     EXPECT_GT(peak, 0.5);
     EXPECT_LE(w, 0.0);
   }
