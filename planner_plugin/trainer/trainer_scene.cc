@@ -184,11 +184,33 @@ IntercostalSpace TrainerScene::SpaceAt(const Eigen::Vector3d& p) const {
   return {side, rib_above};
 }
 
+double DistanceToEllipsoid(const Eigen::Vector3d& centre, const Eigen::Vector3d& semi_axes,
+                           const Eigen::Vector3d& p) {
+  // Eberly, "Distance from a point to an ellipse, an ellipsoid, or a hyperellipsoid" (2013): in the
+  // first octant, the nearest point is y_i a_i^2 / (t + a_i^2) with t the root of
+  // F(t) = sum (a_i y_i / (t + a_i^2))^2 - 1, found by bisection.
+  const Eigen::Vector3d y = (p - centre).cwiseAbs();
+  const Eigen::Vector3d a2 = semi_axes.cwiseProduct(semi_axes);
+  const double inside = (y.array() / semi_axes.array()).square().sum();
+  if (inside == 1) return 0;
+  auto F = [&](double t) { return (semi_axes.array() * y.array() / (t + a2.array())).square().sum() - 1; };
+  const double amin = a2.minCoeff();
+  double lo = -amin + 1e-12 * amin, hi = (y.norm() + semi_axes.maxCoeff()) * semi_axes.maxCoeff();
+  if (inside > 1)
+    lo = 0;
+  else
+    hi = 0;
+  for (int it = 0; it < 200 && hi - lo > 1e-12 * (1 + std::abs(hi)); ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (F(mid) > 0 ? lo : hi) = mid;
+  }
+  const double t = 0.5 * (lo + hi);
+  const Eigen::Vector3d x = (a2.array() * y.array() / (t + a2.array())).matrix();
+  return (x - y).norm();
+}
+
 double TrainerScene::DistanceToPericardium(const Eigen::Vector3d& p) const {
-  SurfaceHit hit;
-  double reach = 20.0;
-  while (!pericardium_grid.Nearest(p, reach, &hit)) reach *= 4;
-  return hit.distance_mm;
+  return DistanceToEllipsoid(pericardium.centre, pericardium.semi_axes, p);
 }
 
 TrainerScene BuildTrainerScene(const planner::PatientRibcage& ribcage, const TrainerSceneOptions& options) {
@@ -201,6 +223,17 @@ TrainerScene BuildTrainerScene(const planner::PatientRibcage& ribcage, const Tra
   scene.bone_faces = ribcage.surface.faces;
   scene.bone_parts = ribcage.surface.face_parts;
   scene.bone_grid = TriangleGrid(scene.bone_vertices, scene.bone_faces, options.grid_cell_mm);
+  Points3 bone_surface_vertices;  // the vertices on faces (the ribcage's nodes include inner ones)
+  {
+    std::vector<std::int32_t> used(scene.bone_faces.data(),
+                                   scene.bone_faces.data() + scene.bone_faces.size());
+    std::sort(used.begin(), used.end());
+    used.erase(std::unique(used.begin(), used.end()), used.end());
+    bone_surface_vertices.resize(static_cast<Eigen::Index>(used.size()), 3);
+    for (std::size_t i = 0; i < used.size(); ++i) {
+      bone_surface_vertices.row(static_cast<Eigen::Index>(i)) = scene.bone_vertices.row(used[i]);
+    }
+  }
   const planner::RibcageMeasurements& m = ribcage.measured;
   const double L = m.sternal_length_mm, z_t = m.slice_z_mm;
 
@@ -241,7 +274,7 @@ TrainerScene BuildTrainerScene(const planner::PatientRibcage& ribcage, const Tra
     place(&heart, {scene.heart_shift_mm, y, heart_z}, heart_axes);
     if (InsideEllipsoid(heart, {0, y_back - 1, z_t})) return 0.0;  // swallowed the sternum
     const TriangleGrid g(heart.mesh.vertices.positions, heart.mesh.faces, options.grid_cell_mm);
-    return Clearance(heart.mesh.vertices.positions, scene.bone_grid, scene.bone_vertices, g, 2 * gap);
+    return Clearance(heart.mesh.vertices.positions, scene.bone_grid, bone_surface_vertices, g, 2 * gap);
   };
   // From touching the sternum's back, step back until the gap holds, then bisect the last step; a heart
   // that finds no such place between the sternum and the spine is made 5 % smaller and tried again.
@@ -251,7 +284,7 @@ TrainerScene BuildTrainerScene(const planner::PatientRibcage& ribcage, const Tra
     for (double y = first; y <= last; y += 2.0) {
       if (clearance_at(y) >= gap) {
         double lo = y - 2.0, hi = y;
-        for (int it = 0; it < 30 && hi - lo > 1e-4; ++it) {
+        for (int it = 0; it < 30 && hi - lo > 1e-3; ++it) {
           const double mid = 0.5 * (lo + hi);
           (clearance_at(mid) >= gap ? hi : lo) = mid;
         }
@@ -274,7 +307,7 @@ TrainerScene BuildTrainerScene(const planner::PatientRibcage& ribcage, const Tra
                                  m.notch_z_mm - 0.5 * L);
     const Eigen::Vector3d axes(0.17 * m.width_mm, 0.38 * m.depth_mm, 0.5 * L);
     double lo = 0.05, hi = 1.0;
-    for (int it = 0; it < 25; ++it) {
+    for (int it = 0; it < 14; ++it) {
       const double s = 0.5 * (lo + hi);
       place(&lung, centre, s * axes);
       const TriangleGrid g(lung.mesh.vertices.positions, lung.mesh.faces, options.grid_cell_mm);

@@ -17,14 +17,11 @@
 namespace pectus::trainer {
 namespace {
 
-// How far p lies inside the closed collision surfaces (0 outside): a ray's crossings decide inside, the
-// nearest point the depth.
-double DepthBelowSurface(const TrainerScene& scene, const Eigen::Vector3d& p) {
+// Whether p lies inside the closed collision surfaces (a ray's crossings; an odd direction meets no edge).
+bool Inside(const TrainerScene& scene, const Eigen::Vector3d& p) {
   std::vector<SurfaceHit> hits;
-  scene.collision.AllHits(p, p + Eigen::Vector3d(401.3, 377.9, 353.1), &hits);  // an odd direction: no edges
-  if (hits.size() % 2 == 0) return 0;
-  SurfaceHit nearest;
-  return scene.collision.Nearest(p, 50, &nearest) ? nearest.distance_mm : 50;
+  scene.collision.AllHits(p, p + Eigen::Vector3d(401.3, 377.9, 353.1), &hits);
+  return hits.size() % 2 == 1;
 }
 
 struct ScoredPath {
@@ -33,22 +30,20 @@ struct ScoredPath {
   SessionScore score;
 };
 
-// The scripted set: four experts (different wobbles), and each novice mistake twice.
+// The scripted set: three experts (different wobbles), and each novice mistake.
 const std::vector<ScoredPath>& ScriptedSet() {
   static const std::vector<ScoredPath> set = [] {
     const TrainerScene& scene = testing::SceneOf(57);
     std::vector<ScoredPath> out;
-    const PathKind kinds[] = {PathKind::kExpert,          PathKind::kExpert,          PathKind::kExpert,
-                              PathKind::kExpert,          PathKind::kTooDeep,         PathKind::kTooDeep,
-                              PathKind::kOntoPericardium, PathKind::kOntoPericardium, PathKind::kWrongSpace,
-                              PathKind::kWrongSpace};
+    const PathKind kinds[] = {PathKind::kExpert,  PathKind::kExpert,          PathKind::kExpert,
+                              PathKind::kTooDeep, PathKind::kOntoPericardium, PathKind::kWrongSpace};
     int n = 0;
     for (PathKind kind : kinds) {
       ScriptedPathOptions o;
       o.kind = kind;
       o.wobble_phase_rad = 0.9 * n++;
       o.wobble_mm = kind == PathKind::kExpert ? 1.0 : 1.5;
-      o.speed_mm_s = 60;  // a quick push keeps the sanitizer run short
+      o.speed_mm_s = 80;  // a quick push keeps the sanitizer run short
       SimulatedHand hand(MakeScriptedPath(scene, o));
       SessionRecord r = RunSession(scene, &hand, IntroducerSizes()[1], {}, hand.target().duration_s());
       SessionScore s = ScoreSession(scene, r);
@@ -83,22 +78,32 @@ TEST(TrainerSession, ProxyNeverEndsBelowASurfaceByMoreThanAHundredthOfAMillimetr
   PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
   const TrainerScene& scene = testing::SceneOf(57);
   double worst = 0;
-  std::size_t checked = 0;
+  std::size_t checked = 0, rays = 0;
   for (const ScoredPath& p : ScriptedSet()) {
-    for (std::size_t k = 0; k < p.record.samples.size();
-         k += (p.record.samples[k].organs_touched != 0 ? 1 : 25)) {
-      worst = std::max(worst, DepthBelowSurface(scene, p.record.samples[k].proxy_mm));
+    for (std::size_t k = 0; k < p.record.samples.size(); ++k) {
+      const Eigen::Vector3d x = p.record.samples[k].proxy_mm;
+      // Within 0.01 mm of a surface: never deeper than that whichever side. Farther: inside is a fall
+      // through (its depth the distance to the nearest surface), checked by a ray on every tick in
+      // contact and every 20th otherwise.
+      SurfaceHit near;
+      const bool close = scene.collision.Nearest(x, 0.01, &near);
       ++checked;
+      if (close || (p.record.samples[k].organs_touched == 0 && k % 20 != 0)) continue;
+      ++rays;
+      if (Inside(scene, x)) {
+        SurfaceHit nearest;
+        worst = std::max(worst, scene.collision.Nearest(x, 50, &nearest) ? nearest.distance_mm : 50.0);
+      }
     }
   }
-  std::printf("%zu proxies checked, deepest below a surface %.3g mm\n", checked, worst);
+  std::printf("%zu proxies checked (%zu by a ray), deepest below a surface %.3g mm\n", checked, rays, worst);
   EXPECT_LE(worst, 0.01);
 }
 
 TEST(TrainerSession, RecordWrittenAndReplayedGivesTheSameSessionBitForBit) {
   PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
   const TrainerScene& scene = testing::SceneOf(57);
-  const ScoredPath& novice = ScriptedSet()[6];  // onto the pericardium: contacts, friction, forces
+  const ScoredPath& novice = ScriptedSet()[4];  // onto the pericardium: contacts, friction, forces
   const auto path = std::filesystem::temp_directory_path() / "pectus_trainer_session_test.txt";
   WriteSessionRecord(path, novice.record);
   const SessionRecord read = ReadSessionRecord(path);
