@@ -284,7 +284,7 @@ void Pictures(const TrainerScene& scene, const std::string& dir) {
   scope.frame = ndc;
   scope.background = {20, 20, 20};
   render::WritePng(render::WithTitle(render::RenderMesh(projected, scope),
-                                     "thoracoscope, 30 deg oblique, 80 deg field, from the right chest"),
+                                     "scope: 30 deg oblique, 80 deg field"),
                    dir + "/trainer_scope_view.png");
 }
 

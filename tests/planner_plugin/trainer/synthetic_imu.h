@@ -50,7 +50,15 @@ inline SyntheticImu MakeSyntheticImu(const SyntheticImuOptions& o = {}) {
   const double gyro_sigma = o.gyro_noise_deg_s_rthz * kDeg * std::sqrt(0.5 * o.rate_hz);
   const double accel_sigma = o.accel_noise_ug_rthz * 1e-6 * kG * std::sqrt(0.5 * o.rate_hz);
   const double walk_sigma = o.gyro_bias_walk_deg_s_rts * kDeg * std::sqrt(dt);
-  Eigen::Vector3d bias(uniform(rng), uniform(rng), uniform(rng));
+  // Draws in named order: a constructor's arguments are evaluated in an unspecified order (GCC and clang
+  // differ), which would give each compiler other data.
+  auto draw3 = [&](auto& distribution) {
+    const double x = distribution(rng);
+    const double y = distribution(rng);
+    const double z = distribution(rng);
+    return Eigen::Vector3d(x, y, z);
+  };
+  Eigen::Vector3d bias = draw3(uniform);
   bias *= o.gyro_bias_deg_s * kDeg;
   SyntheticImu out;
   const auto n = static_cast<std::size_t>(o.duration_s * o.rate_hz) + 1;
@@ -71,10 +79,10 @@ inline SyntheticImu MakeSyntheticImu(const SyntheticImuOptions& o = {}) {
     out.time_s.push_back(t);
     out.truth.push_back(q);
     out.true_accel_world_m_s2.push_back(a_world);
-    out.gyro_rad_s.push_back(omega + bias + gyro_sigma * Eigen::Vector3d(unit(rng), unit(rng), unit(rng)));
+    out.gyro_rad_s.push_back(omega + bias + gyro_sigma * draw3(unit));
     out.accel_m_s2.push_back(q.conjugate() * (a_world + Eigen::Vector3d(0, 0, kG)) +
-                             accel_sigma * Eigen::Vector3d(unit(rng), unit(rng), unit(rng)));
-    bias += walk_sigma * Eigen::Vector3d(unit(rng), unit(rng), unit(rng));
+                             accel_sigma * draw3(unit));
+    bias += walk_sigma * draw3(unit);
   }
   return out;
 }
