@@ -57,8 +57,4 @@ class TriangleGrid {
   void ForCells(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, Visit&& visit) const noexcept;
 };
 
-/// The point of triangle (a, b, c) nearest to p (Ericson, Real-Time Collision Detection, §5.1.5).
-Eigen::Vector3d ClosestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                                       const Eigen::Vector3d& b, const Eigen::Vector3d& c) noexcept;
-
 }  // namespace pectus::trainer

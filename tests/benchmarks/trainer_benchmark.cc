@@ -27,6 +27,7 @@
 #include "shape/io/patient_table_io.h"
 #include "shape/render/image.h"
 #include "shape/render/mesh_render.h"
+#include "tests/planner_plugin/host/marker_poses.h"
 #include "tests/planner_plugin/trainer/synthetic_imu.h"
 #include "tests/support/shared_data.h"
 
@@ -98,12 +99,8 @@ nlohmann::json Inertial() {
     testing::SyntheticImuOptions o;
     o.seed = seed;
     const testing::SyntheticImu imu = testing::MakeSyntheticImu(o);
-    Eigen::Vector3d bias = Eigen::Vector3d::Zero();
-    int still = 0;
-    for (std::size_t k = 0; k < imu.time_s.size() && imu.time_s[k] < o.still_s; ++k, ++still)
-      bias += imu.gyro_rad_s[k];
     MadgwickFilter filter({}, imu.truth.front());
-    filter.SetGyroBias(bias / still);
+    filter.SetGyroBias(testing::StillBias(imu, o.still_s));
     double sum_sq = 0, worst = 0;
     // Eq. 16 from the end of the still interval: x += v dt + a dt^2 / 2, v += a dt, a = R f - g.
     Eigen::Vector3d x_filter = Eigen::Vector3d::Zero(), v_filter = Eigen::Vector3d::Zero();
@@ -144,18 +141,13 @@ nlohmann::json Inertial() {
 nlohmann::json Markers() {
   const MarkerCamera camera;
   const MarkerOptions options;
-  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  constexpr double kDeg = 3.14159265358979323846 / 180.0;  // for the errors
   std::vector<double> mm, deg;
   int missed = 0;
   for (double distance = 150; distance <= 350; distance += 25) {
     for (double tilt = 0; tilt <= 45; tilt += 7.5) {
       for (double spin : {0.0, 37.0, 81.0}) {
-        Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-        T.linear() = (Eigen::AngleAxisd(180 * kDeg, Eigen::Vector3d::UnitX()) *
-                      Eigen::AngleAxisd(tilt * kDeg, Eigen::Vector3d(1, 1, 0).normalized()) *
-                      Eigen::AngleAxisd(spin * kDeg, Eigen::Vector3d::UnitZ()))
-                         .toRotationMatrix();
-        T.translation() = Eigen::Vector3d(0.1 * distance, -0.05 * distance, distance);
+        const Eigen::Isometry3d T = testing::MarkerFacingCamera(distance, tilt, spin);
         const MarkerPoseResult r = EstimateMarkerPose(RenderMarkerView(camera, T, options), camera, options);
         if (!r.found) {
           ++missed;
@@ -283,9 +275,9 @@ void Pictures(const TrainerScene& scene, const std::string& dir) {
   ndc.max = {tx, ty, 400};
   scope.frame = ndc;
   scope.background = {20, 20, 20};
-  render::WritePng(render::WithTitle(render::RenderMesh(projected, scope),
-                                     "scope: 30 deg oblique, 80 deg field"),
-                   dir + "/trainer_scope_view.png");
+  render::WritePng(
+      render::WithTitle(render::RenderMesh(projected, scope), "scope: 30 deg oblique, 80 deg field"),
+      dir + "/trainer_scope_view.png");
 }
 
 }  // namespace

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "tests/planner_plugin/host/marker_poses.h"
+
 namespace pectus::trainer {
 namespace {
 
@@ -18,14 +20,7 @@ TEST(ScopeMarkerPose, RecoversTheKnownPoseOfRenderedMarkersWithinAMillimetreAndH
   for (double distance : {180.0, 250.0, 320.0}) {
     for (double tilt : {0.0, 20.0, 35.0}) {
       for (double spin : {10.0, 100.0}) {
-        Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-        // The marker faces the camera (its z towards -z of the camera), tilted about an oblique axis,
-        // spun about its normal, and off the optical axis.
-        T.linear() = (Eigen::AngleAxisd(180 * kDeg, Eigen::Vector3d::UnitX()) *
-                      Eigen::AngleAxisd(tilt * kDeg, Eigen::Vector3d(1, 1, 0).normalized()) *
-                      Eigen::AngleAxisd(spin * kDeg, Eigen::Vector3d::UnitZ()))
-                         .toRotationMatrix();
-        T.translation() = Eigen::Vector3d(0.1 * distance, -0.05 * distance, distance);
+        const Eigen::Isometry3d T = testing::MarkerFacingCamera(distance, tilt, spin);
         const GrayImage image = RenderMarkerView(camera, T, options);
         const MarkerPoseResult r = EstimateMarkerPose(image, camera, options);
         ASSERT_TRUE(r.found) << r.message << " at " << distance << " mm, tilt " << tilt;

@@ -87,6 +87,15 @@ inline SyntheticImu MakeSyntheticImu(const SyntheticImuOptions& o = {}) {
   return out;
 }
 
+/// The gyro's bias as the mean rate while the scope lies still at its port (the first `still_s` seconds).
+inline Eigen::Vector3d StillBias(const SyntheticImu& imu, double still_s) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  int n = 0;
+  for (std::size_t k = 0; k < imu.time_s.size() && imu.time_s[k] < still_s; ++k, ++n)
+    sum += imu.gyro_rad_s[k];
+  return n > 0 ? Eigen::Vector3d(sum / n) : sum;
+}
+
 /// Angle between two orientations, degrees.
 inline double AngleDeg(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {
   return Eigen::AngleAxisd(a.conjugate() * b).angle() * 180.0 / 3.14159265358979323846;

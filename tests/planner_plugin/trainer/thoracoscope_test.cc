@@ -73,12 +73,8 @@ TEST(Thoracoscope, CameraProjectsKnownPointsWithinHalfAPixelOfThePinholeModel) {
 // when the scope lies still at its port), degrees.
 double RmsError(const testing::SyntheticImuOptions& o, double* worst) {
   const testing::SyntheticImu imu = testing::MakeSyntheticImu(o);
-  Eigen::Vector3d bias = Eigen::Vector3d::Zero();
-  int still = 0;
-  for (std::size_t k = 0; k < imu.time_s.size() && imu.time_s[k] < o.still_s; ++k, ++still)
-    bias += imu.gyro_rad_s[k];
   MadgwickFilter filter({}, imu.truth.front());
-  filter.SetGyroBias(bias / still);
+  filter.SetGyroBias(testing::StillBias(imu, o.still_s));
   double sum_sq = 0;
   *worst = 0;
   for (std::size_t k = 1; k < imu.time_s.size(); ++k) {
