@@ -132,6 +132,11 @@ Eigen::Vector3d GodObject::Slide(const Eigen::Vector3d& from, const Eigen::Vecto
 
 const ProxyContact& GodObject::Update(const Eigen::Vector3d& tip_mm, const Eigen::Quaterniond& orientation,
                                       double dt_s) noexcept {
+  if (!tip_mm.allFinite() || !orientation.coeffs().allFinite() || !(dt_s >= 0)) {
+    contact_.force_n.setZero();  // a bad reading renders nothing and leaves the proxy where it was
+    contact_.torque_nmm.setZero();
+    return contact_;
+  }
   const Eigen::Vector3d previous = contact_.proxy_mm;
   const bool was_touching = contact_.num_planes > 0;
   ProxyContact c;

@@ -71,7 +71,7 @@ class GodObject {
   /// Puts the proxy at `tip_mm` (free space) and forgets the contacts.
   void Reset(const Eigen::Vector3d& tip_mm);
   /// One servo tick: the device's tip and orientation (axis = orientation * (0, 0, 1), handle to tip),
-  /// the period dt_s.
+  /// the period dt_s. A non-finite reading renders no force and leaves the proxy where it was.
   const ProxyContact& Update(const Eigen::Vector3d& tip_mm, const Eigen::Quaterniond& orientation,
                              double dt_s) noexcept;
   const ProxyContact& contact() const { return contact_; }

@@ -78,6 +78,11 @@ TEST(GodObject, ProxyStaysOnTheSurfaceAndTheSpringPushesBackWithTheTissuesStiffn
   EXPECT_NEAR(corner.proxy_mm.x(), 10 - options.surface_offset_mm, 1e-9);
   EXPECT_NEAR(corner.proxy_mm.z(), options.surface_offset_mm, 1e-9);
   EXPECT_NEAR(corner.force_n.x(), -options.stiffness_n_per_mm[kBone] * (5 + options.surface_offset_mm), 1e-9);
+  // A bad reading (NaN) renders nothing and keeps the proxy.
+  const Eigen::Vector3d kept = in_corner.contact().proxy_mm;
+  const ProxyContact& bad = in_corner.Update(Eigen::Vector3d::Constant(std::nan("")), up, 0.001);
+  EXPECT_TRUE(bad.force_n.isZero());
+  EXPECT_EQ(bad.proxy_mm, kept);
   // A softer tissue pushes back with its own stiffness.
   const TrainerScene soft = BoxScene(kPericardium);
   GodObject on_heart(soft, IntroducerSizes()[1], options);
