@@ -66,9 +66,15 @@ TEST(TrainerSession, ScoresTellExpertPathsFromNovicePathsWithoutOverlap) {
     } else {
       best_novice = std::max(best_novice, p.score.score);
     }
-    if (p.kind == PathKind::kOntoPericardium) EXPECT_GT(p.score.pericardial_contacts, 0);
-    if (p.kind == PathKind::kTooDeep) EXPECT_LT(p.score.min_pericardium_distance_mm, 5.0);
-    if (p.kind == PathKind::kWrongSpace) EXPECT_FALSE(p.score.entry_as_planned) << p.score.entry.Name();
+    if (p.kind == PathKind::kOntoPericardium) {
+      EXPECT_GT(p.score.pericardial_contacts, 0);
+    }
+    if (p.kind == PathKind::kTooDeep) {
+      EXPECT_LT(p.score.min_pericardium_distance_mm, 5.0);
+    }
+    if (p.kind == PathKind::kWrongSpace) {
+      EXPECT_FALSE(p.score.entry_as_planned) << p.score.entry.Name();
+    }
   }
   std::printf("worst expert %.2f, best novice %.2f\n", worst_expert, best_novice);
   EXPECT_GT(worst_expert, best_novice);
