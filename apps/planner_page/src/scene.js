@@ -26,7 +26,9 @@ function softwareWebGl() {
 export class Scene {
   constructor(element) {
     this.software = softwareWebGl();
-    this.renderer = new THREE.WebGLRenderer({ antialias: !this.software, preserveDrawingBuffer: true });
+    // The drawing buffer is not kept after a frame is shown (a copy of it per frame otherwise): the PNG
+    // export draws and reads it in one go (main.js, exportPng).
+    this.renderer = new THREE.WebGLRenderer({ antialias: !this.software });
     this.renderer.setPixelRatio(1);
     // While the bar or the camera moves: this fraction of the resolution (1 on a GPU); full again at rest.
     this.movingPixelRatio = this.software ? 0.5 : 1;
