@@ -183,9 +183,11 @@ class SubjectStore {
     return folder_.empty() ? held_[i].has_value() : fs::exists(Path(i), ec);
   }
   // The subjects without a result, in subject order.
-  std::vector<int> Missing() const {
+  std::vector<int> Missing() const { return Missing(LargestFirst(std::vector<double>(names_.size(), 0.0))); }
+  // The subjects of `order` without a result, in that order.
+  std::vector<int> Missing(const std::vector<int>& order) const {
     std::vector<int> missing;
-    for (int i = 0; i < static_cast<int>(names_.size()); ++i) {
+    for (int i : order) {
       if (!Has(i)) missing.push_back(i);
     }
     return missing;
@@ -334,12 +336,21 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
   if (!run.resume && !run.work.empty() && runner.IsLeader()) RemoveSubjectResults(run.work);
   runner.Barrier();
   SubjectStore surfaces(run.work, "surface", inputs), registered(run.work, "registered", inputs);
-  if (run.gather && !registered.Missing().empty()) {
+  if (const std::vector<int> missing = registered.Missing(); run.gather && !missing.empty()) {
     std::string names;
-    for (int i : registered.Missing()) names += (names.empty() ? "" : ", ") + inputs[i].name;
+    for (std::size_t k = 0; k < std::min<std::size_t>(missing.size(), 10); ++k)
+      names += (k == 0 ? "" : ", ") + inputs[missing[k]].name;
+    if (missing.size() > 10) names += " and " + std::to_string(missing.size() - 10) + " more";
     ThrowUsage("--gather: no share has finished subject(s) " + names + " (their results are not in " +
                run.work.string() + "); run their shares, or the whole run with --resume");
   }
+  // The subjects handed out largest first (bytes of sweeps), so that the last to finish are small ones.
+  std::vector<double> bytes(inputs.size(), 0.0);
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    std::error_code ec;
+    for (const fs::path& f : inputs[i].sweeps) bytes[i] += static_cast<double>(fs::file_size(f, ec));
+  }
+  const std::vector<int> largest_first = LargestFirst(bytes);
   auto report = [&](const SubjectOutcome& s, const std::string& stage) {
     if (!observer) return;
 #pragma omp critical(pectus_pipeline_observer)
@@ -355,7 +366,7 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
     surfaces.Put(i, s);
     report(s, "surface");
   };
-  runner.Run(surfaces.Missing(), build_surface);
+  runner.Run(surfaces.Missing(largest_first), build_surface);
 
   // 4. The reference: the named subject, or the first whose surface was made (made here if a share of a
   // job array did not make it).
@@ -382,7 +393,7 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
   reference.reset();
 
   // 5-6. Register each surface to the reference (landmarks, then ICP), resample it on its landmark grid.
-  runner.Run(registered.Missing(), [&](int i) {
+  runner.Run(registered.Missing(largest_first), [&](int i) {
     SubjectOutcome s = surfaces.Take(i);
     RunStage(&s, "register", [&] {
       if (i == ref) {
