@@ -12,6 +12,7 @@ each subject's stage times (s) and the run's own stages. The model of a run on P
   S(N)        rank 0 alone: the model (Procrustes, imputation, PCA: taken as growing with N^2, the Gram
               matrix), the distance maps and the outputs (with N), measured on this run.
   efficiency  T(1) / (P T(P)).
+--farm-only leaves S out: how the farm itself scales.
 
 A cohort larger than the measured one draws its subjects' times from the measured ones (fixed seed).
 """
@@ -34,6 +35,7 @@ def main():
     ap.add_argument("--subjects", type=int, nargs="+", default=[200, 2000])
     ap.add_argument("--ranks", type=int, nargs="+", default=[1, 2, 8, 16, 32, 64])
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--farm-only", action="store_true", help="leave rank 0's own part out (S = 0)")
     a = ap.parse_args()
     r = json.load(open(a.report))
     subjects = [s for s in r["subjects"]]
@@ -54,7 +56,7 @@ def main():
         else:
             draw = [rng.randrange(n0) for _ in range(n)]
             ta, tb = [phase_a[i] for i in draw], [phase_b[i] for i in draw]
-        serial = model * (n / n0) ** 2 + linear * (n / n0)
+        serial = 0.0 if a.farm_only else model * (n / n0) ** 2 + linear * (n / n0)
         t1 = sum(ta) + sum(tb) + serial
         for p in a.ranks:
             for order, name in ((sorted, "largest first"), (list, "subject order")):
