@@ -107,11 +107,13 @@ class PipelineCluster : public testing_support::ScratchDirTest {
 TEST_F(PipelineCluster, MpiRanksGiveTheSerialBytes) {
   for (int ranks : {1, 2, 3}) {
     const std::string out = P("ranks" + std::to_string(ranks));
-    // CI runs as root: Open MPI refuses that unless told, here for this command only.
-    const CliRun run = testing_support::Pectus(
-        "pipeline " + Cohort() + " --out " + out + kOptions,
-        "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " PECTUS_MPIEXEC " --oversubscribe -n " +
-            std::to_string(ranks));
+    // CI runs as root: Open MPI refuses that unless told, here for this command only. Under the
+    // sanitizers, full stacks for LeakSanitizer (cmake/sanitizers/lsan.supp: Open MPI's own leaks).
+    const CliRun run = Pectus("pipeline " + Cohort() + " --out " + out + kOptions,
+                              "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+                              "ASAN_OPTIONS=\"$ASAN_OPTIONS:fast_unwind_on_malloc=0\" " PECTUS_MPIEXEC
+                              " --oversubscribe -n " +
+                                  std::to_string(ranks));
     ASSERT_EQ(run.code, 0) << ranks << " ranks: " << run.output;
     ExpectSerialBytes(out, std::to_string(ranks) + " ranks");
   }
