@@ -69,10 +69,11 @@ class PipelineCluster : public testing_support::ScratchDirTest {
  protected:
   PipelineCluster() : ScratchDirTest("pectus_pipeline_cluster_") {}
 
-  // One cohort and its serial run for the whole suite.
+  // One cohort and its serial run for the suite's tests in this process.
   static void SetUpTestSuite() {
     setenv("SOURCE_DATE_EPOCH", "1700000000", 1);  // the model file's build time (statismo_io.cc)
-    suite_ = fs::temp_directory_path() / "pectus_pipeline_cluster_suite";
+    // One folder per process: CTest runs each test in a process of its own, several at once.
+    suite_ = fs::temp_directory_path() / ("pectus_pipeline_cluster_suite_" + std::to_string(getpid()));
     fs::remove_all(suite_);
     fs::create_directories(suite_);
     CliRun run = Pectus("synth cohort --subjects 6 --seed 3 --sweeps 3 --spacing 3 --no-sweep-truth -o " +
