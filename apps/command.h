@@ -9,14 +9,18 @@
 
 #include "shape/core/atomic_file.h"
 #include "shape/core/report.h"
+#include "shape/core/task_runner.h"
 
 namespace pectus::cli {
 
 /// What every command gets to run with.
 struct Context {
-  Report report;               ///< what the command did; written to --report on success
-  OutputTransaction outputs;   ///< stage every output here; committed only if Run() returns
-  int threads = 1;             ///< --threads (already applied to OpenMP)
+  Report report;              ///< what the command did; written to --report on success
+  OutputTransaction outputs;  ///< stage every output here; committed only if Run() returns
+  int threads = 1;            ///< --threads (already applied to OpenMP)
+  /// Where per-subject tasks run: this process's threads, or the MPI ranks under mpirun. Only the
+  /// runner's leader writes the report and commits the outputs.
+  TaskRunner* runner = nullptr;
 };
 
 /// One `pectus <name>` subcommand.
@@ -47,11 +51,12 @@ struct CommandRegistration {
 /// The registered commands, made fresh, in help order.
 std::vector<std::unique_ptr<Command>> MakeAllCommands();
 
-#define PECTUS_REGISTER_COMMAND(CLASS, ORDER)                                                      \
-  static const ::pectus::cli::CommandRegistration kRegister##CLASS(                               \
+#define PECTUS_REGISTER_COMMAND(CLASS, ORDER)                       \
+  static const ::pectus::cli::CommandRegistration kRegister##CLASS( \
       ORDER, []() -> std::unique_ptr<::pectus::cli::Command> { return std::make_unique<CLASS>(); })
 
 /// Stages `target` in the context's transaction after refusing to overwrite any input.
-std::filesystem::path StageOutput(Context* context, const Command& command, const std::filesystem::path& target);
+std::filesystem::path StageOutput(Context* context, const Command& command,
+                                  const std::filesystem::path& target);
 
 }  // namespace pectus::cli

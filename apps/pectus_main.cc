@@ -5,15 +5,21 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
+#include <optional>
 #include <thread>
 
 #include "apps/command.h"
 #include "shape/core/error.h"
 #include "shape/core/log.h"
+#include "shape/core/task_runner.h"
+#ifdef PECTUS_HAVE_MPI
+#include "apps/mpi_task_runner.h"
+#endif
 
 namespace pectus::cli {
 
-std::filesystem::path StageOutput(Context* context, const Command& command, const std::filesystem::path& target) {
+std::filesystem::path StageOutput(Context* context, const Command& command,
+                                  const std::filesystem::path& target) {
   RefuseOverwritingInputs(target, command.Inputs());
   return context->outputs.Stage(target);
 }
@@ -27,11 +33,14 @@ std::vector<std::pair<int, CommandRegistration::Factory>>& Registry() {
 
 }  // namespace
 
-CommandRegistration::CommandRegistration(int order, Factory factory) { Registry().emplace_back(order, factory); }
+CommandRegistration::CommandRegistration(int order, Factory factory) {
+  Registry().emplace_back(order, factory);
+}
 
 std::vector<std::unique_ptr<Command>> MakeAllCommands() {
   auto entries = Registry();
-  std::stable_sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::stable_sort(entries.begin(), entries.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<std::unique_ptr<Command>> commands;
   for (const auto& [order, factory] : entries) commands.push_back(factory());
   return commands;
@@ -39,11 +48,34 @@ std::vector<std::unique_ptr<Command>> MakeAllCommands() {
 
 namespace {
 
+// An error on the terminal; under MPI each rank names itself but rank 0.
+void PrintError(const Command& command, int rank, const char* message) {
+  if (rank == 0) {
+    std::fprintf(stderr, "pectus %s: error: %s\n", command.Name().c_str(), message);
+  } else {
+    std::fprintf(stderr, "pectus %s (rank %d): error: %s\n", command.Name().c_str(), rank, message);
+  }
+}
+
 // Exit codes (docs/errors.md): 0 success, 2 usage, 3 bad input, 1 any other failure.
 int Main(int argc, char** argv) {
-  CLI::App app{"pectus: handheld chest scans to clean surfaces, shape models and Nuss procedure plans.\n"
-               "Units are millimetres. Run `pectus <command> --help` for a worked example.",
-               "pectus"};
+  // Under mpirun (or srun) every rank runs this same command: MPI is started once here, rank 0 hands out
+  // the subjects of the commands that farm them out (Context::runner), prints, and writes the outputs.
+#ifdef PECTUS_HAVE_MPI
+  std::optional<MpiSession> mpi;
+  if (LaunchedByMpi()) mpi.emplace(&argc, &argv);
+  const int rank = mpi ? mpi->rank() : 0;
+  const bool under_mpi = mpi.has_value();
+#else
+  const int rank = 0;
+  const bool under_mpi = false;
+#endif
+  CLI::App app{
+      "pectus: handheld chest scans to clean surfaces, shape models and Nuss procedure plans.\n"
+      "Units are millimetres. Run `pectus <command> --help` for a worked example.\n"
+      "On a cluster, `mpirun -n N pectus pipeline ...` shares the subjects out over N ranks, one\n"
+      "thread each unless --threads says otherwise (docs/cluster.md).",
+      "pectus"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string(PECTUS_VERSION));
 
@@ -57,8 +89,10 @@ int Main(int argc, char** argv) {
     CLI::App* sub = app.add_subcommand(command->Name(), command->Summary());
     sub->footer("\nExample:\n" + command->Example());
     sub->add_option("--report", report_path, "Write what the command did (counts, figures, timings) as JSON");
-    sub->add_option("--threads", threads, "Worker threads (default: all cores)")->check(CLI::NonNegativeNumber);
-    sub->add_flag("-q,--quiet", quiet, "No progress or warnings on the terminal (warnings still go to --report)");
+    sub->add_option("--threads", threads, "Worker threads (default: all cores; under mpirun: 1 per rank)")
+        ->check(CLI::NonNegativeNumber);
+    sub->add_flag("-q,--quiet", quiet,
+                  "No progress or warnings on the terminal (warnings still go to --report)");
     command->Configure(sub);
     subs.emplace_back(sub, command.get());
   }
@@ -66,13 +100,20 @@ int Main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    if (rank != 0) return e.get_exit_code() == 0 ? 0 : 2;  // rank 0 prints the help or the error
     const int code = app.exit(e);
     return code == 0 ? 0 : 2;
   }
 
-  SetQuiet(quiet);
+  SetQuiet(quiet || rank != 0);
   Context context;
-  context.threads = threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  std::unique_ptr<TaskRunner> runner = std::make_unique<SerialTaskRunner>();
+#ifdef PECTUS_HAVE_MPI
+  if (mpi) runner = std::make_unique<MpiTaskRunner>(*mpi);
+#endif
+  context.runner = runner.get();
+  const int all_cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  context.threads = threads > 0 ? threads : under_mpi ? 1 : all_cores;
   omp_set_num_threads(context.threads);
   for (auto& [sub, command] : subs) {
     if (!sub->parsed()) continue;
@@ -80,20 +121,24 @@ int Main(int argc, char** argv) {
       context.report["command"] = command->Name();
       context.report["pectus_version"] = PECTUS_VERSION;
       context.report["threads"] = context.threads;
+      context.report["processes"] = context.runner->Processes();
+      // Only the leader (rank 0) writes: the report and every output.
+      const bool leader = context.runner->IsLeader();
       std::filesystem::path report_stage;
-      if (!report_path.empty()) report_stage = StageOutput(&context, *command, report_path);
+      if (!report_path.empty() && leader) report_stage = StageOutput(&context, *command, report_path);
       command->Run(&context);
+      if (!leader) return 0;
       if (!report_path.empty()) context.report.Write(report_stage);
       context.outputs.CommitAll();
       return 0;
     } catch (const Error& e) {
-      std::fprintf(stderr, "pectus %s: error: %s\n", command->Name().c_str(), e.what());
+      PrintError(*command, rank, e.what());
       return static_cast<int>(e.kind());
     } catch (const std::bad_alloc&) {
-      std::fprintf(stderr, "pectus %s: error: out of memory\n", command->Name().c_str());
+      PrintError(*command, rank, "out of memory");
       return 1;
     } catch (const std::exception& e) {
-      std::fprintf(stderr, "pectus %s: error: %s\n", command->Name().c_str(), e.what());
+      PrintError(*command, rank, e.what());
       return 1;
     }
   }

@@ -28,6 +28,15 @@ if(PECTUS_CORE_ONLY)
 endif()
 
 find_package(CLI11 2.1 REQUIRED)
+# MPI (Open MPI from Debian, installed by scripts/bootstrap): `mpirun -n N pectus ...` farms the subjects
+# out over ranks (docs/cluster.md). Optional: without it `pectus` is the same serial tool.
+find_package(MPI 3.0 COMPONENTS CXX)
+set(PECTUS_HAVE_MPI ${MPI_CXX_FOUND})
+if(PECTUS_HAVE_MPI)
+  message(STATUS "pectus: MPI found (${MPIEXEC_EXECUTABLE}); `mpirun -n N pectus ...` shares subjects out")
+else()
+  message(STATUS "pectus: MPI not found; `pectus` runs on one machine only (install libopenmpi-dev)")
+endif()
 find_package(nanoflann 1.4 REQUIRED)
 find_package(Ceres 2.1 REQUIRED)
 find_package(OpenCV 4.6 REQUIRED COMPONENTS core imgproc)

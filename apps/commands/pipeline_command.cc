@@ -27,7 +27,14 @@ class PipelineCommand : public Command {
            "  (then open results/report.html; per subject: merge -> reconstruct -> register to the "
            "reference\n"
            "   by landmarks then ICP -> resample on the landmark grid; then the model and distance maps.\n"
-           "   A subject that fails is listed in the report and the others go on.)";
+           "   A subject that fails is listed in the report and the others go on.)\n"
+           "  mpirun -n 64 pectus pipeline cohort --out results      (subjects shared out over 64 ranks)\n"
+           "  pectus pipeline cohort --out results --resume          (after a killed run: only what is "
+           "missing)\n"
+           "  pectus pipeline cohort --out results --shard 2/8       (share 2 of 8 of a job array; then:)\n"
+           "  pectus pipeline cohort --out results --gather          (the shares' subjects to the model)\n"
+           "  (Each subject's results are committed to the work folder as they finish; the outputs are the\n"
+           "   same bytes for any number of ranks or shares. docs/cluster.md)";
   }
   void Configure(CLI::App* app) override {
     app->add_option("cohort", cohort_,
@@ -68,6 +75,16 @@ class PipelineCommand : public Command {
                     "Colour scale of the distance maps, +-mm (0: auto)")
         ->default_val(0.0);
     app->add_flag("--no-surfaces", no_surfaces_, "Do not write each subject's registered surface");
+    app->add_option("--work", work_,
+                    "Folder of the subjects' results, committed as each finishes, on a file system every "
+                    "rank sees (default: OUT/.pectus-work; emptied after a complete run)");
+    app->add_flag("--resume", resume_, "Keep the subjects' results of a killed run and do only the rest");
+    app->add_option("--shard", shard_,
+                    "K/N: only share K of N of the subjects (a job array without MPI), kept in the work "
+                    "folder for --gather");
+    app->add_flag(
+        "--gather", gather_,
+        "The shares' results to the model and every output; fails naming the subjects no share did");
   }
   std::vector<fs::path> Inputs() const override {
     std::vector<fs::path> in;
@@ -87,8 +104,21 @@ class PipelineCommand : public Command {
     if (!options_.IsValid(&why)) ThrowUsage(why);
     const fs::path out(out_);
     subjects_ = FindCohortSubjects(cohort_, sweep_pattern_, landmarks_name_);
-    const fs::path html = StageOutput(context, *this, out / "report.html");  // refuses an input early
-    Info("pipeline: " + std::to_string(subjects_.size()) + " subjects in " + cohort_);
+    const TaskShare share = shard_.empty() ? TaskShare{} : ParseTaskShare(shard_);
+    if (!share.whole() && (gather_ || context->runner->Processes() > 1))
+      ThrowUsage("--shard runs one share on its own: not with --gather, nor under mpirun");
+    SerialTaskRunner share_runner(share);
+    PipelineRun run;
+    run.runner = share.whole() ? context->runner : &share_runner;
+    run.work = work_.empty() ? out / ".pectus-work" : fs::path(work_);
+    run.resume = resume_ || gather_ || !share.whole();
+    run.subjects_only = !share.whole();
+    run.gather = gather_;
+    const bool leader = context->runner->IsLeader() && share.whole();
+    fs::path html;
+    if (leader) html = StageOutput(context, *this, out / "report.html");  // refuses an input early
+    Info("pipeline: " + std::to_string(subjects_.size()) + " subjects in " + cohort_ + " (" +
+         run.runner->Describe() + ")");
 
     // 1-8. Every stage, subject by subject (the library reports failures per subject).
     PipelineResult result;
@@ -96,14 +126,22 @@ class PipelineCommand : public Command {
       auto t = context->report.Stage("pipeline");
       Progress progress("pipeline: subjects through surface and resampling",
                         2 * static_cast<std::int64_t>(subjects_.size()));
-      result = RunCohortPipeline(subjects_, options_, [&](const SubjectOutcome& s, const std::string& stage) {
-        if (!s.failed_stage.empty() &&
-            (stage == "surface" || s.failed_stage == "register" || s.failed_stage == "resample")) {
-          Warn(s.name + " failed at " + s.failed_stage + ": " + s.error);
-        }
-        progress.Advance();
-      });
+      result = RunCohortPipeline(
+          subjects_, options_,
+          [&](const SubjectOutcome& s, const std::string& stage) {
+            if (!s.failed_stage.empty() &&
+                (stage == "surface" || s.failed_stage == "register" || s.failed_stage == "resample")) {
+              Warn(s.name + " failed at " + s.failed_stage + ": " + s.error);
+            }
+            progress.Advance();
+          },
+          run);
     }
+    if (!share.whole()) {
+      Info("pipeline: share " + shard_ + " done; its subjects' results are in " + run.work.string() +
+           " (then: the same command with --gather)");
+    }
+    if (!leader) return;
     context->report.AddTimes(result.timings_s);
     if (!result.imputation_message.empty()) Info("pipeline: " + result.imputation_message);
 
@@ -131,11 +169,13 @@ class PipelineCommand : public Command {
                                {"sternal", options_.resample.grid.sternal}};
     context->report["profile_fit"] = ToString(options_.resample.fit.kind);
     Info("pipeline: " + result.BriefReport() + "; report: " + (out / "report.html").string());
+    RemoveSubjectResults(run.work);  // every output is staged: the subjects' results are no longer needed
   }
 
  private:
   std::string cohort_, out_, sweep_pattern_, landmarks_name_, grid_, fit_;
-  bool no_quality_ = false, no_surfaces_ = false;
+  std::string work_, shard_;
+  bool no_quality_ = false, no_surfaces_ = false, resume_ = false, gather_ = false;
   PipelineOptions options_;
   PipelineReportOptions report_;
   std::vector<CohortSubject> subjects_;

@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <ctime>
 #include <string>
 #include <vector>
@@ -46,8 +47,12 @@ struct File {
   [[noreturn]] void Fail(const std::string& what) const { ThrowFailure("HDF5 could not " + what, name); }
   [[noreturn]] void Bad(const std::string& what) const { ThrowBadInput(name, what); }
 
+  // Objects are made without modification times, so that one model is always written as the same bytes
+  // (with SOURCE_DATE_EPOCH for the build times, Now()).
   hid_t Group(hid_t parent, const std::string& path) const {
-    const hid_t g = H5Gcreate2(parent, path.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    const Id properties(H5Pcreate(H5P_GROUP_CREATE), H5Pclose);
+    H5Pset_obj_track_times(properties.get(), false);
+    const hid_t g = H5Gcreate2(parent, path.c_str(), H5P_DEFAULT, properties.get(), H5P_DEFAULT);
     if (g < 0) Fail("create group " + path);
     return g;
   }
@@ -56,7 +61,10 @@ struct File {
     Id space(dims.empty() ? H5Screate(H5S_SCALAR)
                           : H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr),
              H5Sclose);
-    Id set(H5Dcreate2(loc, path.c_str(), type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose);
+    const Id properties(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
+    H5Pset_obj_track_times(properties.get(), false);
+    Id set(H5Dcreate2(loc, path.c_str(), type, space.get(), H5P_DEFAULT, properties.get(), H5P_DEFAULT),
+           H5Dclose);
     if (!space.ok() || !set.ok() || H5Dwrite(set.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) {
       Fail("write " + path);
     }
@@ -164,10 +172,21 @@ struct File {
   }
 };
 
+// The build time statismo records: now, local time; or, when the environment sets SOURCE_DATE_EPOCH (the
+// reproducible-builds convention: seconds since 1970), that time in UTC, so that a rerun gives the same
+// bytes.
 std::string Now() {
-  const std::time_t t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::time_t t = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm when{};
+  const char* epoch = std::getenv("SOURCE_DATE_EPOCH");
+  if (epoch != nullptr && *epoch != '\0') {
+    t = static_cast<std::time_t>(std::strtoll(epoch, nullptr, 10));
+    gmtime_r(&t, &when);
+  } else {
+    localtime_r(&t, &when);
+  }
   char text[64];
-  std::strftime(text, sizeof(text), "%a %b %d %H:%M:%S %Y", std::localtime(&t));
+  std::strftime(text, sizeof(text), "%a %b %d %H:%M:%S %Y", &when);
   return text;
 }
 

@@ -12,6 +12,7 @@
 #include "shape/io/landmark_io.h"
 #include "shape/io/mesh_io.h"
 #include "shape/model/shape_grid.h"
+#include "shape/pipeline/internal/subject_record.h"
 #include "shape/surface/cloud_filter.h"
 
 namespace pectus {
@@ -169,6 +170,53 @@ Eigen::MatrixXd FillUnseenVertices(const std::vector<int>& good,
   return std::move(filled.shapes);
 }
 
+// The subjects' results of one phase ("surface": stages 1-3; "registered": 4-6): in memory, or one record
+// per subject committed to `work/PHASE/NAME.rec` as it finishes (PipelineRun).
+class SubjectStore {
+ public:
+  SubjectStore(const fs::path& work, const std::string& phase, const std::vector<CohortSubject>& subjects)
+      : folder_(work.empty() ? fs::path() : work / phase), held_(subjects.size()) {
+    for (const CohortSubject& s : subjects) names_.push_back(s.name);
+  }
+  bool Has(int i) const {
+    std::error_code ec;
+    return folder_.empty() ? held_[i].has_value() : fs::exists(Path(i), ec);
+  }
+  // The subjects without a result, in subject order.
+  std::vector<int> Missing() const { return Missing(LargestFirst(std::vector<double>(names_.size(), 0.0))); }
+  // The subjects of `order` without a result, in that order.
+  std::vector<int> Missing(const std::vector<int>& order) const {
+    std::vector<int> missing;
+    for (int i : order) {
+      if (!Has(i)) missing.push_back(i);
+    }
+    return missing;
+  }
+  void Put(int i, SubjectOutcome s) {
+    if (folder_.empty()) {
+      held_[i] = std::move(s);
+    } else {
+      internal::WriteSubjectRecord(Path(i), s);
+    }
+  }
+  SubjectOutcome Get(int i) const {
+    return folder_.empty() ? *held_[i] : internal::ReadSubjectRecord(Path(i));
+  }
+  // Get, releasing the one held in memory.
+  SubjectOutcome Take(int i) {
+    if (!folder_.empty()) return Get(i);
+    SubjectOutcome s = std::move(*held_[i]);
+    held_[i].reset();
+    return s;
+  }
+
+ private:
+  fs::path Path(int i) const { return folder_ / (names_[i] + ".rec"); }
+  fs::path folder_;
+  std::vector<std::string> names_;
+  std::vector<std::optional<SubjectOutcome>> held_;
+};
+
 }  // namespace
 
 PointCloud CropToRoi(const PointCloud& cloud, const ChestRoi& roi, double margin_mm) {
@@ -242,6 +290,15 @@ std::vector<CohortSubject> FindCohortSubjects(const fs::path& folder, const std:
   return subjects;
 }
 
+void RemoveSubjectResults(const fs::path& work) {
+  std::error_code ec;
+  for (const char* phase : {"surface", "registered"}) {
+    fs::remove_all(work / phase, ec);
+    if (ec) ThrowFailure("cannot remove the subjects' results: " + ec.message(), (work / phase).string());
+  }
+  if (fs::is_empty(work, ec)) fs::remove(work, ec);
+}
+
 std::string PipelineResult::BriefReport() const {
   std::ostringstream s;
   s.precision(3);
@@ -270,12 +327,30 @@ bool PipelineOptions::IsValid(std::string* why) const {
 }
 
 PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const PipelineOptions& options,
-                                 const PipelineObserver& observer) {
+                                 const PipelineObserver& observer, const PipelineRun& run) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage("pipeline: " + why);
   const auto n = static_cast<int>(inputs.size());
-  PipelineResult result;
-  result.subjects.resize(inputs.size());
+  SerialTaskRunner serial;
+  TaskRunner& runner = run.runner != nullptr ? *run.runner : serial;
+  if (!run.resume && !run.work.empty() && runner.IsLeader()) RemoveSubjectResults(run.work);
+  runner.Barrier();
+  SubjectStore surfaces(run.work, "surface", inputs), registered(run.work, "registered", inputs);
+  if (const std::vector<int> missing = registered.Missing(); run.gather && !missing.empty()) {
+    std::string names;
+    for (std::size_t k = 0; k < std::min<std::size_t>(missing.size(), 10); ++k)
+      names += (k == 0 ? "" : ", ") + inputs[missing[k]].name;
+    if (missing.size() > 10) names += " and " + std::to_string(missing.size() - 10) + " more";
+    ThrowUsage("--gather: no share has finished subject(s) " + names + " (their results are not in " +
+               run.work.string() + "); run their shares, or the whole run with --resume");
+  }
+  // The subjects handed out largest first (bytes of sweeps), so that the last to finish are small ones.
+  std::vector<double> bytes(inputs.size(), 0.0);
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    std::error_code ec;
+    for (const fs::path& f : inputs[i].sweeps) bytes[i] += static_cast<double>(fs::file_size(f, ec));
+  }
+  const std::vector<int> largest_first = LargestFirst(bytes);
   auto report = [&](const SubjectOutcome& s, const std::string& stage) {
     if (!observer) return;
 #pragma omp critical(pectus_pipeline_observer)
@@ -283,39 +358,43 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
   };
 
   // 1-3. Every subject's surface from its sweeps: read, merge, reconstruct (subjects in parallel).
-#pragma omp parallel for schedule(dynamic)
-  for (int i = 0; i < n; ++i) {
-    SubjectOutcome& s = result.subjects[i];
+  auto build_surface = [&](int i) {
+    SubjectOutcome s;
     s.name = inputs[i].name;
     std::vector<PointCloud> sweeps;
     BuildSurface(inputs[i], options, &s, &sweeps);
+    surfaces.Put(i, s);
     report(s, "surface");
-  }
+  };
+  runner.Run(surfaces.Missing(largest_first), build_surface);
 
-  // 4. The reference: the named subject, or the first whose surface was made.
+  // 4. The reference: the named subject, or the first whose surface was made (made here if a share of a
+  // job array did not make it).
   int ref = -1;
   for (int i = 0; i < n && ref < 0; ++i) {
-    if (options.reference.empty() ? result.subjects[i].failed_stage.empty()
-                                  : inputs[i].name == options.reference)
-      ref = i;
+    if (!options.reference.empty() && inputs[i].name != options.reference) continue;
+    if (!surfaces.Has(i)) build_surface(i);
+    if (!options.reference.empty() || surfaces.Get(i).failed_stage.empty()) ref = i;
   }
   if (ref < 0 && !options.reference.empty())
     ThrowUsage("pipeline: no subject is named '" + options.reference + "'");
-  if (ref < 0 || !result.subjects[ref].failed_stage.empty()) {
+  std::optional<SubjectOutcome> reference;
+  if (ref >= 0) reference = surfaces.Get(ref);
+  if (ref < 0 || !reference->failed_stage.empty()) {
     ThrowFailure(ref < 0 ? "no subject's surface could be made; nothing to register to"
-                         : "the reference subject failed: " + result.subjects[ref].error,
+                         : "the reference subject failed: " + reference->error,
                  ref < 0 ? "cohort" : inputs[ref].name);
   }
+  PipelineResult result;
   result.reference = inputs[ref].name;
-  const SubjectOutcome& reference = result.subjects[ref];
-  const IcpTarget target(reference.surface.vertices.positions, reference.surface.vertices.normals,
-                         reference.name + " (reference surface)");
-  const LandmarkSet reference_landmarks = reference.landmarks;
+  const IcpTarget target(reference->surface.vertices.positions, reference->surface.vertices.normals,
+                         reference->name + " (reference surface)");
+  const LandmarkSet reference_landmarks = reference->landmarks;
+  reference.reset();
 
   // 5-6. Register each surface to the reference (landmarks, then ICP), resample it on its landmark grid.
-#pragma omp parallel for schedule(dynamic)
-  for (int i = 0; i < n; ++i) {
-    SubjectOutcome& s = result.subjects[i];
+  runner.Run(registered.Missing(largest_first), [&](int i) {
+    SubjectOutcome s = surfaces.Take(i);
     RunStage(&s, "register", [&] {
       if (i == ref) {
         s.icp_accepted = true;
@@ -336,8 +415,12 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
     }
     s.ok = s.failed_stage.empty();
     if (!options.keep_surfaces) s.surface = TriangleMesh();
+    registered.Put(i, s);
     report(s, "resample");
-  }
+  });
+  if (!runner.IsLeader() || run.subjects_only) return result;
+  result.subjects.reserve(inputs.size());
+  for (int i = 0; i < n; ++i) result.subjects.push_back(registered.Take(i));
 
   // 7. The model of the subjects that made it.
   std::vector<int> good;

@@ -13,6 +13,7 @@
 #include "registration/register_pair.h"
 #include "shape/core/geometry.h"
 #include "shape/core/landmarks.h"
+#include "shape/core/task_runner.h"
 #include "shape/core/timings.h"
 #include "shape/model/compute_chest_roi.h"
 #include "shape/model/cross_section_resampler.h"
@@ -183,9 +184,37 @@ void ResampleSubject(const PipelineOptions& options, SubjectOutcome* subject);
 /// Called after each subject's stage ("merge", "register", ...), for progress and logs; may be empty.
 using PipelineObserver = std::function<void(const SubjectOutcome& subject, const std::string& stage)>;
 
+/// Where the subjects' stages run and where their results are kept (docs/cluster.md). Each subject goes
+/// through two tasks, its surface (stages 1-3) and its registration and grid (5-6, after the reference is
+/// known), each committing the subject's result as one file when it finishes; the model is then built
+/// from those files read back in subject order, so the outputs are the same bytes whatever ran where.
+struct PipelineRun {
+  /// Runs the subjects' tasks; nullptr: SerialTaskRunner (this process's threads).
+  TaskRunner* runner = nullptr;
+  /// Folder of the subjects' results (`surface/NAME.rec`, `registered/NAME.rec`), on a file system every
+  /// process sees; empty: kept in memory (one process only).
+  std::filesystem::path work;
+  /// Keep the results already in `work` and compute only the missing ones (a killed run, shards to
+  /// gather); false: `work` is emptied first. The options and inputs must be those of the run that wrote
+  /// them.
+  bool resume = false;
+  /// Stop after the subjects' results (a share of a job array, gathered later): no model.
+  bool subjects_only = false;
+  /// Every subject's results must be in `work` already (the shares' gather): Error(kUsage) naming those
+  /// missing instead of computing them here.
+  bool gather = false;
+};
+
+/// Removes the subjects' results that RunCohortPipeline kept in `work` (its two sub-folders), and `work`
+/// itself if that leaves it empty. Nothing else in `work` is touched.
+void RemoveSubjectResults(const std::filesystem::path& work);
+
 /// Runs the pipeline. Throws Error(kUsage) for invalid options or an unknown reference name, and
 /// Error(kFailure) if no subject reconstructs (nothing to register to); a failing subject never throws.
+/// Only the runner's leader returns the whole result; other processes (and `subjects_only`) return the
+/// reference's name and an empty list of subjects.
 PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& subjects,
-                                 const PipelineOptions& options = {}, const PipelineObserver& observer = {});
+                                 const PipelineOptions& options = {}, const PipelineObserver& observer = {},
+                                 const PipelineRun& run = {});
 
 }  // namespace pectus

@@ -14,9 +14,11 @@ struct CliRun {
   std::string output;  // stdout and stderr, interleaved
 };
 
-// `args` is appended to the executable's path and run through the shell.
-inline CliRun Pectus(const std::string& args) {
-  const std::string cmd = std::string(PECTUS_EXECUTABLE) + " " + args + " 2>&1";
+// `args` is appended to the executable's path and run through the shell; `launcher`, if any, comes before
+// the path (`mpiexec -n 2`, environment variables).
+inline CliRun Pectus(const std::string& args, const std::string& launcher = "") {
+  const std::string cmd =
+      (launcher.empty() ? "" : launcher + " ") + std::string(PECTUS_EXECUTABLE) + " " + args + " 2>&1";
   CliRun run;
   FILE* pipe = ::popen(cmd.c_str(), "r");
   if (pipe == nullptr) return run;

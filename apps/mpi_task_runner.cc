@@ -1,0 +1,104 @@
+#include "apps/mpi_task_runner.h"
+
+#include <mpi.h>
+#include <omp.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <exception>
+#include <thread>
+
+#include "shape/core/error.h"
+
+namespace pectus::cli {
+namespace {
+
+constexpr int kRequestTag = 17;  // worker -> rank 0: the previous task's error (empty: none), give me one
+constexpr int kTaskTag = 18;     // rank 0 -> worker: a task index, or -1: no more
+
+}  // namespace
+
+bool LaunchedByMpi() {
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK"}) {
+    if (std::getenv(name) != nullptr) return true;
+  }
+  return false;
+}
+
+MpiSession::MpiSession(int* argc, char*** argv) {
+  int provided = 0;
+  MPI_Init_thread(argc, argv, MPI_THREAD_MULTIPLE, &provided);
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+  MPI_Comm_size(MPI_COMM_WORLD, &size_);
+  if (provided < MPI_THREAD_MULTIPLE) {
+    // Rank 0 hands out tasks from a thread of its own while it works; a library without thread support
+    // cannot do that.
+    MPI_Finalize();
+    ThrowFailure("this MPI library does not support MPI_THREAD_MULTIPLE, which pectus needs under mpirun");
+  }
+}
+
+MpiSession::~MpiSession() { MPI_Finalize(); }
+
+void MpiTaskRunner::HandOut(const std::vector<int>& order, std::string* first_error) const {
+  std::size_t next = 0;
+  int finished = 0;
+  while (finished < size_) {
+    int waiting = 0;
+    MPI_Status status;
+    MPI_Iprobe(MPI_ANY_SOURCE, kRequestTag, MPI_COMM_WORLD, &waiting, &status);
+    if (!waiting) {  // poll gently: this thread shares rank 0's core with its work
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      continue;
+    }
+    int length = 0;
+    MPI_Get_count(&status, MPI_CHAR, &length);
+    std::string error(static_cast<std::size_t>(length), '\0');
+    MPI_Recv(error.data(), length, MPI_CHAR, status.MPI_SOURCE, kRequestTag, MPI_COMM_WORLD,
+             MPI_STATUS_IGNORE);
+    if (!error.empty() && first_error->empty()) *first_error = error;
+    int task = -1;
+    if (next < order.size()) {
+      task = order[next++];
+    } else {
+      ++finished;
+    }
+    MPI_Send(&task, 1, MPI_INT, status.MPI_SOURCE, kTaskTag, MPI_COMM_WORLD);
+  }
+}
+
+void MpiTaskRunner::Run(const std::vector<int>& order, const std::function<void(int)>& task) {
+  std::string first_error;
+  std::thread hand_out;
+  if (rank_ == 0) hand_out = std::thread([&] { HandOut(order, &first_error); });
+  std::string error;  // this rank's last task error, sent with its next request
+  for (;;) {
+    MPI_Send(error.data(), static_cast<int>(error.size()), MPI_CHAR, 0, kRequestTag, MPI_COMM_WORLD);
+    error.clear();
+    int next = -1;
+    MPI_Recv(&next, 1, MPI_INT, 0, kTaskTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    if (next < 0) break;
+    try {
+      task(next);
+    } catch (const std::exception& e) {
+      error = e.what();
+      if (error.empty()) error = "task " + std::to_string(next) + " failed";
+    }
+  }
+  if (hand_out.joinable()) hand_out.join();
+  // Every rank learns the first error (and waits here until every task is done).
+  int length = static_cast<int>(first_error.size());
+  MPI_Bcast(&length, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  first_error.resize(static_cast<std::size_t>(length));
+  MPI_Bcast(first_error.data(), length, MPI_CHAR, 0, MPI_COMM_WORLD);
+  if (!first_error.empty()) ThrowFailure(first_error);
+}
+
+void MpiTaskRunner::Barrier() { MPI_Barrier(MPI_COMM_WORLD); }
+
+std::string MpiTaskRunner::Describe() const {
+  return "MPI, " + std::to_string(size_) + " rank(s) of " + std::to_string(omp_get_max_threads()) +
+         " thread(s)";
+}
+
+}  // namespace pectus::cli

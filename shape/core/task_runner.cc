@@ -1,0 +1,62 @@
+#include "shape/core/task_runner.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <exception>
+#include <numeric>
+
+#include "shape/core/error.h"
+
+namespace pectus {
+
+TaskShare ParseTaskShare(const std::string& text) {
+  TaskShare share;
+  const std::size_t slash = text.find('/');
+  try {
+    std::size_t end_k = 0, end_n = 0;
+    if (slash == std::string::npos) throw std::invalid_argument("no slash");
+    share.index = std::stoi(text.substr(0, slash), &end_k);
+    share.count = std::stoi(text.substr(slash + 1), &end_n);
+    if (end_k != slash || end_n != text.size() - slash - 1) throw std::invalid_argument("trailing text");
+  } catch (const std::exception&) {
+    ThrowUsage("--shard '" + text + "': expected K/N, share K of N (1 <= K <= N)");
+  }
+  if (share.count < 1 || share.index < 1 || share.index > share.count)
+    ThrowUsage("--shard '" + text + "': expected K/N with 1 <= K <= N");
+  return share;
+}
+
+void SerialTaskRunner::Run(const std::vector<int>& order, const std::function<void(int)>& task) {
+  std::vector<int> mine;
+  for (int i : order) {
+    if (share_.Holds(i)) mine.push_back(i);
+  }
+  std::string first_error;
+  const auto n = static_cast<int>(mine.size());
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int k = 0; k < n; ++k) {
+    try {
+      task(mine[static_cast<std::size_t>(k)]);
+    } catch (const std::exception& e) {
+#pragma omp critical(pectus_task_runner_error)
+      if (first_error.empty()) first_error = e.what();
+    }
+  }
+  if (!first_error.empty()) ThrowFailure(first_error);
+}
+
+std::string SerialTaskRunner::Describe() const {
+  std::string s = "one process, " + std::to_string(omp_get_max_threads()) + " thread(s)";
+  if (!share_.whole()) s += ", share " + std::to_string(share_.index) + "/" + std::to_string(share_.count);
+  return s;
+}
+
+std::vector<int> LargestFirst(const std::vector<double>& sizes) {
+  std::vector<int> order(sizes.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return sizes[a] > sizes[b]; });
+  return order;
+}
+
+}  // namespace pectus

@@ -1,0 +1,63 @@
+// pectus: the task farm every per-subject command runs on (docs/cluster.md). A command splits its work into
+// tasks, one per subject or patient, each of which commits its own result file atomically (AtomicOutput);
+// the runner decides where each task runs: here, in OpenMP threads (SerialTaskRunner); on other machines,
+// over MPI (apps/mpi_task_runner.h, built when MPI is found); or only a share of them (--shard K/N, for job
+// arrays). Whatever runs where, the command then reads the results back in subject order, so its outputs
+// are the same bytes for any runner.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace pectus {
+
+/// Runs independent tasks, each identified by its index.
+class TaskRunner {
+ public:
+  virtual ~TaskRunner() = default;
+  /// Runs task(i) for every i of `order` (task indices, largest first when sizes are known), on this
+  /// process and its peers, and returns when every task of every process is done. A task that throws
+  /// does not stop the others; Run then throws Error(kFailure) with the first message, on every process.
+  virtual void Run(const std::vector<int>& order, const std::function<void(int)>& task) = 0;
+  /// True on the one process that gathers the results and writes the outputs (MPI rank 0).
+  virtual bool IsLeader() const { return true; }
+  /// Processes taking part (MPI ranks; 1 otherwise).
+  virtual int Processes() const { return 1; }
+  /// Waits until every process got here (a no-op on one process).
+  virtual void Barrier() {}
+  /// One line for logs and reports: "serial, 2 threads", "MPI, 3 ranks", "shard 2/3".
+  virtual std::string Describe() const = 0;
+};
+
+/// One share of the tasks: share `index` (1-based) of `count`.
+struct TaskShare {
+  int index = 1;
+  int count = 1;
+  /// True for the task at position `position` of the task list (positions dealt round-robin).
+  bool Holds(int position) const { return position % count == index - 1; }
+  bool whole() const { return count == 1; }
+};
+
+/// "K/N" (1 <= K <= N) to a share; throws Error(kUsage) naming the text otherwise.
+TaskShare ParseTaskShare(const std::string& text);
+
+/// The tasks in this process's threads (OpenMP, dynamic schedule, `order` handed out in turn), only those
+/// of `share` (positions in the task list in ascending index order: a share is the same subjects whatever
+/// the order).
+class SerialTaskRunner : public TaskRunner {
+ public:
+  explicit SerialTaskRunner(TaskShare share = {}) : share_(share) {}
+  void Run(const std::vector<int>& order, const std::function<void(int)>& task) override;
+  std::string Describe() const override;
+  const TaskShare& share() const { return share_; }
+
+ private:
+  TaskShare share_;
+};
+
+/// Task indices 0..sizes.size()-1, largest size first (ties by index), so that the longest tasks start
+/// first and the last to finish are short.
+std::vector<int> LargestFirst(const std::vector<double>& sizes);
+
+}  // namespace pectus

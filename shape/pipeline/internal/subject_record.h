@@ -1,0 +1,19 @@
+// pectus pipeline: one subject's outcome as a file, bit for bit (CBOR: numbers as IEEE doubles, arrays as
+// raw little-endian bytes), so that a subject computed by another process, or by an earlier run that was
+// killed, reads back exactly as if it had been computed here (docs/cluster.md).
+#pragma once
+
+#include <filesystem>
+
+#include "shape/pipeline/cohort_pipeline.h"
+
+namespace pectus::internal {
+
+/// Writes `subject` (every field up to the stage it reached: not to_mean, scores or the fills, which the
+/// model stage makes) to `path` atomically.
+void WriteSubjectRecord(const std::filesystem::path& path, const SubjectOutcome& subject);
+
+/// Reads a record written by WriteSubjectRecord. Throws Error(kBadInput) naming the file if it is not one.
+SubjectOutcome ReadSubjectRecord(const std::filesystem::path& path);
+
+}  // namespace pectus::internal
