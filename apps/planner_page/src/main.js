@@ -176,6 +176,7 @@ window.addEventListener('keydown', (e) => {
     drag = { y: e.clientY, position: state.bar.position, mmPerPixel: (scene.camera.position.distanceTo(scene.controls.target) * Math.tan((scene.camera.fov * Math.PI) / 360) * 2) / r.height };
     scene.controls.enabled = false;
     scene.setMoving(true);
+    set({ dragging: true });
     canvas.setPointerCapture(e.pointerId);
   });
   // The bar follows the pointer once per frame (loop()), however many moves arrive in between.
@@ -187,6 +188,7 @@ window.addEventListener('keydown', (e) => {
     if (draggedTo !== null) setBar({ position: draggedTo });
     draggedTo = null;
     if (drag && scene.setMoving(false)) dirty = true;
+    if (drag) set({ dragging: false });
     drag = null;
     scene.controls.enabled = true;
   });

@@ -63,7 +63,20 @@ export function renderPanel(element, actions) {
     }
   };
 
+  // While the bar is dragged the panel is redrawn ten times a second, not every frame: figures changing
+  // faster cannot be read, and each redraw is a repaint of the panel (in a browser without a GPU, as
+  // costly as drawing the chest). At rest, at once.
+  let pending = 0;
   subscribe((s) => {
+    if (s.dragging) {
+      if (!pending) pending = setTimeout(() => ((pending = 0), draw(state)), 100);
+      return;
+    }
+    clearTimeout(pending);
+    pending = 0;
+    draw(s);
+  });
+  function draw(s) {
     if ($('patient').options.length !== s.patients.length) {
       $('patient').innerHTML = s.patients.map((p) => `<option value="${p.id}">${p.id}</option>`).join('');
     }
@@ -100,7 +113,7 @@ export function renderPanel(element, actions) {
           <tr><td colspan="4" style="text-align:left;color:#777">${current ? 'for the bar shown' : 'updating…'}</td></tr>`
       : '');
     drawSearch($('search-map'), $('search-best'), s, actions);
-  });
+  }
 }
 
 // Views redraw on every change of the state (every frame while the bar moves): the document changes only

@@ -31,7 +31,7 @@ export class Scene {
     this.renderer = new THREE.WebGLRenderer({ antialias: !this.software });
     this.renderer.setPixelRatio(1);
     // While the bar or the camera moves: this fraction of the resolution (1 on a GPU); full again at rest.
-    this.movingPixelRatio = this.software ? 0.5 : 1;
+    this.movingPixelRatio = this.software ? 0.35 : 1;
     this.renderer.setClearColor(0xf4f4f4);
     element.prepend(this.renderer.domElement);
     this.renderer.domElement.tabIndex = 0;
@@ -93,7 +93,9 @@ export class Scene {
     sg.setAttribute('position', new THREE.BufferAttribute(this.skinRest.slice(), 3));
     sg.setIndex(new THREE.BufferAttribute(new Uint32Array(skin, 24 * ns, 3 * fs), 1));
     sg.computeVertexNormals();
-    this.skin = new THREE.Mesh(sg, new THREE.MeshLambertMaterial({ color: 0xe8b89a, transparent: true, opacity: 0.45, side: THREE.DoubleSide, depthWrite: false }));
+    // Both sides in one pass (three draws a translucent double-sided mesh twice otherwise, back faces
+    // first): the skin is seen through once, and the second pass was the dearest part of a frame.
+    this.skin = new THREE.Mesh(sg, new THREE.MeshLambertMaterial({ color: 0xe8b89a, transparent: true, opacity: 0.45, side: THREE.DoubleSide, depthWrite: false, forceSinglePass: true }));
     this.skin.renderOrder = 2;
     this.patient.add(this.skin);
     // Landmarks: the skin's (moving with it) and the bone's.

@@ -12,6 +12,7 @@ export const state = {
   plan: null, // the server's exact figures for `bar` (/api/score: scenarios A and B as `pectus plan --report` scores them)
   planFor: null, // the bar the plan was made for
   search: null, // the server's best-placement search
+  dragging: false, // the bar is being dragged in the view
   busy: '',
   error: '',
 };

@@ -1,7 +1,7 @@
 // Timings of the planner page in headless Chromium (Debian's, with SwiftShader: software WebGL), against a
 // running `pectus serve` whose patient is made (it says "ready"):
 //   node tests/apps/serve/planner_page_benchmark.mjs URL [--patient ID] [--loads 5] [--drag-seconds 3]
-//       [--width 1280 --height 800]
+//       [--width 1280 --height 800] [--gpu-compositing]
 // (run from anywhere; playwright-core is taken from apps/planner_page/node_modules). Prints JSON:
 //   first_frame_ms  per page load, from navigation's start to the patient drawn (the page's own clock),
 //                   with the steps: script running, average chest drawn, patient downloaded, scene built;
@@ -36,6 +36,10 @@ const loads = Number(flag('loads', 5));
 const dragSeconds = Number(flag('drag-seconds', 3));
 const viewport = { width: Number(flag('width', 1280)), height: Number(flag('height', 800)) };
 const pageUrl = patient ? `${url}&patient=${encodeURIComponent(patient)}` : url;
+// Without a GPU, WebGL runs in SwiftShader either way; the page's layers are composited by Chromium's own
+// software compositor (the default here, as the browser test runs) or, with --gpu-compositing, through
+// SwiftShader as well (Chromium's default when it is told nothing: a fixed 25 ms a frame on this machine).
+const gpuCompositing = argv.includes('--gpu-compositing');
 
 const userDataDir = fs.mkdtempSync(path.join(os.tmpdir(), 'pectus-chromium-bench-'));
 const context = await chromium.launchPersistentContext(userDataDir, {
@@ -43,7 +47,7 @@ const context = await chromium.launchPersistentContext(userDataDir, {
   headless: true,
   viewport,
   args: ['--headless', '--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--no-first-run'],
+    '--disable-component-update', '--disable-sync', '--no-first-run', ...(gpuCompositing ? [] : ['--disable-gpu-compositing'])],
 });
 const median = (v) => [...v].sort((a, b) => a - b)[Math.floor(v.length / 2)];
 try {
@@ -111,6 +115,7 @@ try {
   const round = (o) => Object.fromEntries(Object.entries(o).map(([k, v]) => [k, typeof v === 'number' ? Math.round(v * 100) / 100 : v]));
   console.log(JSON.stringify({
     renderer,
+    compositing: gpuCompositing ? 'gpu (SwiftShader)' : 'software',
     viewport,
     cpus: os.cpus().length,
     load_average: os.loadavg().map((v) => Math.round(v * 100) / 100),

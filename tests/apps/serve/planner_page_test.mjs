@@ -31,8 +31,10 @@ const context = await chromium.launchPersistentContext(userDataDir, {
   headless: true,
   viewport: { width: 1280, height: 800 },
   acceptDownloads: true,
+  // WebGL in SwiftShader (no GPU here); the page's layers composited by Chromium's software compositor
+  // (planner_page_benchmark.mjs says why).
   args: ['--headless', '--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--no-first-run',
+    '--disable-component-update', '--disable-sync', '--no-first-run', '--disable-gpu-compositing',
     ...(process.env.PECTUS_DISABLE_GPU ? ['--disable-gpu'] : [])],
 });
 let exitCode = 1;
