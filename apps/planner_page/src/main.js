@@ -57,7 +57,9 @@ function requestPlan(delay = 0) {
     .catch((e) => serial === planSerial && set({ error: e.message }))
     .finally(() => {
       planInFlight = false;
-      if (planWanted) requestPlan(0);
+      // While dragging, at most about fifteen a second: each answer recolours the map, and answers come
+      // faster than frames.
+      if (planWanted) requestPlan(state.dragging ? 60 : 0);
     });
 }
 function planBody(bar, search) {
@@ -110,7 +112,7 @@ function update() {
   if (view.bone) deform(basis, mm, bar.force, 0, scene.boneDisplacement);
   if (view.skin) deform(basis, mm, bar.force, basis.boneRows, scene.skinDisplacement);
   const updateMs = performance.now() - t0;
-  scene.applyDeformation(mm, view);
+  scene.applyDeformation(mm, view, state.dragging);
   drawnBar = { ...bar, bone: view.bone, skin: view.skin };
   const perN = lift / bar.force;
   set({
@@ -188,7 +190,10 @@ window.addEventListener('keydown', (e) => {
     if (draggedTo !== null) setBar({ position: draggedTo });
     draggedTo = null;
     if (drag && scene.setMoving(false)) dirty = true;
-    if (drag) set({ dragging: false });
+    if (drag) {
+      set({ dragging: false });
+      drawnBar = null; // drawn again at rest, with its normals
+    }
     drag = null;
     scene.controls.enabled = true;
   });

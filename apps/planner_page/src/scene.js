@@ -183,13 +183,14 @@ export class Scene {
   }
 
   /// Moves the ribcage (if `parts.bone`), skin (if `parts.skin`), landmarks and bar to the displacements
-  /// (mm) of the bar at `mm` from the notch.
-  applyDeformation(mm, parts = { bone: true, skin: true }) {
+  /// (mm) of the bar at `mm` from the notch. `moving` (a drag under way) keeps the normals of the last
+  /// frame at rest: the shading lags the shape by a drag, a tenth of a frame's work saved.
+  applyDeformation(mm, parts = { bone: true, skin: true }, moving = false) {
     const move = (mesh, rest, d) => {
       const p = mesh.geometry.attributes.position;
       for (let i = 0; i < d.length; ++i) p.array[i] = rest[i] + d[i];
       p.needsUpdate = true;
-      mesh.geometry.computeVertexNormals();
+      if (!moving) mesh.geometry.computeVertexNormals();
     };
     if (parts.bone) move(this.bone, this.boneRest, this.boneDisplacement);
     if (parts.skin) move(this.skin, this.skinRest, this.skinDisplacement);
