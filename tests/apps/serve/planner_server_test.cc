@@ -15,6 +15,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "tests/apps/serve/test_server_options.h"
@@ -232,40 +233,36 @@ TEST_F(PlannerServerTest, OversizedBodyIs413) {
 
 TEST_F(PlannerServerTest, MalformedJsonIs400WithAMessage) {
   auto client = Client();
-  const std::pair<std::string, std::string> cases[] = {
-      {"{bad", "malformed JSON"},
-      {"", "malformed JSON"},
-      {"[1, 2]", "must be a JSON object"},
-      {R"({"bar": {"position": 0.85, "force_n": 200}})", "patient must be a string"},
-      {R"({"patient": "57", "bar": {"position": 1.5, "force_n": 200}})",
+  // {route, body, what the message says}: the plan, then the live score, which checks its request the
+  // same way before any work.
+  const std::tuple<std::string, std::string, std::string> cases[] = {
+      {"plan", "{bad", "malformed JSON"},
+      {"plan", "", "malformed JSON"},
+      {"plan", "[1, 2]", "must be a JSON object"},
+      {"plan", R"({"bar": {"position": 0.85, "force_n": 200}})", "patient must be a string"},
+      {"plan", R"({"patient": "57", "bar": {"position": 1.5, "force_n": 200}})",
        "bar.position = 1.5 is outside [0, 1]"},
-      {R"({"patient": "57", "bar": {"position": 0.85, "force_n": "200"}})", "bar.force_n must be a number"},
-      {R"({"patient": "57", "bar": {"position": 0.85, "force_n": -1}})", "bar.force_n = -1 is outside"},
-      {R"({"patient": "57", "bar": {"position": 0.85, "force_n": 200, "position_in_mm": 3}})",
+      {"plan", R"({"patient": "57", "bar": {"position": 0.85, "force_n": "200"}})",
+       "bar.force_n must be a number"},
+      {"plan", R"({"patient": "57", "bar": {"position": 0.85, "force_n": -1}})",
+       "bar.force_n = -1 is outside"},
+      {"plan", R"({"patient": "57", "bar": {"position": 0.85, "force_n": 200, "position_in_mm": 3}})",
        "position_in_mm"},
-      {R"({"patient": "57", "bar": {"position": 0.85, "force_n": 200}, "search": {"positions": 1000}})",
+      {"plan",
+       R"({"patient": "57", "bar": {"position": 0.85, "force_n": 200}, "search": {"positions": 1000}})",
        "search.positions must be an integer in [2, 40]"},
-  };
-  for (const auto& [body, message] : cases) {
-    const auto r = client.Post("/api/plan", Token(), body, "application/json");
-    ASSERT_TRUE(r);
-    EXPECT_EQ(r->status, 400) << body << ": " << r->body;
-    EXPECT_NE(ErrorOf(r).find(message), std::string::npos) << body << ": " << r->body;
-  }
-  // The live score checks its request the same way, before any work.
-  const std::pair<std::string, std::string> score_cases[] = {
-      {"{bad", "malformed JSON"},
-      {R"({"patient": "57"})", "bar must be an object"},
-      {R"({"patient": "57", "bar": {"position": 0.85, "force_n": 200}, "difference": 1})",
+      {"score", "{bad", "malformed JSON"},
+      {"score", R"({"patient": "57"})", "bar must be an object"},
+      {"score", R"({"patient": "57", "bar": {"position": 0.85, "force_n": 200}, "difference": 1})",
        "difference must be true or false"},
-      {R"({"patient": "57", "bar": {"position": 0.85, "force_n": 200}, "compare": {"position": 2}})",
+      {"score", R"({"patient": "57", "bar": {"position": 0.85, "force_n": 200}, "compare": {"position": 2}})",
        "compare.position = 2 is outside [0, 1]"},
   };
-  for (const auto& [body, message] : score_cases) {
-    const auto r = client.Post("/api/score", Token(), body, "application/json");
+  for (const auto& [route, body, message] : cases) {
+    const auto r = client.Post("/api/" + route, Token(), body, "application/json");
     ASSERT_TRUE(r);
-    EXPECT_EQ(r->status, 400) << body << ": " << r->body;
-    EXPECT_NE(ErrorOf(r).find(message), std::string::npos) << body << ": " << r->body;
+    EXPECT_EQ(r->status, 400) << route << " " << body << ": " << r->body;
+    EXPECT_NE(ErrorOf(r).find(message), std::string::npos) << route << " " << body << ": " << r->body;
   }
   const auto unknown =
       client.Post("/api/plan", Token(),
