@@ -23,6 +23,60 @@ function softwareWebGl() {
   }
 }
 
+/// A coarser triangulation of the same vertices, for frames while something moves (vertex clustering,
+/// Rossignac and Borrel 1993): vertices are grouped in cubes of `cell` mm, each group stands at its first
+/// vertex (which the deformation moves, as every vertex), and a triangle whose corners fall in fewer than
+/// three groups is left out. Triangles [start, start + count) of `index`.
+function clusteredIndex(position, index, start, count, cell) {
+  const groups = new Map(), at = new Int32Array(position.length / 3).fill(-1), out = [];
+  const groupOf = (v) => {
+    if (at[v] < 0) {
+      const key = `${Math.floor(position[3 * v] / cell)},${Math.floor(position[3 * v + 1] / cell)},${Math.floor(position[3 * v + 2] / cell)}`;
+      if (!groups.has(key)) groups.set(key, v);
+      at[v] = groups.get(key);
+    }
+    return at[v];
+  };
+  for (let f = start; f < start + count; ++f) {
+    const a = groupOf(index[3 * f]), b = groupOf(index[3 * f + 1]), c = groupOf(index[3 * f + 2]);
+    if (a !== b && b !== c && a !== c) out.push(a, b, c);
+  }
+  return out;
+}
+
+/// Gives `geometry` a coarse triangulation (clusteredIndex, cubes of twice its mean edge: about a fifth of
+/// the triangles) beside its own, group by group; Scene.setMoving() swaps them.
+function addCoarseDetail(geometry) {
+  const p = geometry.attributes.position.array, index = geometry.index.array;
+  let edges = 0;
+  const faces = index.length / 3, step = Math.max(1, Math.floor(faces / 2000));
+  let sampled = 0;
+  for (let f = 0; f < faces; f += step, ++sampled) {
+    const a = index[3 * f], b = index[3 * f + 1];
+    edges += Math.hypot(p[3 * a] - p[3 * b], p[3 * a + 1] - p[3 * b + 1], p[3 * a + 2] - p[3 * b + 2]);
+  }
+  const cell = (2 * edges) / Math.max(sampled, 1);
+  const ranges = geometry.groups.length ? geometry.groups : [{ start: 0, count: index.length, materialIndex: 0 }];
+  const coarse = [], groups = [];
+  for (const g of ranges) {
+    const part = clusteredIndex(p, index, g.start / 3, g.count / 3, cell);
+    groups.push({ start: coarse.length, count: part.length, materialIndex: g.materialIndex });
+    coarse.push(...part);
+  }
+  geometry.userData.detail = {
+    fine: { index: geometry.index, groups: geometry.groups.map((g) => ({ ...g })) },
+    coarse: { index: new THREE.BufferAttribute(new Uint32Array(coarse), 1), groups: geometry.groups.length ? groups : [] },
+  };
+}
+
+function setDetail(geometry, which) {
+  const d = geometry?.userData.detail;
+  if (!d) return;
+  geometry.setIndex(d[which].index);
+  geometry.clearGroups();
+  for (const g of d[which].groups) geometry.addGroup(g.start, g.count, g.materialIndex);
+}
+
 export class Scene {
   constructor(element) {
     this.software = softwareWebGl();
@@ -93,6 +147,7 @@ export class Scene {
     sg.setAttribute('position', new THREE.BufferAttribute(this.skinRest.slice(), 3));
     sg.setIndex(new THREE.BufferAttribute(new Uint32Array(skin, 24 * ns, 3 * fs), 1));
     sg.computeVertexNormals();
+    addCoarseDetail(sg);
     // Both sides in one pass (three draws a translucent double-sided mesh twice otherwise, back faces
     // first): the skin is seen through once, and the second pass was the dearest part of a frame.
     this.skin = new THREE.Mesh(sg, new THREE.MeshLambertMaterial({ color: 0xe8b89a, transparent: true, opacity: 0.45, side: THREE.DoubleSide, depthWrite: false, forceSinglePass: true }));
@@ -139,6 +194,7 @@ export class Scene {
     pg.setAttribute('color', new THREE.BufferAttribute(new Float32Array(3 * nv).fill(0.7), 3));
     pg.setIndex(index);
     pg.computeVertexNormals();
+    addCoarseDetail(pg);
     this.predicted = new THREE.Mesh(pg, new THREE.MeshLambertMaterial({ vertexColors: true, side: THREE.DoubleSide }));
     this.predicted.visible = false;
     this.scene.add(this.predicted);
@@ -219,6 +275,12 @@ export class Scene {
     if (this.renderer.getPixelRatio() === ratio) return false;
     this.renderer.setPixelRatio(ratio);
     this.resize();
+    // In software, the coarse triangulations too (addCoarseDetail).
+    // (Not the ribcage: its ribs are a cell thick, and clustering tears them.)
+    for (const mesh of [this.skin, this.predicted]) setDetail(mesh?.geometry, moving ? 'coarse' : 'fine');
+    // The map's normals, if it was recoloured on the coarse triangles (the ribcage's and the skin's are
+    // made at rest by the next deformation).
+    if (!moving) this.predicted?.geometry.computeVertexNormals();
     return true;
   }
 
