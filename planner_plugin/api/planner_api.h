@@ -23,6 +23,9 @@
  * Version 3 added the learned emulator's leave-one-patient-out evaluation (evaluate_emulator).
  * Version 4 added the basis as a table for a host that evaluates it itself, such as the planner page in a
  * browser: its modes (basis_modes) and a bar position's coefficients (basis_coefficients).
+ * Version 5 added the Nuss trainer (docs/trainer.md): a patient's trainer scene (bones, pericardium, lungs,
+ * the planned tunnel), its sessions ticked by the host's haptic device (one tick at a time, or on the
+ * plugin's own 1 kHz servo thread), their scores and records, and the thoracoscope's view.
  */
 #ifndef PECTUS_PLANNER_API_H_
 #define PECTUS_PLANNER_API_H_
@@ -35,7 +38,7 @@ extern "C" {
 #endif
 
 /** The interface version this header describes. Any change to a struct or function below bumps it. */
-#define PECTUS_PLANNER_INTERFACE_VERSION 4u
+#define PECTUS_PLANNER_INTERFACE_VERSION 5u
 /** The name of the one exported symbol (for dlsym). */
 #define PECTUS_PLANNER_ENTRY_POINT "pectus_planner_interface"
 
@@ -213,8 +216,87 @@ typedef struct PectusPlannerEmulatorEvaluation {
   PectusPlannerEmulatorFigures emulator, nearest_patient, mean_response;
 } PectusPlannerEmulatorEvaluation;
 
+/* ---- version 5: the trainer's types ---- */
+
+/** A haptic device's reading (CHAI3D's generic device in spirit). Scene frame (LPS, mm). */
+typedef struct PectusPlannerDeviceState {
+  double time_s;               /**< since the session's start */
+  double position_mm[3];       /**< the tool's tip */
+  double orientation_wxyz[4];  /**< unit quaternion; the tool's axis, handle to tip, is R (0, 0, 1) */
+  uint32_t buttons;            /**< bit i: button i pressed */
+} PectusPlannerDeviceState;
+
+/** The host's haptic device, called by the plugin's servo thread (trainer_start): `read` gives the state
+ *  at `time_s`, `set_force` takes the force (N) and torque (N mm) to render until the next tick. Both are
+ *  called once per tick from one thread and must not block. */
+typedef struct PectusPlannerDevice {
+  void* user;
+  void (*read)(void* user, double time_s, PectusPlannerDeviceState* out);
+  void (*set_force)(void* user, const double force_n[3], const double torque_nmm[3]);
+} PectusPlannerDevice;
+
+/** One servo tick's outcome. */
+typedef struct PectusPlannerTrainerTick {
+  int64_t tick;                 /**< ticks of the session so far, this one included */
+  double time_s;
+  double device_mm[3];          /**< the device's tip (the proxy's goal) */
+  double proxy_mm[3];           /**< the introducer's tip as drawn: never inside a surface */
+  double axis[3];               /**< the introducer's axis, handle to tip */
+  double force_n[3];            /**< sent to the device */
+  uint32_t organs_touched;      /**< bit 0 bone, bit 1 pericardium, bit 2 lung */
+  double pericardium_force_n;   /**< the force the pericardium takes */
+  double pericardium_distance_mm; /**< from the proxy to the pericardium */
+} PectusPlannerTrainerTick;
+
+/** An intercostal space: side -1 right, +1 left, 0 none; number 1-9 (between rib n and n + 1), 0 none. */
+typedef struct PectusPlannerSpace {
+  int32_t side, number;
+} PectusPlannerSpace;
+
+/** The planned pathway of the introducer's tip (docs/trainer.md, "Planned tunnel"). */
+typedef struct PectusPlannerTunnel {
+  double entry_port_mm[3], exit_port_mm[3]; /**< centres of the spaces it enters and leaves through */
+  PectusPlannerSpace entry, exit;
+  double scope_port_mm[3]; /**< where the thoracoscope enters (the right space below the entry) */
+  double level_z_mm;       /**< the bar's level: the slice of deepest depression */
+  double length_mm;
+  int64_t num_points;      /**< of the polyline (tunnel_points) */
+} PectusPlannerTunnel;
+
+/** A session's scores (docs/trainer.md, "Scores": each a definition over the recorded ticks). */
+typedef struct PectusPlannerTrainerScore {
+  int64_t ticks;
+  double min_pericardium_distance_mm, time_near_pericardium_s;
+  int32_t pericardial_contacts;
+  double peak_pericardium_force_n, peak_force_n, path_length_mm, rms_tunnel_deviation_mm;
+  PectusPlannerSpace entry, exit;
+  int32_t entry_as_planned, exit_as_planned;
+  double total_time_s;
+  double score; /**< 100 minus the penalties, at least 0 */
+} PectusPlannerTrainerScore;
+
+/** The servo loop's timing over a run (trainer_stop). */
+typedef struct PectusPlannerLoopStatistics {
+  int64_t ticks, late_ticks;
+  double period_mean_ms, period_p50_ms, period_p99_ms, period_max_ms;
+  double tick_p50_us, tick_p99_us, tick_max_us;
+} PectusPlannerLoopStatistics;
+
+/** The thoracoscope's camera: it pivots at the scope port, tip = port + R (0, 0, insertion); a 30 degree
+ *  oblique optic with an 80 degree horizontal field, 640 x 480 pixels (docs/trainer.md). */
+typedef struct PectusPlannerScopeView {
+  double orientation_wxyz[4]; /**< R: the scope's axis, handle to tip, is R (0, 0, 1) */
+  double insertion_mm;
+  double eye_mm[3];           /**< the camera at the scope's tip */
+  double forward[3], up[3];   /**< the view direction and the image's up, unit */
+  double horizontal_fov_deg, vertical_fov_deg;
+  int32_t width_px, height_px;
+  double focal_px;
+} PectusPlannerScopeView;
+
 typedef struct PectusPlanner PectusPlanner;                 /**< opaque */
 typedef struct PectusPlannerDeformer PectusPlannerDeformer; /**< opaque: one per thread (version 2) */
+typedef struct PectusPlannerTrainer PectusPlannerTrainer;   /**< opaque (version 5) */
 
 /** The plugin's function table. Every function returning int32_t returns a PectusPlannerCode and fills
  *  `status` (which may be NULL if the caller does not want the message). */
@@ -337,6 +419,63 @@ typedef struct PectusPlannerInterface {
    *  positions plus force_n x U_r c. Real time, as deform(): USAGE, outputs untouched, off the sternum. */
   int32_t (*basis_coefficients)(PectusPlannerDeformer* deformer, const PectusPlannerBar* bar,
                                 double* coefficients, double* lift_per_n, PectusPlannerStatus* status);
+
+  /* ---- version 5: the Nuss trainer ---- */
+
+  /** The trainer of the planner's patient: its scene (seconds: the organs placed from the fitted ribcage,
+   *  the collision grids) and an empty session for `introducer` ("small", "medium", "large"; NULL:
+   *  "medium") with room for `capacity_ticks` ticks (0: ten minutes at 1 kHz; ticks beyond are run but not
+   *  recorded). It copies what it needs: the planner may be destroyed first. */
+  int32_t (*trainer_create)(const PectusPlanner* planner, const char* introducer, int64_t capacity_ticks,
+                            PectusPlannerTrainer** out, PectusPlannerStatus* status);
+  /** Stops its servo thread if running and frees it (NULL is allowed). */
+  void (*trainer_destroy)(PectusPlannerTrainer* trainer);
+  /** A scene mesh: 0 the bones, 1 the pericardium, 2 the right lung, 3 the left lung (closed, outward;
+   *  the bones' labels: 0 sternum, k left rib k, -k right rib k, each with its cartilage). */
+  int32_t (*trainer_mesh)(const PectusPlannerTrainer* trainer, int32_t part, PectusPlannerMesh* out,
+                          PectusPlannerStatus* status);
+  /** The planned tunnel; its polyline (num_points x 3, right port first) into `points` if not NULL and
+   *  `capacity` (points) suffices (USAGE otherwise). */
+  int32_t (*trainer_tunnel)(const PectusPlannerTrainer* trainer, PectusPlannerTunnel* out, double* points,
+                            int64_t capacity, PectusPlannerStatus* status);
+  /** Starts a new session (the record emptied; the proxy placed at the first tick's device tip). Not while
+   *  the servo thread runs (USAGE). */
+  int32_t (*trainer_reset)(PectusPlannerTrainer* trainer, PectusPlannerStatus* status);
+  /** One servo tick of the session in the caller's thread, the device's state given (its time_s never
+   *  below the last tick's): the proxy moved, the force computed into `out`, the tick recorded. Real time:
+   *  no allocation, lock, exception or I/O. USAGE while the servo thread runs or for a non-finite state. */
+  int32_t (*trainer_tick)(PectusPlannerTrainer* trainer, const PectusPlannerDeviceState* state,
+                          PectusPlannerTrainerTick* out, PectusPlannerStatus* status);
+  /** Starts a new session on the plugin's servo thread: `rate_hz` ticks a second (0: 1000) on an absolute
+   *  schedule, each reading `device` and sending it the force. The device must stay valid until
+   *  trainer_stop(). */
+  int32_t (*trainer_start)(PectusPlannerTrainer* trainer, const PectusPlannerDevice* device, double rate_hz,
+                           PectusPlannerStatus* status);
+  /** Stops the servo thread (nothing if not running); its timing into `out` (may be NULL). */
+  int32_t (*trainer_stop)(PectusPlannerTrainer* trainer, PectusPlannerLoopStatistics* out,
+                          PectusPlannerStatus* status);
+  /** The session's latest tick, from any thread while the servo thread runs (never blocks it). USAGE
+   *  before the first tick. */
+  int32_t (*trainer_latest)(const PectusPlannerTrainer* trainer, PectusPlannerTrainerTick* out,
+                            PectusPlannerStatus* status);
+  /** The scores of the ticks recorded so far (from any thread, the servo thread running or not). USAGE
+   *  for fewer than two ticks. */
+  int32_t (*trainer_score)(const PectusPlannerTrainer* trainer, PectusPlannerTrainerScore* out,
+                           PectusPlannerStatus* status);
+  /** Writes the session's record (ticks so far, docs/trainer.md "Session records") atomically to `path`. */
+  int32_t (*trainer_write_record)(const PectusPlannerTrainer* trainer, const char* path,
+                                  PectusPlannerStatus* status);
+  /** Replays the record at `path` in this trainer's scene (it must be this patient's) and scores it: the
+   *  session's scores bit for bit if it is this session's record. */
+  int32_t (*trainer_replay)(const PectusPlannerTrainer* trainer, const char* path, PectusPlannerTrainerScore* out,
+                            PectusPlannerStatus* status);
+  /** The thoracoscope's view at the scope port: with `orientation_wxyz` (the tracked scope's R) as given;
+   *  with NULL aimed so that the oblique view's centre looks at `target_mm` (NULL: the proxy of the latest
+   *  tick), the image's up as near the patient's head as it can be. `insertion_mm` from the port to the
+   *  tip (> 0). */
+  int32_t (*trainer_scope_view)(const PectusPlannerTrainer* trainer, const double* orientation_wxyz,
+                                const double* target_mm, double insertion_mm, PectusPlannerScopeView* out,
+                                PectusPlannerStatus* status);
 } PectusPlannerInterface;
 
 /** The one exported symbol: the plugin's function table (static storage; never NULL). */

@@ -13,6 +13,7 @@
 #include "planner_plugin/api/planner_api.h"
 #include "planner_plugin/io/fem_dataset_h5.h"
 #include "planner_plugin/plugin/planner_session.h"
+#include "planner_plugin/plugin/planner_trainer.h"
 #include "planner_plugin/plugin/run_fem_dataset.h"
 #include "planner_plugin/surrogate/emulator_evaluation.h"
 #include "shape/core/error.h"
@@ -28,6 +29,13 @@ struct PectusPlanner {
 
 struct PectusPlannerDeformer {
   pectus::planner::SessionDeformer deformer;
+};
+
+struct PectusPlannerTrainer {
+  PectusPlannerTrainer(const pectus::planner::PatientRibcage& ribcage, const std::string& introducer,
+                       std::int64_t capacity_ticks)
+      : trainer(ribcage, introducer, capacity_ticks) {}
+  pectus::planner::PlannerTrainer trainer;  // refers to itself: made in place, never moved
 };
 
 namespace {
@@ -430,6 +438,211 @@ std::int32_t EvaluateEmulator(const char* table_path, const char* patients,
   });
 }
 
+// ---- version 5: the trainer -----------------------------------------------------------------------------
+
+using pectus::planner::PlannerTrainer;
+
+PectusPlannerSpace SpaceOf(const pectus::trainer::IntercostalSpace& s) { return {s.side, s.number}; }
+
+void Copy3(const Eigen::Vector3d& v, double* out) {
+  for (int k = 0; k < 3; ++k) out[k] = v[k];
+}
+
+std::int32_t TrainerCreate(const PectusPlanner* planner, const char* introducer, std::int64_t capacity_ticks,
+                           PectusPlannerTrainer** out, PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(planner, "planner");
+    Require(out, "out");
+    *out = nullptr;
+    *out = new PectusPlannerTrainer(planner->session.ribcage(), introducer != nullptr ? introducer : "medium",
+                                    capacity_ticks);
+  });
+}
+
+void TrainerDestroy(PectusPlannerTrainer* trainer) { delete trainer; }
+
+std::int32_t TrainerMesh(const PectusPlannerTrainer* trainer, std::int32_t part, PectusPlannerMesh* out,
+                         PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(trainer, "trainer");
+    Require(out, "out");
+    const pectus::trainer::TrainerScene& scene = trainer->trainer.scene();
+    auto view = [](const pectus::Points3& v, const pectus::Faces3& f, const std::int32_t* labels) {
+      return PectusPlannerMesh{v.rows(), v.data(), f.rows(), f.data(), labels};
+    };
+    switch (part) {
+      case 0:
+        *out = view(scene.bone_vertices, scene.bone_faces, scene.bone_parts.data());
+        return;
+      case 1:
+        *out = view(scene.pericardium.mesh.vertices.positions, scene.pericardium.mesh.faces, nullptr);
+        return;
+      case 2:
+        *out = view(scene.right_lung.mesh.vertices.positions, scene.right_lung.mesh.faces, nullptr);
+        return;
+      case 3:
+        *out = view(scene.left_lung.mesh.vertices.positions, scene.left_lung.mesh.faces, nullptr);
+        return;
+      default:
+        pectus::ThrowUsage("trainer_mesh: part " + std::to_string(part) +
+                           " is none of 0 bones, 1 pericardium, 2 right lung, 3 left lung");
+    }
+  });
+}
+
+std::int32_t TrainerTunnel(const PectusPlannerTrainer* trainer, PectusPlannerTunnel* out, double* points,
+                           std::int64_t capacity, PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(trainer, "trainer");
+    const pectus::trainer::PlannedTunnel& t = trainer->trainer.scene().tunnel;
+    const std::int64_t n = t.points.rows();
+    if (points != nullptr && capacity < n) {
+      pectus::ThrowUsage("trainer_tunnel: the tunnel has " + std::to_string(n) + " points, capacity is " +
+                         std::to_string(capacity));
+    }
+    if (out != nullptr) {
+      PectusPlannerTunnel o{};
+      Copy3(t.entry_port, o.entry_port_mm);
+      Copy3(t.exit_port, o.exit_port_mm);
+      o.entry = SpaceOf(t.entry);
+      o.exit = SpaceOf(t.exit);
+      Copy3(trainer->trainer.scope_port(), o.scope_port_mm);
+      o.level_z_mm = t.level_z_mm;
+      o.length_mm = t.length_mm;
+      o.num_points = n;
+      *out = o;
+    }
+    if (points != nullptr) std::copy(t.points.data(), t.points.data() + 3 * n, points);
+  });
+}
+
+std::int32_t TrainerReset(PectusPlannerTrainer* trainer, PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(trainer, "trainer");
+    trainer->trainer.Reset();
+  });
+}
+
+std::int32_t TrainerTick(PectusPlannerTrainer* trainer, const PectusPlannerDeviceState* state,
+                         PectusPlannerTrainerTick* out, PectusPlannerStatus* status) noexcept {
+  if (trainer == nullptr || state == nullptr) return RealTimeFailure(status, "trainer and state must not be NULL");
+  const char* why = "";
+  if (!trainer->trainer.Tick(*state, out, &why)) return RealTimeFailure(status, why);
+  return RealTimeOk(status);
+}
+
+std::int32_t TrainerStart(PectusPlannerTrainer* trainer, const PectusPlannerDevice* device, double rate_hz,
+                          PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(trainer, "trainer");
+    Require(device, "device");
+    trainer->trainer.Start(*device, rate_hz == 0 ? 1000.0 : rate_hz);
+  });
+}
+
+std::int32_t TrainerStop(PectusPlannerTrainer* trainer, PectusPlannerLoopStatistics* out,
+                         PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(trainer, "trainer");
+    const pectus::trainer::ServoLoopStatistics s = trainer->trainer.Stop();
+    if (out != nullptr) {
+      *out = {s.ticks,         s.late_ticks,    s.period_mean_ms, s.period_p50_ms, s.period_p99_ms,
+              s.period_max_ms, s.tick_p50_us,   s.tick_p99_us,    s.tick_max_us};
+    }
+  });
+}
+
+std::int32_t TrainerLatest(const PectusPlannerTrainer* trainer, PectusPlannerTrainerTick* out,
+                           PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(trainer, "trainer");
+    Require(out, "out");
+    if (!trainer->trainer.Latest(out)) pectus::ThrowUsage("trainer_latest: the session has no tick yet");
+  });
+}
+
+PectusPlannerTrainerScore ScoreOf(const pectus::trainer::SessionScore& s, std::int64_t ticks) {
+  PectusPlannerTrainerScore o{};
+  o.ticks = ticks;
+  o.min_pericardium_distance_mm = s.min_pericardium_distance_mm;
+  o.time_near_pericardium_s = s.time_near_pericardium_s;
+  o.pericardial_contacts = s.pericardial_contacts;
+  o.peak_pericardium_force_n = s.peak_pericardium_force_n;
+  o.peak_force_n = s.peak_force_n;
+  o.path_length_mm = s.path_length_mm;
+  o.rms_tunnel_deviation_mm = s.rms_tunnel_deviation_mm;
+  o.entry = SpaceOf(s.entry);
+  o.exit = SpaceOf(s.exit);
+  o.entry_as_planned = s.entry_as_planned ? 1 : 0;
+  o.exit_as_planned = s.exit_as_planned ? 1 : 0;
+  o.total_time_s = s.total_time_s;
+  o.score = s.score;
+  return o;
+}
+
+std::int32_t TrainerScore(const PectusPlannerTrainer* trainer, PectusPlannerTrainerScore* out,
+                          PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(trainer, "trainer");
+    Require(out, "out");
+    const pectus::trainer::SessionRecord record = trainer->trainer.RecordSoFar();
+    if (record.samples.size() < 2) pectus::ThrowUsage("trainer_score: the session has fewer than two ticks");
+    *out = ScoreOf(pectus::trainer::ScoreSession(trainer->trainer.scene(), record),
+                   static_cast<std::int64_t>(record.samples.size()));
+  });
+}
+
+std::int32_t TrainerWriteRecord(const PectusPlannerTrainer* trainer, const char* path,
+                                PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(trainer, "trainer");
+    Require(path, "path");
+    pectus::trainer::WriteSessionRecord(path, trainer->trainer.RecordSoFar());
+  });
+}
+
+std::int32_t TrainerReplay(const PectusPlannerTrainer* trainer, const char* path, PectusPlannerTrainerScore* out,
+                           PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(trainer, "trainer");
+    Require(path, "path");
+    Require(out, "out");
+    const pectus::trainer::SessionRecord record = pectus::trainer::ReadSessionRecord(path);
+    const pectus::trainer::TrainerScene& scene = trainer->trainer.scene();
+    if (record.patient != scene.patient) {
+      pectus::ThrowBadInput(path, "the record is patient '" + record.patient + "''s, this trainer patient '" +
+                                      scene.patient + "''s");
+    }
+    if (record.samples.size() < 2) pectus::ThrowBadInput(path, "the record has fewer than two ticks");
+    const pectus::trainer::SessionRecord replayed = pectus::trainer::ReplaySession(scene, record);
+    *out = ScoreOf(pectus::trainer::ScoreSession(scene, replayed), static_cast<std::int64_t>(replayed.samples.size()));
+  });
+}
+
+std::int32_t TrainerScopeView(const PectusPlannerTrainer* trainer, const double* orientation_wxyz,
+                              const double* target_mm, double insertion_mm, PectusPlannerScopeView* out,
+                              PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(trainer, "trainer");
+    Require(out, "out");
+    if (orientation_wxyz != nullptr) {
+      const Eigen::Quaterniond q(orientation_wxyz[0], orientation_wxyz[1], orientation_wxyz[2], orientation_wxyz[3]);
+      *out = trainer->trainer.ScopeView(&q, Eigen::Vector3d::Zero(), insertion_mm);
+      return;
+    }
+    Eigen::Vector3d target;
+    if (target_mm != nullptr) {
+      target = Eigen::Vector3d(target_mm[0], target_mm[1], target_mm[2]);
+    } else {
+      PectusPlannerTrainerTick latest{};
+      if (!trainer->trainer.Latest(&latest))
+        pectus::ThrowUsage("trainer_scope_view: no target and no tick yet to aim at");
+      target = Eigen::Vector3d(latest.proxy_mm[0], latest.proxy_mm[1], latest.proxy_mm[2]);
+    }
+    *out = trainer->trainer.ScopeView(nullptr, target, insertion_mm);
+  });
+}
+
 const PectusPlannerInterface kInterface = {
     PECTUS_PLANNER_INTERFACE_VERSION,
     sizeof(PectusPlannerInterface),
@@ -454,6 +667,19 @@ const PectusPlannerInterface kInterface = {
     EvaluateEmulator,
     BasisModes,
     BasisCoefficients,
+    TrainerCreate,
+    TrainerDestroy,
+    TrainerMesh,
+    TrainerTunnel,
+    TrainerReset,
+    TrainerTick,
+    TrainerStart,
+    TrainerStop,
+    TrainerLatest,
+    TrainerScore,
+    TrainerWriteRecord,
+    TrainerReplay,
+    TrainerScopeView,
 };
 
 }  // namespace

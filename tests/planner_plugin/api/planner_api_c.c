@@ -30,7 +30,14 @@ void pectus_planner_api_layout_from_c(size_t* out, int capacity) {
                            sizeof(PectusPlannerEmulatorEvaluation),
                            offsetof(PectusPlannerEmulatorFigures, worst_lift_patient),
                            offsetof(PectusPlannerInterface, evaluate_emulator),
-                           offsetof(PectusPlannerInterface, basis_coefficients)};
+                           offsetof(PectusPlannerInterface, basis_coefficients),
+                           sizeof(PectusPlannerDeviceState),
+                           sizeof(PectusPlannerDevice),
+                           sizeof(PectusPlannerTrainerTick),
+                           sizeof(PectusPlannerTunnel),
+                           sizeof(PectusPlannerTrainerScore),
+                           sizeof(PectusPlannerScopeView),
+                           offsetof(PectusPlannerInterface, trainer_scope_view)};
   int i;
   for (i = 0; i < capacity && i < (int)(sizeof(values) / sizeof(values[0])); ++i) out[i] = values[i];
 }

@@ -14,6 +14,7 @@
 
 #include "planner_plugin/api/planner_api.h"
 #include "planner_plugin/plugin/planner_session.h"
+#include "tests/planner_plugin/plugin/plugin_fixture.h"
 #include "tests/planner_plugin/ribcage/direct_lift.h"
 #include "tests/support/require_shared_data.h"
 #ifdef PECTUS_COUNT_ALLOCATIONS
@@ -26,40 +27,17 @@ namespace {
 
 const std::string kTable = pectus::testing_support::SharedPath(pectus::testing_support::kPatientTable);
 
-class PluginEntry : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    handle_ = dlopen(PECTUS_PLANNER_PLUGIN_PATH, RTLD_NOW | RTLD_LOCAL);
-    ASSERT_NE(handle_, nullptr) << dlerror();
-    const auto entry = reinterpret_cast<PectusPlannerEntryFn>(dlsym(handle_, PECTUS_PLANNER_ENTRY_POINT));
-    ASSERT_NE(entry, nullptr);
-    api_ = entry();
-  }
-  static void TearDownTestSuite() { dlclose(handle_); }
-  // Coarse mesh and skin, to keep the tests quick.
-  static PectusPlannerOptions Coarse() {
-    PectusPlannerOptions o{};
-    api_->default_options(&o);
-    o.rib_cell_length_mm = 10;
-    o.sternum_cells_along = 28;
-    o.skin_rows = 24;
-    o.skin_columns = 32;
-    return o;
-  }
-  static void* handle_;
-  static const PectusPlannerInterface* api_;
-};
-void* PluginEntry::handle_ = nullptr;
-const PectusPlannerInterface* PluginEntry::api_ = nullptr;
+using PluginEntry = pectus::testing_support::PluginTest;
 
 TEST_F(PluginEntry, ExportsOneVersionedTableThatCAndCppLayOutAlike) {
   ASSERT_NE(api_, nullptr);
   EXPECT_EQ(api_->version, PECTUS_PLANNER_INTERFACE_VERSION);
   EXPECT_EQ(api_->struct_size, sizeof(PectusPlannerInterface));
   EXPECT_NE(std::string(api_->description).find("pectus planner"), std::string::npos);
-  size_t c[25] = {};
-  pectus_planner_api_layout_from_c(c, 25);
-  const size_t cpp[25] = {sizeof(PectusPlannerStatus),
+  constexpr int kItems = 32;
+  size_t c[kItems] = {};
+  pectus_planner_api_layout_from_c(c, kItems);
+  const size_t cpp[kItems] = {sizeof(PectusPlannerStatus),
                           sizeof(PectusPlannerPatient),
                           sizeof(PectusPlannerOptions),
                           sizeof(PectusPlannerMeasurements),
@@ -83,8 +61,15 @@ TEST_F(PluginEntry, ExportsOneVersionedTableThatCAndCppLayOutAlike) {
                           sizeof(PectusPlannerEmulatorEvaluation),
                           offsetof(PectusPlannerEmulatorFigures, worst_lift_patient),
                           offsetof(PectusPlannerInterface, evaluate_emulator),
-                          offsetof(PectusPlannerInterface, basis_coefficients)};
-  for (int i = 0; i < 25; ++i) EXPECT_EQ(c[i], cpp[i]) << "layout item " << i;
+                          offsetof(PectusPlannerInterface, basis_coefficients),
+                          sizeof(PectusPlannerDeviceState),
+                          sizeof(PectusPlannerDevice),
+                          sizeof(PectusPlannerTrainerTick),
+                          sizeof(PectusPlannerTunnel),
+                          sizeof(PectusPlannerTrainerScore),
+                          sizeof(PectusPlannerScopeView),
+                          offsetof(PectusPlannerInterface, trainer_scope_view)};
+  for (int i = 0; i < kItems; ++i) EXPECT_EQ(c[i], cpp[i]) << "layout item " << i;
   // Nothing but the entry point is visible: not even the engine's functions (which this test binary
   // links itself, so the name below is the real one).
   EXPECT_EQ(dlsym(handle_, "_ZN6pectus7planner19BuildGenericRibcageERKNS0_21GenericRibcageOptionsE"),
