@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "apps/serve/planner_page_files.h"
+#include "apps/serve/trainer_sessions.h"
 #include "planner_plugin/host/average_chest.h"
 #include "planner_plugin/host/chest_registration.h"
 #include "planner_plugin/host/nuss_plan.h"
@@ -246,6 +247,7 @@ struct PlannerServer::State {
   std::vector<std::string> ids;  // the table's, in its order
   std::thread prepare;           // Prepare()'s
   std::string prepare_failure;   // its reason if it could not (read after prepare is joined)
+  std::unique_ptr<TrainerSessions> trainers;  // the trainer's sessions (issue 16)
   int port = 0;
   std::mutex run_mutex;
   std::condition_variable stopped_cv;
@@ -257,6 +259,7 @@ struct PlannerServer::State {
   void Routes();
   json Plan(const json& body);
   json Score(const json& body);
+  void TrainerRoutes();
 };
 
 // ---- a patient's session: planner, registration, basis and the page's coefficient table ----------------
@@ -594,6 +597,7 @@ void PlannerServer::State::Routes() {
   http.Post("/api/score", [this](const httplib::Request& req, httplib::Response& res) {
     SendJson(res, Score(ParseBody(req)));
   });
+  TrainerRoutes();
   // The page: only the embedded files, by exact path.
   http.Get(R"(/[A-Za-z0-9_./-]*)", [this](const httplib::Request& req, httplib::Response& res) {
     const std::string path = req.path == "/" ? "/index.html" : req.path;
@@ -615,6 +619,79 @@ void PlannerServer::State::Routes() {
   });
   // Any other method or path: JSON 404 (through the error handler). The page's route comes last: the first
   // pattern that matches answers.
+}
+
+// ---- the trainer (issue 16; docs/trainer.md, "The trainer in the planner page") ---------------------------
+
+namespace {
+
+std::string SessionId(const json& body) {
+  const auto it = body.find("session");
+  if (it == body.end() || !it->is_string() || it->get<std::string>().empty() ||
+      it->get<std::string>().size() > 20)
+    throw HttpError(400, "session must be a string (the id /api/trainer/start answered)");
+  return it->get<std::string>();
+}
+
+// Runs a call of the trainer's sessions: an unknown session is 404, a finished one or a bad request 400,
+// anything else 500.
+template <typename Call>
+auto Trainer(Call&& call) {
+  try {
+    return call();
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    if (what.rfind("no trainer session", 0) == 0) throw HttpError(404, what);
+    throw HttpError(e.kind() == ErrorKind::kFailure ? 500 : 400, what);
+  }
+}
+
+}  // namespace
+
+void PlannerServer::State::TrainerRoutes() {
+  http.Post("/api/trainer/start", [this](const httplib::Request& req, httplib::Response& res) {
+    const json body = ParseBody(req);
+    const auto id = body.find("patient");
+    if (id == body.end() || !id->is_string()) throw HttpError(400, "patient must be a string (an id of the table)");
+    std::string introducer = "medium";
+    if (body.contains("introducer")) {
+      const json& i = body.at("introducer");
+      if (!i.is_string() || (i != "small" && i != "medium" && i != "large"))
+        throw HttpError(400, "introducer must be \"small\", \"medium\" or \"large\"");
+      introducer = i.get<std::string>();
+    }
+    const auto s = Session(id->get<std::string>());
+    std::lock_guard<std::mutex> lock(s->mutex);  // the trainer is made from the planner's ribcage
+    SendJson(res, Trainer([&] { return trainers->Start(*s->planner, id->get<std::string>(), introducer); }));
+  });
+  http.Get(R"(/api/trainer/([0-9]+)/meshes)", [this](const httplib::Request& req, httplib::Response& res) {
+    res.set_content(Trainer([&] { return trainers->Meshes(req.matches[1]); }), "application/octet-stream");
+  });
+  http.Post("/api/trainer/device", [this](const httplib::Request& req, httplib::Response& res) {
+    const json body = ParseBody(req);
+    const std::string session = SessionId(body);
+    const auto it = body.find("position");
+    if (it == body.end() || !it->is_array() || it->size() != 3)
+      throw HttpError(400, "position must be [x, y, z] in mm (the patient's frame)");
+    Eigen::Vector3d p;
+    for (int k = 0; k < 3; ++k) {
+      const json& v = it->at(k);
+      if (!v.is_number() || !std::isfinite(v.get<double>()) || std::abs(v.get<double>()) > 2000)
+        throw HttpError(400, "position must hold three numbers within 2000 mm of the notch");
+      p[k] = v.get<double>();
+    }
+    const auto buttons = static_cast<std::uint32_t>(Integer(body, "buttons", 0, 255, 0, "device"));
+    SendJson(res, Trainer([&] { return trainers->Device(session, p, buttons); }));
+  });
+  http.Post("/api/trainer/finish", [this](const httplib::Request& req, httplib::Response& res) {
+    const std::string session = SessionId(ParseBody(req));
+    SendJson(res, Trainer([&] { return trainers->Finish(session); }));
+  });
+  http.Get(R"(/api/trainer/([0-9]+)/record)", [this](const httplib::Request& req, httplib::Response& res) {
+    const std::string id = req.matches[1];
+    res.set_content(Trainer([&] { return trainers->Record(id); }), "text/plain; charset=utf-8");
+    res.set_header("Content-Disposition", "attachment; filename=\"trainer_session_" + id + ".txt\"");
+  });
 }
 
 // ---- the server
@@ -660,6 +737,9 @@ PlannerServer::PlannerServer(PlannerServerOptions options) : state_(std::make_un
                                {"haller_index", p.ct_haller_index}});
   }
   if (s.patients.empty()) ThrowBadInput(s.options.patient_table.string(), "the table has no patient");
+  // Step 3: the trainer's sessions; their records pass through a folder of this server's own.
+  s.trainers = std::make_unique<TrainerSessions>(
+      *s.plugin, fs::temp_directory_path() / ("pectus-serve-" + s.options.token.substr(0, 12)));
 
   s.Routes();
 }
@@ -724,6 +804,7 @@ void PlannerServer::Stop() {
   state_->http.stop();
   if (state_->thread.joinable()) state_->thread.join();
   if (state_->prepare.joinable()) state_->prepare.join();
+  state_->trainers.reset();  // every servo thread stopped
 }
 
 int PlannerServer::port() const { return state_->port; }

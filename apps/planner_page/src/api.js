@@ -2,7 +2,7 @@
 // every request as the X-Pectus-Token header.
 const token = new URLSearchParams(location.search).get('token') ?? '';
 
-async function request(path, options = {}) {
+export async function request(path, options = {}) {
   const response = await fetch(path, { ...options, headers: { 'X-Pectus-Token': token, ...(options.headers ?? {}) } });
   if (!response.ok) {
     let message = `${response.status}`;

@@ -8,11 +8,13 @@ import { deform, liftPerNewton, makeBasis, onSternum } from './basis.js';
 import { drawColourBar } from './colormap.js';
 import { renderPanel } from './panel.js';
 import { Scene } from './scene.js';
+import { Trainer, renderTrainerPanel } from './trainer.js';
 import { positionMm, set, state, subscribe } from './state.js';
 
 // When the page's start steps ended, ms after the page started loading (performance.now()'s origin).
 const startTimings = { module: performance.now() };
 const scene = new Scene(document.getElementById('scene'));
+const trainer = new Trainer(scene);
 startTimings.webgl = performance.now();
 let basis = null;
 let drawnBar = null; // the bar the scene shows
@@ -149,10 +151,17 @@ subscribe((s) => {
   drawColourBar(document.getElementById('colorbar'), s.view.colormap, limit);
 });
 renderPanel(document.getElementById('panel'), { setBar, setLift, runSearch, loadPatient, requestPlan, exportPlan, exportPng, exportPly, loadPlan });
+renderTrainerPanel(document.getElementById('trainer'), trainer);
 
 // ---- keyboard and dragging ---------------------------------------------------------------------------------
 window.addEventListener('keydown', (e) => {
   if (e.target instanceof HTMLInputElement && e.target.type !== 'range') return;
+  if (e.target instanceof HTMLSelectElement) return;
+  // While a trainer session runs the keys move its device.
+  if (trainer.key(e)) {
+    e.preventDefault();
+    return;
+  }
   const step = e.shiftKey ? 10 : 1;
   const L = state.info?.sternal_length_mm ?? 1;
   const moves = {
@@ -232,7 +241,7 @@ async function exportPlan() {
   }
 }
 function exportPng() {
-  scene.render();
+  trainer.render();
   scene.renderer.domElement.toBlob((blob) => download(`planner_${state.patientId}.png`, blob));
 }
 /// The predicted chest (scenario A, the average chest's frame) as ASCII PLY with its difference, mm.
@@ -289,9 +298,10 @@ function loop() {
     draggedTo = null;
   }
   update();
+  trainer.frame();
   if (dirty) {
     dirty = false;
-    scene.render();
+    trainer.render();
     ++renders;
   }
   requestAnimationFrame(loop);
@@ -300,13 +310,13 @@ function loop() {
 let firstFrameMs = null;
 start().then(() => {
   update();
-  scene.render();
+  trainer.render();
   firstFrameMs = performance.now();
 });
 requestAnimationFrame(loop);
 
 // For tests and for a user's console: the state, the actions, the basis evaluation and the exports.
-window.pectus = { state, set, scene, setBar, setLift, loadPatient, loadPlan, planJson, plyText, runSearch,
+window.pectus = { state, set, scene, trainer, setBar, setLift, loadPatient, loadPlan, planJson, plyText, runSearch,
   firstFrameMs: () => firstFrameMs,
   startTimings: () => ({ ...startTimings, first_frame: firstFrameMs }),
   /// Mean times of a frame whose bar moved, ms: the deformation from the basis, moving the meshes (and

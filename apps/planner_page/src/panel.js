@@ -35,6 +35,8 @@ export function renderPanel(element, actions) {
     <h2>Best placement</h2>
     <button id="search">search</button> <span id="search-best"></span>
     <div id="search-map"></div>
+    <h2>Trainer</h2>
+    <div id="trainer"></div>
     <h2>Plan</h2>
     <button id="export-json">plan JSON</button> <button id="export-png">PNG</button> <button id="export-ply">predicted chest PLY</button>
     <label>load a plan JSON <input id="load" type="file" accept=".json,application/json" /></label>`;

@@ -13,6 +13,9 @@ export const state = {
   planFor: null, // the bar the plan was made for
   search: null, // the server's best-placement search
   dragging: false, // the bar is being dragged in the view
+  // The trainer (trainer.js): its session, scene (/api/trainer/start), the device's target (mm, patient
+  // frame), the latest tick, the scope's view, the score so far, and the report once finished.
+  trainer: { session: null, info: null, target: null, tick: null, scope: null, score: null, report: null, busy: '', error: '' },
   busy: '',
   error: '',
 };

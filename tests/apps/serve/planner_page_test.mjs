@@ -43,6 +43,7 @@ try {
   const errors = [];
   page.on('console', (m) => m.type() === 'error' && errors.push(m.text()));
   page.on('pageerror', (e) => errors.push(String(e)));
+  page.on('response', async (r) => r.status() >= 400 && errors.push(`${r.status()} ${r.url().replace(/token=[0-9a-f]+/, 'token=…')}: ${await r.text().catch(() => '')}`));
   const reference = JSON.parse(fs.readFileSync(referencePath, 'utf8'));
   const refA = reference.scenarios[0].bar;
 
@@ -216,6 +217,79 @@ try {
   check('a plan saved and loaded gives its bar back, in the schema of pectus plan --report',
     Math.abs(loaded.bar.position - clicked.bar.position) < 1e-12 && Math.abs(loaded.bar.force - clicked.bar.force) < 1e-9 &&
       keys === Object.keys(reference.scenarios[0]).sort().join(), JSON.stringify(loaded.bar));
+
+  // 10. The trainer: a scripted session end to end with the pointer as the device: started from the panel,
+  // the pointer dragged along the planned tunnel (right port, under the sternum, left port), the tip
+  // followed by the server's haptic loop, the scope's view inset drawn, the live score shown, then finished:
+  // the report, its scores as the record replays to, and the record.
+  await page.selectOption('#trainer-introducer', 'medium');
+  await page.click('#trainer-start');
+  await page.waitForFunction(() => window.pectus.state.trainer.tick && window.pectus.state.trainer.scope, null, { timeout: 60000 });
+  const route = await page.evaluate(() => {
+    const t = window.pectus.state.trainer.info, tr = window.pectus.trainer;
+    const pts = [t.start_mm];
+    for (let i = 0; i < t.tunnel.points.length; i += 3) pts.push(t.tunnel.points[i]);
+    const n = t.tunnel.points.length, last = t.tunnel.points[n - 1], before = t.tunnel.points[Math.max(0, n - 6)];
+    const d = last.map((v, k) => v - before[k]), len = Math.hypot(...d);
+    for (const s of [10, 20, 30]) pts.push(last.map((v, k) => v + (s * d[k]) / len));
+    // Each point as the pointer reaches it, on the working plane (the tunnel is planar within a few mm).
+    return pts.map((p) => tr.screenOf(p));
+  });
+  await page.mouse.move(route[0].x, route[0].y);
+  await page.mouse.down();
+  const sessionStart = Date.now();
+  for (const p of route.slice(1)) {
+    await page.mouse.move(p.x, p.y, { steps: 2 });
+    await page.waitForTimeout(40);
+  }
+  await page.mouse.up();
+  await page.waitForTimeout(400);
+  const live = await page.evaluate(() => {
+    const s = window.pectus.state.trainer;
+    const exit = s.info.tunnel.exit_port_mm;
+    return {
+      proxyBeyondExit: s.tick.proxy_mm[0] > exit[0], proxy: s.tick.proxy_mm, exit,
+      score: document.getElementById('trainer-score')?.textContent, distance: document.getElementById('trainer-distance')?.textContent,
+      inset: window.pectus.trainer.inset, ticks: s.tick.tick,
+    };
+  });
+  check('the pointer drags the introducer through the tunnel and out beyond the left port', live.proxyBeyondExit, JSON.stringify(live));
+  check('the live score and the distance to the pericardium are shown', Number(live.score) > 0 && /mm/.test(live.distance ?? ''), JSON.stringify(live));
+  check('the servo loop ran at about 1 kHz during the drag', live.ticks > 0.5 * (Date.now() - sessionStart), JSON.stringify({ ticks: live.ticks, ms: Date.now() - sessionStart }));
+  // The scope's view: its corner of the canvas is drawn (not the clear colour alone) and shows the scene.
+  const shot = await page.locator('canvas').first().screenshot();
+  const inset = await page.evaluate(async ([b64, box]) => {
+    const img = await createImageBitmap(await (await fetch(`data:image/png;base64,${b64}`)).blob());
+    const c = new OffscreenCanvas(img.width, img.height);
+    const g = c.getContext('2d');
+    g.drawImage(img, 0, 0);
+    const d = g.getImageData(box.x, img.height - box.y - box.height, box.width, box.height).data;
+    let dark = 0, drawn = 0;
+    for (let i = 0; i < d.length; i += 4) {
+      if (Math.abs(d[i] - 0x1a) + Math.abs(d[i + 1] - 0x0f) + Math.abs(d[i + 2] - 0x0a) < 6) ++dark;
+      else ++drawn;
+    }
+    return { background: dark / (d.length / 4), drawn: drawn / (d.length / 4) };
+  }, [shot.toString('base64'), live.inset]);
+  check('the thoracoscope view is inset and shows the scene', inset.background > 0.01 && inset.drawn > 0.2, JSON.stringify(inset));
+  await page.click('#trainer-finish');
+  await page.waitForFunction(() => window.pectus.state.trainer.report, null, { timeout: 60000 });
+  const report = await page.evaluate(() => ({
+    r: window.pectus.state.trainer.report,
+    shown: document.getElementById('trainer-report-score')?.textContent,
+    replay: document.getElementById('trainer-report-replay')?.textContent,
+  }));
+  const sc = report.r.score;
+  check('the report: entry and exit through the planned spaces, no pericardial contact',
+    sc.entry_as_planned && sc.exit_as_planned && sc.pericardial_contacts === 0 && sc.min_pericardium_distance_mm > 1, JSON.stringify(sc));
+  check('the report is shown and its record replays to the same scores', Number(report.shown) === Number(sc.score.toFixed(1)) && report.replay === 'yes' && report.r.replay_gives_the_same_scores,
+    JSON.stringify({ shown: report.shown, replay: report.replay }));
+  const record = await page.evaluate(() => window.pectus.trainer.recordText());
+  const tickLines = record.split('\n').filter((l) => l.startsWith('tick ')).length;
+  check('the record holds every tick of the session', tickLines === sc.ticks && /patient\s+57/.test(record), JSON.stringify({ tickLines, ticks: sc.ticks, head: record.slice(0, 80) }));
+  await page.click('#trainer-close');
+  check('back to the planner: the bar and the skin again', await page.evaluate(() => window.pectus.scene.bar.visible && window.pectus.state.view.skin), '');
+  console.log(JSON.stringify({ trainer_score: sc.score, trainer_ticks: sc.ticks, trainer_loop_p99_ms: report.r.loop.period_p99_ms }));
 
   // Timings: the deformation update per frame (whole surface: bone, skin, landmarks), mean of 200.
   const updateMs = await page.evaluate(() => window.pectus.timeUpdate(200));
