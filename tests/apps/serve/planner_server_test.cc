@@ -257,6 +257,17 @@ TEST_F(PlannerServerTest, MalformedJsonIs400WithAMessage) {
        "difference must be true or false"},
       {"score", R"({"patient": "57", "bar": {"position": 0.85, "force_n": 200}, "compare": {"position": 2}})",
        "compare.position = 2 is outside [0, 1]"},
+      // The trainer's sessions: each request checked before any session or patient is looked up.
+      {"trainer/start", "{bad", "malformed JSON"},
+      {"trainer/start", R"({"introducer": "small"})", "patient must be a string"},
+      {"trainer/start", R"({"patient": "57", "introducer": "huge"})", "introducer must be"},
+      {"trainer/device", R"({"position": [0, 0, 0]})", "session must be a string"},
+      {"trainer/device", R"({"session": "1", "position": [0, 0]})", "position must be [x, y, z]"},
+      {"trainer/device", R"({"session": "1", "position": [0, 0, "a"]})", "three numbers"},
+      {"trainer/device", R"({"session": "1", "position": [0, 0, 1e9]})", "within 2000 mm"},
+      {"trainer/device", R"({"session": "1", "position": [0, 0, 0], "buttons": -1})",
+       "device.buttons must be an integer in [0, 255]"},
+      {"trainer/finish", R"({"session": 5})", "session must be a string"},
   };
   for (const auto& [route, body, message] : cases) {
     const auto r = client.Post("/api/" + route, Token(), body, "application/json");
@@ -269,6 +280,20 @@ TEST_F(PlannerServerTest, MalformedJsonIs400WithAMessage) {
                   R"({"patient": "no such", "bar": {"position": 0.85, "force_n": 200}})", "application/json");
   EXPECT_EQ(unknown->status, 404);
   EXPECT_NE(ErrorOf(unknown).find("no patient 'no such'"), std::string::npos);
+  // A trainer session that was never started: 404 naming it, for every route that takes one.
+  for (const auto& [route, body] :
+       {std::pair<std::string, std::string>{"device", R"({"session": "999", "position": [0, 0, 0]})"},
+        {"finish", R"({"session": "999"})"}}) {
+    const auto r = client.Post("/api/trainer/" + route, Token(), body, "application/json");
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 404) << route << ": " << r->body;
+    EXPECT_NE(ErrorOf(r).find("no trainer session '999'"), std::string::npos) << r->body;
+  }
+  for (const std::string what : {"meshes", "record"}) {
+    const auto r = client.Get("/api/trainer/999/" + what, Token());
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 404) << what << ": " << r->body;
+  }
 }
 
 TEST_F(PlannerServerTest, AThousandMalformedRequestsAndTheServerStillAnswers) {
