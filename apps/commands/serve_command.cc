@@ -39,6 +39,9 @@ class ServeCommand : public Command {
     app->add_option("--patient", patient_,
                     "The patient the page opens on, made as the server starts (default: the table's first)");
     app->add_option("--port", options_.port, "Port on 127.0.0.1; 0 picks a free one")->default_val(8765);
+    app->add_option("--device-port", options_.device_port,
+                    "UDP port for an outside haptic device's driver (the trainer's device protocol, "
+                    "docs/trainer.md); 0 picks a free one; none unless given");
     app->add_option("--max-body-bytes", options_.max_body_bytes, "Larger request bodies get 413")
         ->default_val(1 << 20);
     app->add_option("--cartilage-modulus", options_.cartilage_mpa, "As `pectus plan` (MPa)");
@@ -73,6 +76,9 @@ class ServeCommand : public Command {
     server.Prepare(patient);
     std::printf("pectus serve: the planner is at %s%s\n", server.url().c_str(),
                 patient_.empty() ? "" : ("&patient=" + patient).c_str());
+    if (server.device_port() >= 0)
+      std::printf("pectus serve: device drivers send to UDP %s:%d (docs/trainer.md)\n", "127.0.0.1",
+                  server.device_port());
     std::printf("pectus serve: making patient %s (its ribcage and response basis: seconds)...\n",
                 patient.c_str());
     std::fflush(stdout);

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "apps/serve/planner_page_files.h"
+#include "apps/serve/device_protocol.h"
 #include "apps/serve/trainer_sessions.h"
 #include "planner_plugin/host/average_chest.h"
 #include "planner_plugin/host/chest_registration.h"
@@ -224,6 +225,7 @@ bool PlannerServerOptions::IsValid(std::string* why) const {
   if (patient_table.empty()) return fail("--patient-table is required");
   if (model.empty()) return fail("--model (the average chest) is required");
   if (port < 0 || port > 65535) return fail("--port must be in [0, 65535]");
+  if (device_port < -1 || device_port > 65535) return fail("--device-port must be in [0, 65535]");
   if (max_body_bytes < 1024) return fail("the request body limit must be at least 1024 bytes");
   if (threads < 1 || threads > 64) return fail("threads must be in [1, 64]");
   if (max_patients < 1) return fail("at least one patient must be kept in memory");
@@ -248,6 +250,7 @@ struct PlannerServer::State {
   std::thread prepare;           // Prepare()'s
   std::string prepare_failure;   // its reason if it could not (read after prepare is joined)
   std::unique_ptr<TrainerSessions> trainers;  // the trainer's sessions (issue 16)
+  std::unique_ptr<DeviceProtocolServer> devices;  // their outside drivers (--device-port)
   int port = 0;
   std::mutex run_mutex;
   std::condition_variable stopped_cv;
@@ -757,6 +760,9 @@ void PlannerServer::Start() {
     ThrowFailure("cannot listen on " + s.options.host + ":" + std::to_string(s.options.port) +
                  " (in use? --port 0 picks a free one)");
   }
+  if (s.options.device_port >= 0)
+    s.devices = std::make_unique<DeviceProtocolServer>(s.trainers.get(), s.options.token, s.options.host,
+                                                       s.options.device_port);
   s.thread = std::thread([&s] {
     s.http.listen_after_bind();
     std::lock_guard<std::mutex> lock(s.run_mutex);
@@ -804,10 +810,12 @@ void PlannerServer::Stop() {
   state_->http.stop();
   if (state_->thread.joinable()) state_->thread.join();
   if (state_->prepare.joinable()) state_->prepare.join();
+  state_->devices.reset();   // no driver's datagram after this
   state_->trainers.reset();  // every servo thread stopped
 }
 
 int PlannerServer::port() const { return state_->port; }
+int PlannerServer::device_port() const { return state_->devices ? state_->devices->port() : -1; }
 const std::string& PlannerServer::token() const { return state_->options.token; }
 std::string PlannerServer::url() const {
   return "http://127.0.0.1:" + std::to_string(state_->port) + "/?token=" + state_->options.token;

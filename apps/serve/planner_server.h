@@ -29,6 +29,9 @@ struct PlannerServerOptions {
   std::filesystem::path plugin;          ///< the planner plugin (empty: beside pectus)
   std::string host = "127.0.0.1";        ///< address bound; loopback only unless asked otherwise
   int port = 8765;                       ///< 0: a free port, told by port() and url()
+  /// UDP port of the trainer's device protocol for outside drivers (device_protocol.h): -1 none (the
+  /// default), 0 a free one, told by device_port()
+  int device_port = -1;
   std::string token;                     ///< empty: 32 random hex characters (std::random_device)
   std::size_t max_body_bytes = 1 << 20;  ///< larger request bodies get 413. Default 1 MiB
   /// Worker threads answering requests. A keep-alive connection holds one while it is open (a browser
@@ -70,6 +73,8 @@ class PlannerServer {
   void Stop();
 
   int port() const;
+  /// The device protocol's UDP port (-1 if not asked for).
+  int device_port() const;
   const std::string& token() const;
   /// The page's address with the token: http://127.0.0.1:PORT/?token=...
   std::string url() const;

@@ -92,7 +92,20 @@ void PointerDevice::MoveTo(const Eigen::Vector3d& target_mm, std::uint32_t butto
   glide_s_ = std::clamp(since, 0.005, 0.1);
   moved_at_ = now;
   buttons_ = buttons;
+  has_orientation_ = false;
   // The shaft trails the tip: the anchor follows at 20 mm along the path (follow the leader).
+  const Eigen::Vector3d d = to_ - anchor_;
+  if (d.norm() > 20.0) anchor_ = to_ - 20.0 * d.normalized();
+}
+
+void PointerDevice::Set(const Eigen::Vector3d& position_mm, const Eigen::Quaterniond& orientation,
+                        std::uint32_t buttons) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  from_ = to_ = position_mm;
+  moved_at_ = Clock::now();
+  buttons_ = buttons;
+  orientation_ = orientation;
+  has_orientation_ = true;
   const Eigen::Vector3d d = to_ - anchor_;
   if (d.norm() > 20.0) anchor_ = to_ - 20.0 * d.normalized();
 }
@@ -103,7 +116,9 @@ PectusPlannerDeviceState PointerDevice::StateAt(Clock::time_point now) {
   const Eigen::Vector3d p = from_ + s * (to_ - from_);
   Eigen::Vector3d axis = p - anchor_;
   if (axis.norm() < 1e-6) axis = Eigen::Vector3d::UnitX();
-  const Eigen::Quaterniond q = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), axis.normalized());
+  const Eigen::Quaterniond q = has_orientation_ ? orientation_
+                                                : Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(),
+                                                                                     axis.normalized());
   PectusPlannerDeviceState out{};
   for (int k = 0; k < 3; ++k) out.position_mm[k] = p[k];
   out.orientation_wxyz[0] = q.w();
@@ -311,6 +326,24 @@ json TrainerSessions::Device(const std::string& id, const Eigen::Vector3d& posit
   }
   out["score"] = s->score;
   return out;
+}
+
+std::uint32_t TrainerSessions::DriverMove(const std::string& id, const Eigen::Vector3d& position_mm,
+                                         const Eigen::Quaterniond& orientation, std::uint32_t buttons,
+                                         PectusPlannerTrainerTick* tick) {
+  std::shared_ptr<Session> s;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = sessions_.find(id);
+    if (it == sessions_.end()) return 1;
+    s = it->second;
+  }
+  std::lock_guard<std::mutex> lock(s->mutex);
+  if (!s->running) return 3;
+  s->last_used = Clock::now();
+  s->device->Set(position_mm, orientation, buttons);
+  if (!s->trainer->Latest(tick)) *tick = PectusPlannerTrainerTick{};
+  return 0;
 }
 
 json TrainerSessions::Finish(const std::string& id) {

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
@@ -32,6 +33,8 @@ class PointerDevice {
   PointerDevice(const Eigen::Vector3d& start_mm, const Eigen::Vector3d& axis);
   /// A new target (any thread).
   void MoveTo(const Eigen::Vector3d& target_mm, std::uint32_t buttons);
+  /// A device's own state (a driver's, at its servo rate): taken as it is, no gliding, its orientation.
+  void Set(const Eigen::Vector3d& position_mm, const Eigen::Quaterniond& orientation, std::uint32_t buttons);
   /// The callbacks for the plugin's servo thread (never blocking: a reading that finds the target being
   /// moved gives the last one again).
   PectusPlannerDevice Callbacks();
@@ -46,6 +49,8 @@ class PointerDevice {
   Clock::time_point moved_at_, previous_move_;
   double glide_s_ = 0.03;
   std::uint32_t buttons_ = 0;
+  bool has_orientation_ = false;  // Set() gave one
+  Eigen::Quaterniond orientation_ = Eigen::Quaterniond::Identity();
   PectusPlannerDeviceState last_{};  // the servo thread's own
 };
 
@@ -66,6 +71,11 @@ class TrainerSessions {
   /// Moves the device (position in mm, buttons) and answers the latest tick, the scope's view and the
   /// score so far (recomputed at most five times a second).
   nlohmann::json Device(const std::string& session, const Eigen::Vector3d& position_mm, std::uint32_t buttons);
+  /// A driver's device state (device_protocol.h): the session's device set to it; the latest tick into
+  /// `tick`. Returns a DeviceProtocolStatus (0 ok, 1 no such session, 3 finished). Quick: no JSON.
+  std::uint32_t DriverMove(const std::string& session, const Eigen::Vector3d& position_mm,
+                           const Eigen::Quaterniond& orientation, std::uint32_t buttons,
+                           PectusPlannerTrainerTick* tick);
   /// Stops the session's servo loop and answers its report: scores, the loop's timing, the replay check.
   nlohmann::json Finish(const std::string& session);
   /// The record of a session (text, docs/trainer.md "Session records").

@@ -243,6 +243,7 @@ typedef struct PectusPlannerTrainerTick {
   double proxy_mm[3];           /**< the introducer's tip as drawn: never inside a surface */
   double axis[3];               /**< the introducer's axis, handle to tip */
   double force_n[3];            /**< sent to the device */
+  double torque_nmm[3];         /**< sent to the device: the shaft's forces about the tip */
   uint32_t organs_touched;      /**< bit 0 bone, bit 1 pericardium, bit 2 lung */
   double pericardium_force_n;   /**< the force the pericardium takes */
   double pericardium_distance_mm; /**< from the proxy to the pericardium */

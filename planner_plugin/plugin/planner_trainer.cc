@@ -125,6 +125,7 @@ void PlannerTrainer::TickAndPublish(double time_s) noexcept {
   Copy3(c.proxy_mm, t.proxy_mm);
   Copy3(device_.last().orientation * Eigen::Vector3d::UnitZ(), t.axis);
   Copy3(c.force_n, t.force_n);
+  Copy3(c.torque_nmm, t.torque_nmm);
   t.organs_touched = c.organs_touched;
   t.pericardium_force_n = c.pericardium_force_n;
   t.pericardium_distance_mm = scene_.DistanceToPericardium(c.proxy_mm);
