@@ -41,6 +41,7 @@ export class Trainer {
       set({ trainer: { ...state.trainer, session: info.session, info, target: info.start_mm, tick: null, scope: null, score: null, report: null, busy: '' } });
       this.saveView = { ...state.view };
       set({ view: { skin: false, average: false, map: false, landmarks: false } });
+      document.getElementById('colorbar').hidden = true; // the planner's map is not shown
       this.send();
     } catch (e) {
       set({ trainer: { ...state.trainer, busy: '', error: e.message } });
@@ -71,6 +72,7 @@ export class Trainer {
     this.group = null;
     this.scene.renderer.clippingPlanes = [];
     if (this.saveView) set({ view: this.saveView });
+    document.getElementById('colorbar').hidden = false;
     this.scene.bar.visible = true;
     this.scene.controls.enabled = true;
     this.scene.frame(state.info);
@@ -96,7 +98,8 @@ export class Trainer {
       geometry.setIndex(new THREE.BufferAttribute(new Uint32Array(meshes, at, 3 * faces), 1));
       at += 12 * faces;
       geometry.computeVertexNormals();
-      const m = new THREE.Mesh(geometry, new THREE.MeshLambertMaterial({ color: colour, transparent: opacity < 1, opacity, depthWrite: opacity >= 1 }));
+      // Both sides: the slab's cut opens the organs, and their inside is seen through the cut.
+      const m = new THREE.Mesh(geometry, new THREE.MeshLambertMaterial({ color: colour, transparent: opacity < 1, opacity, depthWrite: opacity >= 1, side: THREE.DoubleSide }));
       g.add(m);
       return m;
     };
@@ -362,7 +365,10 @@ export function renderTrainerPanel(element, trainer) {
     <table id="trainer-live" aria-live="polite"></table>
     <div id="trainer-report"></div>`;
   const $ = (id) => element.querySelector(`#${id}`);
-  $('trainer-start').onclick = () => trainer.start($('trainer-introducer').value);
+  $('trainer-start').onclick = () => {
+    element.scrollIntoView({ block: 'start' });
+    trainer.start($('trainer-introducer').value);
+  };
   $('trainer-finish').onclick = () => trainer.finish();
   $('trainer-close').onclick = () => trainer.close();
   subscribe((s) => {

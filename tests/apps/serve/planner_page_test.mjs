@@ -238,9 +238,14 @@ try {
   await page.mouse.move(route[0].x, route[0].y);
   await page.mouse.down();
   const sessionStart = Date.now();
-  for (const p of route.slice(1)) {
+  for (const [i, p] of route.slice(1).entries()) {
     await page.mouse.move(p.x, p.y, { steps: 2 });
     await page.waitForTimeout(40);
+    // The picture of docs/trainer.md, half way under the sternum: PECTUS_TRAINER_PICTURE=FILE.png.
+    if (process.env.PECTUS_TRAINER_PICTURE && i === Math.floor(route.length / 2)) {
+      await page.waitForTimeout(300);
+      await page.screenshot({ path: process.env.PECTUS_TRAINER_PICTURE });
+    }
   }
   await page.mouse.up();
   await page.waitForTimeout(400);
