@@ -263,6 +263,7 @@ struct PlannerServer::State {
   json Plan(const json& body);
   json Score(const json& body);
   void TrainerRoutes();
+  json BarOutcome(const std::string& id, double level_z_mm);
 };
 
 // ---- a patient's session: planner, registration, basis and the page's coefficient table ----------------
@@ -651,6 +652,30 @@ auto Trainer(Call&& call) {
 
 }  // namespace
 
+// The bar the session's tunnel is made for, and its outcome against the average chest, as the planner scores
+// it: at the tunnel's level (its height below the notch, taken along the sternum), with the force that lifts
+// the sternum by the depression, from the patient's exact basis.
+json PlannerServer::State::BarOutcome(const std::string& id, double level_z_mm) {
+  const std::shared_ptr<PatientSession> s = Session(id);
+  std::lock_guard<std::mutex> lock(s->mutex);
+  const PlannerClient& p = *s->planner;
+  const double length = p.measurements().sternal_length_mm;
+  const double mm = std::clamp(-level_z_mm, 0.0, length);
+  Eigen::VectorXd c;
+  double per_n = 0;
+  if (!p.BasisCoefficients({mm, true, 1.0}, &c, &per_n) || !(per_n > 0))
+    return {{"error", "the bar at the tunnel's level is off the sternum"}};
+  const double force = p.measurements().depression_mm / per_n;
+  const std::vector<PlannedCase> cases = p.Deform({{mm, true, force}}, false);
+  const PlanScore score = s->scorer->Score(cases[0].skin);
+  return {{"position_mm", mm},
+          {"position", mm / length},
+          {"force_n", force},
+          {"sternum_lift_mm", cases[0].figures.sternum_lift_mm},
+          {"score", score.ToJson()},
+          {"before", s->before.ToJson()}};
+}
+
 void PlannerServer::State::TrainerRoutes() {
   http.Post("/api/trainer/start", [this](const httplib::Request& req, httplib::Response& res) {
     const json body = ParseBody(req);
@@ -688,7 +713,10 @@ void PlannerServer::State::TrainerRoutes() {
   });
   http.Post("/api/trainer/finish", [this](const httplib::Request& req, httplib::Response& res) {
     const std::string session = SessionId(ParseBody(req));
-    SendJson(res, Trainer([&] { return trainers->Finish(session); }));
+    json report = Trainer([&] { return trainers->Finish(session); });
+    if (report.contains("score") && !report.contains("bar"))
+      report["bar"] = BarOutcome(report["patient"].get<std::string>(), report["level_z_mm"].get<double>());
+    SendJson(res, report);
   });
   http.Get(R"(/api/trainer/([0-9]+)/record)", [this](const httplib::Request& req, httplib::Response& res) {
     const std::string id = req.matches[1];

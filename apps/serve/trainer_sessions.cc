@@ -197,7 +197,8 @@ json TrainerSessions::Session::FinishLocked(const std::filesystem::path& work_di
               {"period_p99_ms", loop.period_p99_ms},
               {"period_max_ms", loop.period_max_ms},
               {"tick_p99_us", loop.tick_p99_us}}},
-            {"record", "/api/trainer/" + id + "/record"}};
+            {"record", "/api/trainer/" + id + "/record"},
+            {"level_z_mm", trainer->tunnel().level_z_mm}};
   return report;
 }
 

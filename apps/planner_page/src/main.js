@@ -151,6 +151,7 @@ subscribe((s) => {
   drawColourBar(document.getElementById('colorbar'), s.view.colormap, limit);
 });
 renderPanel(document.getElementById('panel'), { setBar, setLift, runSearch, loadPatient, requestPlan, exportPlan, exportPng, exportPly, loadPlan });
+trainer.placeBar = setBar;
 renderTrainerPanel(document.getElementById('trainer'), trainer);
 
 // ---- keyboard and dragging ---------------------------------------------------------------------------------

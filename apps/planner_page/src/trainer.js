@@ -401,11 +401,21 @@ export function renderTrainerPanel(element, trainer) {
       <tr><td>exit (planned)</td><td id="trainer-report-exit" class="${r.score.exit_as_planned ? '' : 'flag'}">${r.score.exit.name} (${r.score.planned_exit.name})</td></tr>
       <tr><td>total time</td><td>${f(r.score.total_time_s, 1)} s</td></tr>
       <tr><td>servo loop: ticks, period p99</td><td>${r.loop.ticks}, ${f(r.loop.period_p99_ms, 3)} ms</td></tr>
-      <tr><td>the record replays to the same scores</td><td id="trainer-report-replay">${r.replay_gives_the_same_scores ? 'yes' : 'no'}</td></tr></table>
-      <button id="trainer-record">download the record</button>`
+      <tr><td>the record replays to the same scores</td><td id="trainer-report-replay">${r.replay_gives_the_same_scores ? 'yes' : 'no'}</td></tr>
+      ${r.bar?.score ? html`<tr><th colspan="2" style="text-align:left">The bar through this tunnel (${f(r.bar.position_mm, 0)} mm from the notch, ${f(r.bar.force_n, 0)} N to lift the sternum by its depression)</th></tr>
+      <tr><td>RMS against the average chest</td><td id="trainer-report-bar-rms">${f(r.bar.score.rms_mm, 2)} mm (before ${f(r.bar.before.rms_mm, 2)})</td></tr>
+      <tr><td>central RMS</td><td>${f(r.bar.score.central.rms_mm, 2)} mm (before ${f(r.bar.before.central.rms_mm, 2)})</td></tr>` : ''}</table>
+      <button id="trainer-record">download the record</button> ${r.bar?.score ? '<button id="trainer-place-bar">place the bar there</button>' : ''}`
       : r ? `<p>${r.error}</p>` : '';
     if ($('trainer-report').pectusHtml !== report) {
       $('trainer-report').innerHTML = $('trainer-report').pectusHtml = report;
+      if (r?.bar?.score) {
+        // Back to the planner with the bar at the tunnel's level: the chest deforms as the bar is moved.
+        $('trainer-place-bar').onclick = () => {
+          trainer.close();
+          trainer.placeBar?.({ position: r.bar.position, force: r.bar.force_n });
+        };
+      }
       if (r?.score) {
         $('trainer-record').onclick = async () => {
           const a = document.createElement('a');

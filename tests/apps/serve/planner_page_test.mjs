@@ -289,11 +289,16 @@ try {
     sc.entry_as_planned && sc.exit_as_planned && sc.pericardial_contacts === 0 && sc.min_pericardium_distance_mm > 1, JSON.stringify(sc));
   check('the report is shown and its record replays to the same scores', Number(report.shown) === Number(sc.score.toFixed(1)) && report.replay === 'yes' && report.r.replay_gives_the_same_scores,
     JSON.stringify({ shown: report.shown, replay: report.replay }));
+  const bar = report.r.bar;
+  check("the report gives the bar's outcome through this tunnel against the average chest",
+    bar?.score?.rms_mm > 0 && bar.score.rms_mm < bar.before.rms_mm && bar.force_n > 0 && bar.position > 0.3 && bar.position <= 1, JSON.stringify(bar && { ...bar, score: bar.score?.rms_mm, before: bar.before?.rms_mm }));
   const record = await page.evaluate(() => window.pectus.trainer.recordText());
   const tickLines = record.split('\n').filter((l) => l.startsWith('tick ')).length;
   check('the record holds every tick of the session', tickLines === sc.ticks && /patient\s+57/.test(record), JSON.stringify({ tickLines, ticks: sc.ticks, head: record.slice(0, 80) }));
-  await page.click('#trainer-close');
-  check('back to the planner: the bar and the skin again', await page.evaluate(() => window.pectus.scene.bar.visible && window.pectus.state.view.skin), '');
+  await page.click('#trainer-place-bar');
+  const placed = await page.evaluate(() => ({ bar: window.pectus.state.bar, visible: window.pectus.scene.bar.visible, skin: window.pectus.state.view.skin, trainer: window.pectus.state.trainer.session }));
+  check('back to the planner with the bar placed through the tunnel: the bar and the skin again',
+    placed.visible && placed.skin && placed.trainer === null && Math.abs(placed.bar.position - bar.position) < 1e-12 && Math.abs(placed.bar.force - bar.force_n) < 1e-9, JSON.stringify(placed));
   console.log(JSON.stringify({ trainer_score: sc.score, trainer_ticks: sc.ticks, trainer_loop_p99_ms: report.r.loop.period_p99_ms }));
 
   // Timings: the deformation update per frame (whole surface: bone, skin, landmarks), mean of 200.
