@@ -8,37 +8,13 @@
 #include <vector>
 
 #include "registration/kdtree.h"
+#include "shape/core/closest_point_on_triangle.h"
 #include "shape/core/enum_names.h"
 #include "shape/core/error.h"
 #include "shape/core/sample_statistics.h"
 
 namespace pectus {
 namespace {
-
-// Closest point on triangle (a, b, c) to p (Ericson, Real-Time Collision Detection, 5.1.5). `feature`:
-// 0-2 vertex a/b/c, 3-5 edge ab/bc/ca, 6 the face.
-Eigen::Vector3d ClosestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                                  const Eigen::Vector3d& b, const Eigen::Vector3d& c, int* feature) {
-  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return *feature = 0, a;
-  const Eigen::Vector3d bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return *feature = 1, b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return *feature = 3, Eigen::Vector3d(a + (d1 / (d1 - d3)) * ab);
-  const Eigen::Vector3d cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return *feature = 2, c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return *feature = 5, Eigen::Vector3d(a + (d2 / (d2 - d6)) * ac);
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
-    return *feature = 4, Eigen::Vector3d(b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b));
-  }
-  const double denom = 1.0 / (va + vb + vc);
-  return *feature = 6, Eigen::Vector3d(a + ab * (vb * denom) + ac * (vc * denom));
-}
 
 // Face, edge and angle-weighted vertex pseudo-normals of a mesh.
 struct PseudoNormals {
@@ -173,7 +149,7 @@ DistanceMapResult ComputeDistanceMap(const Points3& points, const TriangleMesh& 
       for (const auto& [v, unused] : near) {
         for (std::int32_t f : faces_of[v]) {
           int feature = 6;
-          const Eigen::Vector3d q = ClosestOnTriangle(p, x.row(reference.faces(f, 0)).transpose(),
+          const Eigen::Vector3d q = ClosestPointOnTriangle(p, x.row(reference.faces(f, 0)).transpose(),
                                                       x.row(reference.faces(f, 1)).transpose(),
                                                       x.row(reference.faces(f, 2)).transpose(), &feature);
           const double d = (p - q).squaredNorm();
