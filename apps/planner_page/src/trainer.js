@@ -38,7 +38,8 @@ export class Trainer {
       const info = await postJson('/api/trainer/start', { patient: state.patientId, introducer });
       const meshes = await getBinary(`/api/trainer/${info.session}/meshes`);
       this.build(info, meshes);
-      set({ trainer: { ...state.trainer, session: info.session, info, target: info.start_mm, tick: null, scope: null, score: null, report: null, busy: '' } });
+      this.barPhase = null;
+      set({ trainer: { ...state.trainer, session: info.session, info, target: info.start_mm, tick: null, scope: null, score: null, report: null, bar: null, busy: '' } });
       this.saveView = { ...state.view };
       set({ view: { skin: false, average: false, map: false, landmarks: false } });
       document.getElementById('colorbar').hidden = true; // the planner's map is not shown
@@ -68,6 +69,7 @@ export class Trainer {
   /// Leaves the trainer: the planner's view as it was.
   close() {
     if (this.active) this.finish();
+    this.barPhase = null;
     if (this.group) this.scene.patient.remove(this.group);
     this.group = null;
     this.scene.renderer.clippingPlanes = [];
@@ -76,7 +78,7 @@ export class Trainer {
     this.scene.bar.visible = true;
     this.scene.controls.enabled = true;
     this.scene.frame(state.info);
-    set({ trainer: { ...state.trainer, session: null, info: null, tick: null, scope: null, score: null, report: null } });
+    set({ trainer: { ...state.trainer, session: null, info: null, tick: null, scope: null, score: null, report: null, bar: null } });
   }
 
   async recordText() {
@@ -271,6 +273,7 @@ export class Trainer {
 
   /// Every frame: the gamepad (left stick in the plane, triggers off it), and the answers drawn.
   frame() {
+    this.animateBar();
     if (!this.active) return;
     const pad = navigator.getGamepads?.().find((p) => p && p.connected);
     if (pad) {
@@ -287,6 +290,52 @@ export class Trainer {
       this.polled = performance.now();
       this.send(); // the score and the force go on while the hand rests
     }
+  }
+
+  /// The bar's passage once the tunnel is made: pulled through along it from the right port (2 s), then
+  /// flipped about the line between the ports (1.5 s) while its force grows from 0 to the report's
+  /// (F (1 - cos θ) / 2): the planner's basis deforms the ribcage every frame as it turns.
+  passBar() {
+    const r = state.trainer.report;
+    if (!r?.bar?.score || !this.group || this.barPhase) return;
+    const t = state.trainer.info.tunnel;
+    const curve = new THREE.CatmullRomCurve3(t.points.map((p) => new THREE.Vector3(...p)));
+    const geometry = new THREE.TubeGeometry(curve, 120, 3, 10, false);
+    const entry = new THREE.Vector3(...t.entry_port_mm), exit = new THREE.Vector3(...t.exit_port_mm);
+    this.barPivot = new THREE.Group();
+    this.barPivot.position.copy(entry);
+    const bar = new THREE.Mesh(geometry, new THREE.MeshLambertMaterial({ color: 0x777777 }));
+    bar.position.copy(entry).negate();
+    this.barPivot.add(bar);
+    this.group.add(this.barPivot);
+    this.barMesh = bar;
+    this.barAxis = exit.clone().sub(entry).normalize();
+    this.barPhase = { start: performance.now(), force: r.bar.force_n, position: r.bar.position };
+    this.tip.visible = this.shaft.visible = this.force.visible = this.device.visible = false;
+    set({ trainer: { ...state.trainer, bar: { phase: 'pulling', lift: 0 } } });
+  }
+
+  /// One frame of the bar's passage (the loop calls it); true while it moves.
+  animateBar() {
+    const b = this.barPhase;
+    if (!b || b.done) return false;
+    const seconds = (performance.now() - b.start) / 1000, pull = 2, flip = 1.5;
+    const count = this.barMesh.geometry.index.count;
+    if (seconds < pull) {
+      // Whole rings of the tube, so that the bar's front is clean.
+      const ring = 6 * 10;
+      this.barMesh.geometry.setDrawRange(0, Math.floor(((seconds / pull) * count) / ring) * ring);
+      return true;
+    }
+    this.barMesh.geometry.setDrawRange(0, count);
+    const s = Math.min((seconds - pull) / flip, 1), angle = Math.PI * s;
+    this.barPivot.quaternion.setFromAxisAngle(this.barAxis, angle);
+    const force = (b.force * (1 - Math.cos(angle))) / 2;
+    this.placeBar?.({ position: b.position, force: Math.max(force, 1) });
+    const done = s >= 1;
+    if (done) b.done = true;
+    set({ trainer: { ...state.trainer, bar: { phase: done ? 'flipped' : 'flipping', angle_deg: (180 * angle) / Math.PI, force_n: force } } });
+    return true;
   }
 
   /// Moves the introducer, the force and the scope to the latest tick.
@@ -388,6 +437,13 @@ export function renderTrainerPanel(element, trainer) {
       <tr><td>path, RMS off the planned tunnel</td><td>${f(score.path_length_mm, 0)} mm, ${f(score.rms_tunnel_deviation_mm)} mm</td></tr>` : ''}`
       : t.busy || t.error ? `<tr><td>${t.error ? 'error: ' + t.error : t.busy}</td></tr>` : '';
     if ($('trainer-live').pectusHtml !== live) $('trainer-live').innerHTML = $('trainer-live').pectusHtml = live;
+    const barStatus = element.querySelector('#trainer-bar-status');
+    if (barStatus) {
+      const b = t.bar, live = s.live;
+      const text = !b ? '' : b.phase === 'pulling' ? 'pulling the bar through the tunnel…'
+        : `bar ${b.phase} (${f(b.angle_deg, 0)}°, ${f(b.force_n, 0)} N): sternal lift ${f(live?.liftMm, 1)} mm of its ${f(s.info?.depression_mm, 1)} mm depression`;
+      if (barStatus.textContent !== text) barStatus.textContent = text;
+    }
     const r = t.report;
     const report = r && r.score ? html`<h2>Session report</h2><table>
       <tr><td>score (100 minus the penalties)</td><td id="trainer-report-score">${f(r.score.score, 1)}</td></tr>
@@ -405,12 +461,14 @@ export function renderTrainerPanel(element, trainer) {
       ${r.bar?.score ? html`<tr><th colspan="2" style="text-align:left">The bar through this tunnel (${f(r.bar.position_mm, 0)} mm from the notch, ${f(r.bar.force_n, 0)} N to lift the sternum by its depression)</th></tr>
       <tr><td>RMS against the average chest</td><td id="trainer-report-bar-rms">${f(r.bar.score.rms_mm, 2)} mm (before ${f(r.bar.before.rms_mm, 2)})</td></tr>
       <tr><td>central RMS</td><td>${f(r.bar.score.central.rms_mm, 2)} mm (before ${f(r.bar.before.central.rms_mm, 2)})</td></tr>` : ''}</table>
-      <button id="trainer-record">download the record</button> ${r.bar?.score ? '<button id="trainer-place-bar">place the bar there</button>' : ''}`
+      <button id="trainer-record">download the record</button> ${r.bar?.score ? '<button id="trainer-pass-bar">pull the bar through and flip it</button> <button id="trainer-place-bar">place the bar there</button>' : ''}
+      <p id="trainer-bar-status" aria-live="polite"></p>`
       : r ? `<p>${r.error}</p>` : '';
     if ($('trainer-report').pectusHtml !== report) {
       $('trainer-report').innerHTML = $('trainer-report').pectusHtml = report;
       if (r?.bar?.score) {
         // Back to the planner with the bar at the tunnel's level: the chest deforms as the bar is moved.
+        $('trainer-pass-bar').onclick = () => trainer.passBar();
         $('trainer-place-bar').onclick = () => {
           trainer.close();
           trainer.placeBar?.({ position: r.bar.position, force: r.bar.force_n });

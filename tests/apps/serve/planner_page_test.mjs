@@ -295,6 +295,13 @@ try {
   const record = await page.evaluate(() => window.pectus.trainer.recordText());
   const tickLines = record.split('\n').filter((l) => l.startsWith('tick ')).length;
   check('the record holds every tick of the session', tickLines === sc.ticks && /patient\s+57/.test(record), JSON.stringify({ tickLines, ticks: sc.ticks, head: record.slice(0, 80) }));
+  // The bar pulled through the tunnel and flipped: the chest deforms as it turns, to the lift the report's
+  // force gives (the sternum raised by its depression), from the page's basis.
+  await page.click('#trainer-pass-bar');
+  await page.waitForFunction(() => window.pectus.state.trainer.bar?.phase === 'flipped' && window.pectus.state.live?.force === window.pectus.state.bar.force, null, { timeout: 30000 });
+  const flipped = await page.evaluate(() => ({ lift: window.pectus.state.live.liftMm, depression: window.pectus.state.info.depression_mm, status: document.getElementById('trainer-bar-status')?.textContent }));
+  if (process.env.PECTUS_TRAINER_BAR_PICTURE) await page.screenshot({ path: process.env.PECTUS_TRAINER_BAR_PICTURE });
+  check('the bar pulled through and flipped lifts the sternum by its depression', Math.abs(flipped.lift - flipped.depression) < 0.05 && /flipped/.test(flipped.status), JSON.stringify(flipped));
   await page.click('#trainer-place-bar');
   const placed = await page.evaluate(() => ({ bar: window.pectus.state.bar, visible: window.pectus.scene.bar.visible, skin: window.pectus.state.view.skin, trainer: window.pectus.state.trainer.session }));
   check('back to the planner with the bar placed through the tunnel: the bar and the skin again',
