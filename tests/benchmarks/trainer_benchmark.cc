@@ -1,7 +1,9 @@
 // The Nuss trainer's figures (docs/benchmarks.md, "The Nuss trainer"): the servo tick's cost over the full
 // scene, the 1 kHz loop's periods, the inertial tracking's error and the drift of position integrated from
 // the accelerations, the ArUco pose error, and the pictures of docs/trainer.md.
-//   trainer_benchmark [--patient 57] [--loop-seconds 60] [--pictures DIR]
+//   trainer_benchmark [--patient 57] [--loop-seconds 60] [--spin-us 200] [--realtime-priority 0]
+//                     [--loop-only] [--pictures DIR]
+// --loop-only measures the servo loop alone (for a run on an idle machine, kept short).
 // Prints one JSON object. Exit code 3 if the shared patient table is missing.
 #include <algorithm>
 #include <chrono>
@@ -65,14 +67,14 @@ nlohmann::json TickCost(const TrainerScene& scene) {
 }
 
 // The servo loop on its thread for `seconds`, each tick a proxy update replaying an expert's session.
-nlohmann::json LoopPeriods(const TrainerScene& scene, double seconds) {
+nlohmann::json LoopPeriods(const TrainerScene& scene, double seconds, const ServoLoopOptions& options) {
   ScriptedPathOptions o;
   SimulatedHand hand(MakeScriptedPath(scene, o));
   const SessionRecord r = RunSession(scene, &hand, IntroducerSizes()[1], {}, hand.target().duration_s());
   GodObject proxy(scene, IntroducerSizes()[1]);
   proxy.Reset(r.samples.front().device_mm);
   std::size_t k = 0;
-  ServoLoop loop;
+  ServoLoop loop(options);
   loop.Start([&](double) {
     const SessionSample& s = r.samples[k++ % r.samples.size()];
     proxy.Update(s.device_mm, s.orientation, 0.001);
@@ -88,6 +90,9 @@ nlohmann::json LoopPeriods(const TrainerScene& scene, double seconds) {
           {"period_max_ms", st.period_max_ms},
           {"tick_p99_us", st.tick_p99_us},
           {"late_ticks", st.late_ticks},
+          {"spin_us", options.spin_us},
+          {"realtime_priority_asked", options.realtime_priority},
+          {"sched_fifo", st.realtime},
           {"brief", st.BriefReport()}};
 }
 
@@ -286,16 +291,25 @@ int main(int argc, char** argv) {
   int patient = 57;
   double loop_seconds = 60;
   std::string pictures;
+  ServoLoopOptions loop_options;
+  bool loop_only = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--patient" && i + 1 < argc)
       patient = std::stoi(argv[++i]);
     else if (a == "--loop-seconds" && i + 1 < argc)
       loop_seconds = std::stod(argv[++i]);
+    else if (a == "--spin-us" && i + 1 < argc)
+      loop_options.spin_us = std::stod(argv[++i]);
+    else if (a == "--realtime-priority" && i + 1 < argc)
+      loop_options.realtime_priority = std::stoi(argv[++i]);
+    else if (a == "--loop-only")
+      loop_only = true;
     else if (a == "--pictures" && i + 1 < argc)
       pictures = argv[++i];
     else {
-      std::cerr << "usage: trainer_benchmark [--patient N] [--loop-seconds S] [--pictures DIR]\n";
+      std::cerr << "usage: trainer_benchmark [--patient N] [--loop-seconds S] [--spin-us US] "
+                   "[--realtime-priority P] [--loop-only] [--pictures DIR]\n";
       return 2;
     }
   }
@@ -316,11 +330,13 @@ int main(int argc, char** argv) {
                        {"tunnel_mm", scene.tunnel.length_mm},
                        {"entry", scene.tunnel.entry.Name()},
                        {"exit", scene.tunnel.exit.Name()}};
-    report["tick_cost"] = TickCost(scene);
-    report["inertial"] = Inertial();
-    report["markers"] = Markers();
-    if (!pictures.empty()) Pictures(scene, pictures);
-    if (loop_seconds > 0) report["servo_loop"] = LoopPeriods(scene, loop_seconds);
+    if (!loop_only) {
+      report["tick_cost"] = TickCost(scene);
+      report["inertial"] = Inertial();
+      report["markers"] = Markers();
+      if (!pictures.empty()) Pictures(scene, pictures);
+    }
+    if (loop_seconds > 0) report["servo_loop"] = LoopPeriods(scene, loop_seconds, loop_options);
     std::cout << report.dump(2) << "\n";
   } catch (const Error& e) {
     std::cerr << "trainer_benchmark: " << e.what() << "\n";

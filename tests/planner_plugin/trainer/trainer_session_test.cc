@@ -183,5 +183,27 @@ TEST(ServoLoop, TicksOnItsOwnThreadAtTheRate) {
   EXPECT_NEAR(s.period_mean_ms, 1.0, 0.3);
 }
 
+TEST(ServoLoop, SpinsOrSleepsAsToldAndFallsBackSilentlyWithoutRealtimePriority) {
+  // Sleeping to the deadline (no spin) and asking for SCHED_FIFO: granted or not, the loop ticks at the
+  // rate; what it got is reported.
+  ServoLoopOptions o;
+  o.spin_us = 0;
+  o.realtime_priority = 10;
+  ServoLoop loop(o);
+  loop.Start([](double) {});
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  loop.Stop();
+  const ServoLoopStatistics s = loop.Statistics();
+  std::printf("%s (SCHED_FIFO %s)\n", s.BriefReport().c_str(), s.realtime ? "granted" : "refused");
+  EXPECT_GT(s.ticks, 70);
+  EXPECT_LT(s.ticks, 130);
+  // A spin longer than the period, or a priority out of SCHED_FIFO's range, is refused up front.
+  o.spin_us = 1500;
+  EXPECT_THROW(ServoLoop{o}, Error);
+  o.spin_us = 200;
+  o.realtime_priority = 100;
+  EXPECT_THROW(ServoLoop{o}, Error);
+}
+
 }  // namespace
 }  // namespace pectus::trainer
