@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <random>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -152,9 +153,13 @@ nlohmann::json Inertial() {
   return out;
 }
 
-nlohmann::json Markers() {
+// The ArUco pose over the sweep, the rendered images as they are or with the camera's noise added
+// (Gaussian, `noise_grey` grey levels, fixed seed).
+nlohmann::json Markers(double noise_grey) {
   const MarkerCamera camera;
   const MarkerOptions options;
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, noise_grey);
   constexpr double kDeg = 3.14159265358979323846 / 180.0;  // for the errors
   std::vector<double> mm, deg;
   int missed = 0;
@@ -162,7 +167,11 @@ nlohmann::json Markers() {
     for (double tilt = 0; tilt <= 45; tilt += 7.5) {
       for (double spin : {0.0, 37.0, 81.0}) {
         const Eigen::Isometry3d T = testing::MarkerFacingCamera(distance, tilt, spin);
-        const MarkerPoseResult r = EstimateMarkerPose(RenderMarkerView(camera, T, options), camera, options);
+        GrayImage image = RenderMarkerView(camera, T, options);
+        for (std::uint8_t& v : image.pixels) {
+          if (noise_grey > 0) v = static_cast<std::uint8_t>(std::clamp(std::lround(v + noise(rng)), 0L, 255L));
+        }
+        const MarkerPoseResult r = EstimateMarkerPose(image, camera, options);
         if (!r.found) {
           ++missed;
           continue;
@@ -176,6 +185,7 @@ nlohmann::json Markers() {
           {"missed", missed},
           {"position_mm", {{"median", Quantile(mm, 0.5)}, {"p95", Quantile(mm, 0.95)}, {"max", Max(mm)}}},
           {"rotation_deg", {{"median", Quantile(deg, 0.5)}, {"p95", Quantile(deg, 0.95)}, {"max", Max(deg)}}},
+          {"noise_grey", noise_grey},
           {"setup", "50 mm marker (DICT_4X4_50 id 7), 150-350 mm, tilt 0-45 deg, 640 x 480, f 500 px"}};
 }
 
@@ -342,7 +352,8 @@ int main(int argc, char** argv) {
     if (!loop_only) {
       report["tick_cost"] = TickCost(scene);
       report["inertial"] = Inertial();
-      report["markers"] = Markers();
+      report["markers"] = Markers(0);
+      report["markers_noisy"] = Markers(2);
       if (!pictures.empty()) Pictures(scene, pictures);
     }
     if (loop_seconds > 0) report["servo_loop"] = LoopPeriods(scene, loop_seconds, loop_options);
