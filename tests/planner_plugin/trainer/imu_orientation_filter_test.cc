@@ -46,7 +46,7 @@ TEST(ImuOrientationFilter, WithTheMagnetometerAWanderingBiasStaysWithinHalfADegr
   // 0.0003 deg/s/sqrt(s); the magnetometer with noise, hard and soft iron (calibrated from the calibration
   // wave), the room's static distortion and a slow disturbance (synthetic_imu.h). Heading is held by the
   // field, the wandering bias followed on-line: <= 0.5 deg RMS on every seed (0.20-0.31 measured,
-  // docs/benchmarks.md). Gravity alone, the same data: heading drifts (up to 1.0 deg RMS), the contrast.
+  // docs/benchmarks.md). Gravity alone, on the first five: heading drifts (up to 1.0 deg RMS), the contrast.
   double worst_marg = 0, worst_imu = 0;
   for (unsigned seed = 1; seed <= 10; ++seed) {
     testing::SyntheticImuOptions o;
@@ -54,7 +54,7 @@ TEST(ImuOrientationFilter, WithTheMagnetometerAWanderingBiasStaysWithinHalfADegr
     double worst = 0;
     const double marg = RmsError(o, true, &worst);
     double worst_gravity_only = 0;
-    const double imu = RmsError(o, false, &worst_gravity_only);
+    const double imu = seed <= 5 ? RmsError(o, false, &worst_gravity_only) : 0;  // the contrast: 5 seeds
     std::printf("seed %u, bias walk: MARG %.3f deg RMS (%.3f at worst); IMU form %.3f deg RMS\n", seed, marg,
                 worst, imu);
     EXPECT_LE(marg, 0.5) << "seed " << seed;
