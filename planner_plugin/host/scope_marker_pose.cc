@@ -26,7 +26,8 @@ double Sample(const cv::Mat& gray, double x, double y) {
   const int y0 = std::clamp(static_cast<int>(std::floor(y)), 0, gray.rows - 2);
   const double fx = std::clamp(x - x0, 0.0, 1.0), fy = std::clamp(y - y0, 0.0, 1.0);
   const auto at = [&](int r, int c) { return static_cast<double>(gray.at<std::uint8_t>(r, c)); };
-  return (1 - fy) * ((1 - fx) * at(y0, x0) + fx * at(y0, x0 + 1)) + fy * ((1 - fx) * at(y0 + 1, x0) + fx * at(y0 + 1, x0 + 1));
+  return (1 - fy) * ((1 - fx) * at(y0, x0) + fx * at(y0, x0 + 1)) +
+         fy * ((1 - fx) * at(y0 + 1, x0) + fx * at(y0 + 1, x0 + 1));
 }
 
 // The marker's corners refined by fitting a line to each side of its black square and intersecting
@@ -92,7 +93,8 @@ void RefineCornersByEdgeLines(const cv::Mat& gray, std::vector<cv::Point2f>* cor
     if ((p - c[i]).norm() > 2.0) return;  // not the same corner: keep the detector's
     c[i] = p;
   }
-  for (int i = 0; i < 4; ++i) (*corners)[i] = cv::Point2f(static_cast<float>(c[i].x()), static_cast<float>(c[i].y()));
+  for (int i = 0; i < 4; ++i)
+    (*corners)[i] = cv::Point2f(static_cast<float>(c[i].x()), static_cast<float>(c[i].y()));
 }
 
 }  // namespace

@@ -13,17 +13,19 @@ namespace {
 Eigen::Vector4d Gradient(const Eigen::Quaterniond& q, const Eigen::Vector3d& d, const Eigen::Vector3d& s) {
   const double q0 = q.w(), q1 = q.x(), q2 = q.y(), q3 = q.z();
   const double dx = d.x(), dy = d.y(), dz = d.z();
-  const Eigen::Vector3d f(
-      2 * dx * (0.5 - q2 * q2 - q3 * q3) + 2 * dy * (q0 * q3 + q1 * q2) + 2 * dz * (q1 * q3 - q0 * q2) - s.x(),
-      2 * dx * (q1 * q2 - q0 * q3) + 2 * dy * (0.5 - q1 * q1 - q3 * q3) + 2 * dz * (q0 * q1 + q2 * q3) - s.y(),
-      2 * dx * (q0 * q2 + q1 * q3) + 2 * dy * (q2 * q3 - q0 * q1) + 2 * dz * (0.5 - q1 * q1 - q2 * q2) - s.z());
+  const Eigen::Vector3d f(2 * dx * (0.5 - q2 * q2 - q3 * q3) + 2 * dy * (q0 * q3 + q1 * q2) +
+                              2 * dz * (q1 * q3 - q0 * q2) - s.x(),
+                          2 * dx * (q1 * q2 - q0 * q3) + 2 * dy * (0.5 - q1 * q1 - q3 * q3) +
+                              2 * dz * (q0 * q1 + q2 * q3) - s.y(),
+                          2 * dx * (q0 * q2 + q1 * q3) + 2 * dy * (q2 * q3 - q0 * q1) +
+                              2 * dz * (0.5 - q1 * q1 - q2 * q2) - s.z());
   Eigen::Matrix<double, 3, 4> J;
   J << 2 * dy * q3 - 2 * dz * q2, 2 * dy * q2 + 2 * dz * q3, -4 * dx * q2 + 2 * dy * q1 - 2 * dz * q0,
       -4 * dx * q3 + 2 * dy * q0 + 2 * dz * q1,  //
       -2 * dx * q3 + 2 * dz * q1, 2 * dx * q2 - 4 * dy * q1 + 2 * dz * q0, 2 * dx * q1 + 2 * dz * q3,
       -2 * dx * q0 - 4 * dy * q3 + 2 * dz * q2,  //
-      2 * dx * q2 - 2 * dy * q1, 2 * dx * q3 - 2 * dy * q0 - 4 * dz * q1, 2 * dx * q0 + 2 * dy * q3 - 4 * dz * q2,
-      2 * dx * q1 + 2 * dy * q2;
+      2 * dx * q2 - 2 * dy * q1, 2 * dx * q3 - 2 * dy * q0 - 4 * dz * q1,
+      2 * dx * q0 + 2 * dy * q3 - 4 * dz * q2, 2 * dx * q1 + 2 * dy * q2;
   return J.transpose() * f;
 }
 
@@ -43,7 +45,8 @@ MadgwickFilter::MadgwickFilter(const MadgwickOptions& options, const Eigen::Quat
 
 void MadgwickFilter::SetMagneticReference(const Eigen::Vector3d& field_world) {
   const double n = field_world.norm();
-  if (!(n > 0) || !std::isfinite(n)) ThrowUsage("Madgwick filter: the magnetic reference must be a non-zero field");
+  if (!(n > 0) || !std::isfinite(n))
+    ThrowUsage("Madgwick filter: the magnetic reference must be a non-zero field");
   field_world_ = field_world / n;
 }
 
@@ -73,7 +76,8 @@ void MadgwickFilter::Step(const Eigen::Vector3d& gyro_rad_s, const Eigen::Vector
   // Eq. 47-48 on the gradient as it is (not normalised): the rate error w_e = 2 q* (x) grad f, integrated
   // into the bias with the gain zeta.
   if (options_.zeta > 0) {
-    const Eigen::Quaterniond e = q_.conjugate() * Eigen::Quaterniond(gradient(0), gradient(1), gradient(2), gradient(3));
+    const Eigen::Quaterniond e =
+        q_.conjugate() * Eigen::Quaterniond(gradient(0), gradient(1), gradient(2), gradient(3));
     bias_ += options_.zeta * dt_s * 2.0 * e.vec();
   }
   const Eigen::Vector3d w = gyro_rad_s - bias_;

@@ -42,8 +42,8 @@ class MadgwickFilter {
   /// One sample with a magnetometer reading (MARG form): `mag` in the sensor frame, calibrated (hard and
   /// soft iron removed: magnetometer_calibration.h), any unit. Falls back to the IMU form until
   /// SetMagneticReference has been called, or when the reading is zero.
-  void Update(const Eigen::Vector3d& gyro_rad_s, const Eigen::Vector3d& accel_m_s2, const Eigen::Vector3d& mag,
-              double dt_s) noexcept;
+  void Update(const Eigen::Vector3d& gyro_rad_s, const Eigen::Vector3d& accel_m_s2,
+              const Eigen::Vector3d& mag, double dt_s) noexcept;
   /// The local magnetic field in the world frame (any unit; only its direction is used), e.g. the mean
   /// calibrated reading over a still interval turned by the orientation then. The local field, not the
   /// Earth's model: the room's static distortion is part of it.

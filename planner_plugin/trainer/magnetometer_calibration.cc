@@ -41,7 +41,8 @@ MagnetometerCalibration FitMagnetometerCalibration(const std::vector<Eigen::Vect
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(A);
   if (eig.eigenvalues().minCoeff() <= 1e-9 * eig.eigenvalues().maxCoeff() ||
       svd.singularValues()(8) < 1e-6 * svd.singularValues()(0)) {
-    ThrowBadInput(what, "the readings do not determine an ellipsoid (too few orientations, or all in a plane)");
+    ThrowBadInput(what,
+                  "the readings do not determine an ellipsoid (too few orientations, or all in a plane)");
   }
   // (p - p0)^T A (p - p0) = k with p0 = -A^-1 b / 2, k = p0^T A p0 - c.
   const Eigen::Vector3d p0 = -0.5 * A.ldlt().solve(b);
@@ -49,16 +50,16 @@ MagnetometerCalibration FitMagnetometerCalibration(const std::vector<Eigen::Vect
   if (!(k > 0)) ThrowBadInput(what, "the fitted quadric is not an ellipsoid");
   // W' = sqrt(A / k) maps the scaled readings onto the unit sphere; in uT: W (m - h) with |.| = 1, then
   // rescaled so that the corrected field keeps the readings' mean strength (det W = 1).
-  const Eigen::Matrix3d root = eig.eigenvectors() *
-                               (eig.eigenvalues() / k).cwiseSqrt().asDiagonal() *
-                               eig.eigenvectors().transpose();
+  const Eigen::Matrix3d root =
+      eig.eigenvectors() * (eig.eigenvalues() / k).cwiseSqrt().asDiagonal() * eig.eigenvectors().transpose();
   MagnetometerCalibration out;
   out.hard_iron_offset = mean + scale * p0;
   out.soft_iron_correction = root / std::cbrt(root.determinant());
   double sum = 0, sum_sq = 0;
   for (const Eigen::Vector3d& m : readings_uT) sum += out.Apply(m).norm();
   out.field_strength = sum / static_cast<double>(n);
-  for (const Eigen::Vector3d& m : readings_uT) sum_sq += std::pow(out.Apply(m).norm() - out.field_strength, 2);
+  for (const Eigen::Vector3d& m : readings_uT)
+    sum_sq += std::pow(out.Apply(m).norm() - out.field_strength, 2);
   out.rms_residual = std::sqrt(sum_sq / static_cast<double>(n));
   return out;
 }

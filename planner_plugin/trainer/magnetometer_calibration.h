@@ -15,11 +15,13 @@ namespace pectus::trainer {
 
 /// The correction of raw magnetometer readings: corrected = soft_iron_correction (raw - hard_iron_offset).
 struct MagnetometerCalibration {
-  Eigen::Vector3d hard_iron_offset = Eigen::Vector3d::Zero();                  ///< the readings' units (uT)
-  Eigen::Matrix3d soft_iron_correction = Eigen::Matrix3d::Identity();          ///< symmetric, unitless
+  Eigen::Vector3d hard_iron_offset = Eigen::Vector3d::Zero();          ///< the readings' units (uT)
+  Eigen::Matrix3d soft_iron_correction = Eigen::Matrix3d::Identity();  ///< symmetric, unitless
   double field_strength = 0;  ///< |corrected|, the mean over the readings (uT)
   double rms_residual = 0;    ///< RMS of |corrected| - field_strength over the readings (uT)
-  Eigen::Vector3d Apply(const Eigen::Vector3d& raw) const { return soft_iron_correction * (raw - hard_iron_offset); }
+  Eigen::Vector3d Apply(const Eigen::Vector3d& raw) const {
+    return soft_iron_correction * (raw - hard_iron_offset);
+  }
 };
 
 /// Fits the calibration to readings that span the orientations (at least 9, spread over the sphere).

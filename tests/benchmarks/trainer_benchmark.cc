@@ -10,8 +10,8 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
-#include <random>
 #include <nlohmann/json.hpp>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -118,9 +118,10 @@ nlohmann::json Inertial() {
         sum_sq += e * e;
         worst = std::max(worst, e);
       }
-      row[marg ? "marg" : "imu"] = {{"orientation_rms_deg", std::sqrt(sum_sq / static_cast<double>(q.size() - 1))},
-                                    {"orientation_worst_deg", worst},
-                                    {"us_per_sample", 1e6 * seconds / static_cast<double>(q.size())}};
+      row[marg ? "marg" : "imu"] = {
+          {"orientation_rms_deg", std::sqrt(sum_sq / static_cast<double>(q.size() - 1))},
+          {"orientation_worst_deg", worst},
+          {"us_per_sample", 1e6 * seconds / static_cast<double>(q.size())}};
       if (!marg) continue;
       // Eq. 16 from the end of the still interval: x += v dt + a dt^2 / 2, v += a dt, a = R f - g.
       Eigen::Vector3d x_filter = Eigen::Vector3d::Zero(), v_filter = Eigen::Vector3d::Zero();
@@ -169,7 +170,8 @@ nlohmann::json Markers(double noise_grey) {
         const Eigen::Isometry3d T = testing::MarkerFacingCamera(distance, tilt, spin);
         GrayImage image = RenderMarkerView(camera, T, options);
         for (std::uint8_t& v : image.pixels) {
-          if (noise_grey > 0) v = static_cast<std::uint8_t>(std::clamp(std::lround(v + noise(rng)), 0L, 255L));
+          if (noise_grey > 0)
+            v = static_cast<std::uint8_t>(std::clamp(std::lround(v + noise(rng)), 0L, 255L));
         }
         const MarkerPoseResult r = EstimateMarkerPose(image, camera, options);
         if (!r.found) {

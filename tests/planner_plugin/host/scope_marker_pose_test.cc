@@ -37,8 +37,9 @@ TEST(ScopeMarkerPose, RecoversTheKnownPoseOfRenderedMarkersWithinAMillimetreAndH
       }
     }
   }
-  std::printf("%d poses, 50 mm marker at 180-350 mm, tilt 0-45 deg, 640 x 480, f 500 px: worst %.3f mm, %.3f deg\n", n,
-              worst_mm, worst_deg);
+  std::printf(
+      "%d poses, 50 mm marker at 180-350 mm, tilt 0-45 deg, 640 x 480, f 500 px: worst %.3f mm, %.3f deg\n",
+      n, worst_mm, worst_deg);
   // Another marker id is not this one.
   MarkerOptions other = options;
   other.marker_id = 3;

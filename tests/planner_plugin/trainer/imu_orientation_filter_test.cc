@@ -88,8 +88,9 @@ TEST(ImuOrientationFilter, TheOnlineBiasEstimateFollowsTheWanderingBias) {
     }
     const double still_off = (testing::StillBias(imu, o.still_s) - imu.final_gyro_bias_rad_s).norm() * kDegS;
     const double online_off = (filter.gyro_bias() - imu.final_gyro_bias_rad_s).norm() * kDegS;
-    std::printf("seed %u, gyro bias at the end: the still interval's %.5f deg/s off, the on-line estimate %.5f\n",
-                seed, still_off, online_off);
+    std::printf(
+        "seed %u, gyro bias at the end: the still interval's %.5f deg/s off, the on-line estimate %.5f\n",
+        seed, still_off, online_off);
     sum_still += still_off;
     sum_online += online_off;
   }

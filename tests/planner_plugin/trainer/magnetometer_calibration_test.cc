@@ -23,8 +23,10 @@ TEST(MagnetometerCalibration, RecoversTheKnownHardAndSoftIronFromACalibrationWav
     const double offset_error = (c.hard_iron_offset - imu.hard_iron_uT).norm();
     const Eigen::Matrix3d WS = c.soft_iron_correction * imu.soft_iron;
     const double soft_error = (WS / std::cbrt(WS.determinant()) - Eigen::Matrix3d::Identity()).norm();
-    std::printf("seed %u: hard iron |%.1f| uT found within %.3f uT, soft iron within %.4f (|W S / s - I|), residual %.3f uT\n",
-                seed, imu.hard_iron_uT.norm(), offset_error, soft_error, c.rms_residual);
+    std::printf(
+        "seed %u: hard iron |%.1f| uT found within %.3f uT, soft iron within %.4f (|W S / s - I|), residual "
+        "%.3f uT\n",
+        seed, imu.hard_iron_uT.norm(), offset_error, soft_error, c.rms_residual);
     EXPECT_LT(offset_error, 0.3);
     EXPECT_LT(soft_error, 0.01);
     EXPECT_LT(c.rms_residual, 0.7);

@@ -98,7 +98,7 @@ inline SyntheticImu MakeSyntheticImu(const SyntheticImuOptions& o = {}) {
   out.hard_iron_uT = o.hard_iron_uT * mag_draw3(mag_uniform);
   const Eigen::Vector3d diagonal = mag_draw3(mag_uniform), off = mag_draw3(mag_uniform);
   out.soft_iron << 1 + o.soft_iron * diagonal.x(), o.soft_iron * off.x(), o.soft_iron * off.y(),  //
-      o.soft_iron * off.x(), 1 + o.soft_iron * diagonal.y(), o.soft_iron * off.z(),                  //
+      o.soft_iron * off.x(), 1 + o.soft_iron * diagonal.y(), o.soft_iron * off.z(),               //
       o.soft_iron * off.y(), o.soft_iron * off.z(), 1 + o.soft_iron * diagonal.z();
   const double inclination = o.inclination_deg * kDeg;
   const Eigen::Vector3d room = o.room_distortion_uT * mag_draw3(mag_uniform) / std::sqrt(3.0);
@@ -114,7 +114,8 @@ inline SyntheticImu MakeSyntheticImu(const SyntheticImuOptions& o = {}) {
     v(3) = mag_unit(mag_rng);
     out.calibration_mag_uT.push_back(reading(Eigen::Quaterniond(v(3), v(0), v(1), v(2)).normalized(), earth));
   }
-  const auto mag_every = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(o.rate_hz / o.mag_rate_hz)));
+  const auto mag_every =
+      std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(o.rate_hz / o.mag_rate_hz)));
   for (std::size_t k = 0; k < n; ++k) {
     const double t = static_cast<double>(k) * dt;
     const Eigen::Quaterniond q = SyntheticOrientation(t, o.still_s);
@@ -170,7 +171,8 @@ inline Eigen::Vector3d StillField(const SyntheticImu& imu, const MagnetometerCal
 /// from the still interval, then either the IMU form (gravity only) or the MARG form (the magnetometer
 /// calibrated from the calibration wave, the local field from the still interval).
 inline std::vector<Eigen::Quaterniond> TrackOrientation(const SyntheticImu& imu, const SyntheticImuOptions& o,
-                                                        const MadgwickOptions& options, bool use_magnetometer) {
+                                                        const MadgwickOptions& options,
+                                                        bool use_magnetometer) {
   MadgwickFilter filter(options, imu.truth.front());
   filter.SetGyroBias(StillBias(imu, o.still_s));
   MagnetometerCalibration calibration;
