@@ -24,8 +24,9 @@ struct MadgwickOptions {
   /// SetGyroBias. The bias integrates zeta times the rate error w_e = 2 q* (x) grad f, the gradient taken
   /// as it is, not normalised: proportional to the error, as Mahony's integral term is (the normalised
   /// gradient of eq. 47 points wherever the sensors' noise does once the filter has converged, and its
-  /// integral wandered: 0.63-0.66 deg RMS against 0.31 here, docs/benchmarks.md). Default 0.0015, measured
-  /// best of 0.0001-0.01 on the synthetic scope's data with a magnetometer.
+  /// integral wandered: 0.60-0.66 deg RMS against 0.31 here, docs/benchmarks.md). Default 0.0015: on the
+  /// synthetic scope's data with a magnetometer, 0.001-0.003 gave 0.30-0.35 deg RMS on the worst of 10
+  /// seeds, 0.0001 0.46 and 0.01 0.75.
   double zeta = 0.0015;
   bool IsValid(std::string* why) const;
 };
