@@ -1,6 +1,8 @@
 // pectus trainer, host side: the thoracoscope tracked by a visual marker (the dissertation tracked it with
-// ARToolkit, §4.4): an ArUco marker on the scope's handle seen by a calibrated camera, its pose by OpenCV's
-// contrib module (detection, sub-pixel corners, IPPE for a square, Levenberg-Marquardt refinement). Host
+// ARToolkit, §4.4): an ArUco marker on the scope's handle seen by a calibrated camera, found by OpenCV's
+// contrib module; its corners refined by lines fitted to the square's sides (as ARToolKit and AprilTag
+// do), its pose by IPPE for a square (both poses of the planar ambiguity), each refined by
+// Levenberg-Marquardt, the one reprojecting better kept. Host
 // side because the plugin proper links no OpenCV (docs/architecture.md); the interface speaks Eigen and
 // plain images, OpenCV stays inside the .cc.
 #pragma once

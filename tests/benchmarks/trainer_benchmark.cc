@@ -1,7 +1,9 @@
 // The Nuss trainer's figures (docs/benchmarks.md, "The Nuss trainer"): the servo tick's cost over the full
 // scene, the 1 kHz loop's periods, the inertial tracking's error and the drift of position integrated from
 // the accelerations, the ArUco pose error, and the pictures of docs/trainer.md.
-//   trainer_benchmark [--patient 57] [--loop-seconds 60] [--pictures DIR]
+//   trainer_benchmark [--patient 57] [--loop-seconds 60] [--spin-us 200] [--realtime-priority 0]
+//                     [--loop-only] [--pictures DIR]
+// --loop-only measures the servo loop alone (for a run on an idle machine, kept short).
 // Prints one JSON object. Exit code 3 if the shared patient table is missing.
 #include <algorithm>
 #include <chrono>
@@ -9,6 +11,7 @@
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -65,14 +68,14 @@ nlohmann::json TickCost(const TrainerScene& scene) {
 }
 
 // The servo loop on its thread for `seconds`, each tick a proxy update replaying an expert's session.
-nlohmann::json LoopPeriods(const TrainerScene& scene, double seconds) {
+nlohmann::json LoopPeriods(const TrainerScene& scene, double seconds, const ServoLoopOptions& options) {
   ScriptedPathOptions o;
   SimulatedHand hand(MakeScriptedPath(scene, o));
   const SessionRecord r = RunSession(scene, &hand, IntroducerSizes()[1], {}, hand.target().duration_s());
   GodObject proxy(scene, IntroducerSizes()[1]);
   proxy.Reset(r.samples.front().device_mm);
   std::size_t k = 0;
-  ServoLoop loop;
+  ServoLoop loop(options);
   loop.Start([&](double) {
     const SessionSample& s = r.samples[k++ % r.samples.size()];
     proxy.Update(s.device_mm, s.orientation, 0.001);
@@ -88,59 +91,76 @@ nlohmann::json LoopPeriods(const TrainerScene& scene, double seconds) {
           {"period_max_ms", st.period_max_ms},
           {"tick_p99_us", st.tick_p99_us},
           {"late_ticks", st.late_ticks},
+          {"spin_us", options.spin_us},
+          {"realtime_priority_asked", options.realtime_priority},
+          {"sched_fifo", st.realtime},
           {"brief", st.BriefReport()}};
 }
 
-// The Madgwick filter on 5 min of synthetic scope motion, and the position integrated from the
-// accelerations (Eq. 16) with the filter's orientation and with the true one.
+// The Madgwick filter on 5 min of synthetic scope motion (10 seeds, the gyro's bias wandering): the MARG
+// form (the magnetometer holding the heading, the bias followed on-line) against the IMU form (gravity
+// only) on the same data, and the position integrated from the accelerations (Eq. 16) with the MARG
+// form's orientation and with the true one.
 nlohmann::json Inertial() {
   nlohmann::json out = nlohmann::json::array();
-  for (unsigned seed : {1u, 2u, 3u, 4u, 5u}) {
+  for (unsigned seed = 1; seed <= 10; ++seed) {
     testing::SyntheticImuOptions o;
     o.seed = seed;
     const testing::SyntheticImu imu = testing::MakeSyntheticImu(o);
-    MadgwickFilter filter({}, imu.truth.front());
-    filter.SetGyroBias(testing::StillBias(imu, o.still_s));
-    double sum_sq = 0, worst = 0;
-    // Eq. 16 from the end of the still interval: x += v dt + a dt^2 / 2, v += a dt, a = R f - g.
-    Eigen::Vector3d x_filter = Eigen::Vector3d::Zero(), v_filter = Eigen::Vector3d::Zero();
-    Eigen::Vector3d x_truth_rot = Eigen::Vector3d::Zero(), v_truth_rot = Eigen::Vector3d::Zero();
-    Eigen::Vector3d x_true = Eigen::Vector3d::Zero(), v_true = Eigen::Vector3d::Zero();
-    nlohmann::json drift;
-    const Eigen::Vector3d g(0, 0, 9.80665);
-    for (std::size_t k = 1; k < imu.time_s.size(); ++k) {
-      const double dt = imu.time_s[k] - imu.time_s[k - 1];
-      filter.Update(imu.gyro_rad_s[k], imu.accel_m_s2[k], dt);
-      const double e = testing::AngleDeg(filter.orientation(), imu.truth[k]);
-      sum_sq += e * e;
-      worst = std::max(worst, e);
-      if (imu.time_s[k] <= o.still_s) continue;
-      const Eigen::Vector3d a_f = filter.orientation() * imu.accel_m_s2[k] - g;
-      const Eigen::Vector3d a_t = imu.truth[k] * imu.accel_m_s2[k] - g;
-      const Eigen::Vector3d a_true = imu.true_accel_world_m_s2[k];
-      x_filter += v_filter * dt + 0.5 * a_f * dt * dt, v_filter += a_f * dt;
-      x_truth_rot += v_truth_rot * dt + 0.5 * a_t * dt * dt, v_truth_rot += a_t * dt;
-      x_true += v_true * dt + 0.5 * a_true * dt * dt, v_true += a_true * dt;
-      const double since = imu.time_s[k] - o.still_s;
-      for (double mark : {1.0, 10.0, 60.0, 280.0}) {
-        if (std::abs(since - mark) < 0.5 * dt) {
-          drift[std::to_string(static_cast<int>(mark)) + "s"] = {
-              {"with_filter_orientation_m", (x_filter - x_true).norm()},
-              {"with_true_orientation_m", (x_truth_rot - x_true).norm()}};
+    nlohmann::json row = {{"seed", seed}};
+    for (const bool marg : {true, false}) {
+      const auto t0 = Clock::now();
+      const std::vector<Eigen::Quaterniond> q = testing::TrackOrientation(imu, o, {}, marg);
+      const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+      double sum_sq = 0, worst = 0;
+      for (std::size_t k = 1; k < q.size(); ++k) {
+        const double e = testing::AngleDeg(q[k], imu.truth[k]);
+        sum_sq += e * e;
+        worst = std::max(worst, e);
+      }
+      row[marg ? "marg" : "imu"] = {
+          {"orientation_rms_deg", std::sqrt(sum_sq / static_cast<double>(q.size() - 1))},
+          {"orientation_worst_deg", worst},
+          {"us_per_sample", 1e6 * seconds / static_cast<double>(q.size())}};
+      if (!marg) continue;
+      // Eq. 16 from the end of the still interval: x += v dt + a dt^2 / 2, v += a dt, a = R f - g.
+      Eigen::Vector3d x_filter = Eigen::Vector3d::Zero(), v_filter = Eigen::Vector3d::Zero();
+      Eigen::Vector3d x_truth_rot = Eigen::Vector3d::Zero(), v_truth_rot = Eigen::Vector3d::Zero();
+      Eigen::Vector3d x_true = Eigen::Vector3d::Zero(), v_true = Eigen::Vector3d::Zero();
+      nlohmann::json drift;
+      const Eigen::Vector3d g(0, 0, 9.80665);
+      for (std::size_t k = 1; k < imu.time_s.size(); ++k) {
+        if (imu.time_s[k] <= o.still_s) continue;
+        const double dt = imu.time_s[k] - imu.time_s[k - 1];
+        const Eigen::Vector3d a_f = q[k] * imu.accel_m_s2[k] - g;
+        const Eigen::Vector3d a_t = imu.truth[k] * imu.accel_m_s2[k] - g;
+        const Eigen::Vector3d a_true = imu.true_accel_world_m_s2[k];
+        x_filter += v_filter * dt + 0.5 * a_f * dt * dt, v_filter += a_f * dt;
+        x_truth_rot += v_truth_rot * dt + 0.5 * a_t * dt * dt, v_truth_rot += a_t * dt;
+        x_true += v_true * dt + 0.5 * a_true * dt * dt, v_true += a_true * dt;
+        const double since = imu.time_s[k] - o.still_s;
+        for (double mark : {1.0, 10.0, 60.0, 280.0}) {
+          if (std::abs(since - mark) < 0.5 * dt) {
+            drift[std::to_string(static_cast<int>(mark)) + "s"] = {
+                {"with_filter_orientation_m", (x_filter - x_true).norm()},
+                {"with_true_orientation_m", (x_truth_rot - x_true).norm()}};
+          }
         }
       }
+      row["position_drift_from_accelerations"] = drift;
     }
-    out.push_back({{"seed", seed},
-                   {"orientation_rms_deg", std::sqrt(sum_sq / static_cast<double>(imu.time_s.size() - 1))},
-                   {"orientation_worst_deg", worst},
-                   {"position_drift_from_accelerations", drift}});
+    out.push_back(row);
   }
   return out;
 }
 
-nlohmann::json Markers() {
+// The ArUco pose over the sweep, the rendered images as they are or with the camera's noise added
+// (Gaussian, `noise_grey` grey levels, fixed seed).
+nlohmann::json Markers(double noise_grey) {
   const MarkerCamera camera;
   const MarkerOptions options;
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, noise_grey);
   constexpr double kDeg = 3.14159265358979323846 / 180.0;  // for the errors
   std::vector<double> mm, deg;
   int missed = 0;
@@ -148,7 +168,12 @@ nlohmann::json Markers() {
     for (double tilt = 0; tilt <= 45; tilt += 7.5) {
       for (double spin : {0.0, 37.0, 81.0}) {
         const Eigen::Isometry3d T = testing::MarkerFacingCamera(distance, tilt, spin);
-        const MarkerPoseResult r = EstimateMarkerPose(RenderMarkerView(camera, T, options), camera, options);
+        GrayImage image = RenderMarkerView(camera, T, options);
+        for (std::uint8_t& v : image.pixels) {
+          if (noise_grey > 0)
+            v = static_cast<std::uint8_t>(std::clamp(std::lround(v + noise(rng)), 0L, 255L));
+        }
+        const MarkerPoseResult r = EstimateMarkerPose(image, camera, options);
         if (!r.found) {
           ++missed;
           continue;
@@ -162,6 +187,7 @@ nlohmann::json Markers() {
           {"missed", missed},
           {"position_mm", {{"median", Quantile(mm, 0.5)}, {"p95", Quantile(mm, 0.95)}, {"max", Max(mm)}}},
           {"rotation_deg", {{"median", Quantile(deg, 0.5)}, {"p95", Quantile(deg, 0.95)}, {"max", Max(deg)}}},
+          {"noise_grey", noise_grey},
           {"setup", "50 mm marker (DICT_4X4_50 id 7), 150-350 mm, tilt 0-45 deg, 640 x 480, f 500 px"}};
 }
 
@@ -286,16 +312,25 @@ int main(int argc, char** argv) {
   int patient = 57;
   double loop_seconds = 60;
   std::string pictures;
+  ServoLoopOptions loop_options;
+  bool loop_only = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--patient" && i + 1 < argc)
       patient = std::stoi(argv[++i]);
     else if (a == "--loop-seconds" && i + 1 < argc)
       loop_seconds = std::stod(argv[++i]);
+    else if (a == "--spin-us" && i + 1 < argc)
+      loop_options.spin_us = std::stod(argv[++i]);
+    else if (a == "--realtime-priority" && i + 1 < argc)
+      loop_options.realtime_priority = std::stoi(argv[++i]);
+    else if (a == "--loop-only")
+      loop_only = true;
     else if (a == "--pictures" && i + 1 < argc)
       pictures = argv[++i];
     else {
-      std::cerr << "usage: trainer_benchmark [--patient N] [--loop-seconds S] [--pictures DIR]\n";
+      std::cerr << "usage: trainer_benchmark [--patient N] [--loop-seconds S] [--spin-us US] "
+                   "[--realtime-priority P] [--loop-only] [--pictures DIR]\n";
       return 2;
     }
   }
@@ -316,11 +351,14 @@ int main(int argc, char** argv) {
                        {"tunnel_mm", scene.tunnel.length_mm},
                        {"entry", scene.tunnel.entry.Name()},
                        {"exit", scene.tunnel.exit.Name()}};
-    report["tick_cost"] = TickCost(scene);
-    report["inertial"] = Inertial();
-    report["markers"] = Markers();
-    if (!pictures.empty()) Pictures(scene, pictures);
-    if (loop_seconds > 0) report["servo_loop"] = LoopPeriods(scene, loop_seconds);
+    if (!loop_only) {
+      report["tick_cost"] = TickCost(scene);
+      report["inertial"] = Inertial();
+      report["markers"] = Markers(0);
+      report["markers_noisy"] = Markers(2);
+      if (!pictures.empty()) Pictures(scene, pictures);
+    }
+    if (loop_seconds > 0) report["servo_loop"] = LoopPeriods(scene, loop_seconds, loop_options);
     std::cout << report.dump(2) << "\n";
   } catch (const Error& e) {
     std::cerr << "trainer_benchmark: " << e.what() << "\n";

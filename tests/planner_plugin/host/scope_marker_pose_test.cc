@@ -17,9 +17,11 @@ TEST(ScopeMarkerPose, RecoversTheKnownPoseOfRenderedMarkersWithinAMillimetreAndH
   const MarkerOptions options;
   double worst_mm = 0, worst_deg = 0;
   int n = 0;
-  for (double distance : {180.0, 250.0, 320.0}) {
-    for (double tilt : {0.0, 20.0, 35.0}) {
-      for (double spin : {10.0, 100.0}) {
+  // Near and far, frontal to 45 degrees: the far, nearly frontal poses are where a square's pose is
+  // worst conditioned (1.39 mm and 1.38 deg there with cornerSubPix's corners, docs/trainer.md).
+  for (double distance : {180.0, 250.0, 350.0}) {
+    for (double tilt : {0.0, 7.5, 20.0, 35.0, 45.0}) {
+      for (double spin : {0.0, 81.0}) {
         const Eigen::Isometry3d T = testing::MarkerFacingCamera(distance, tilt, spin);
         const GrayImage image = RenderMarkerView(camera, T, options);
         const MarkerPoseResult r = EstimateMarkerPose(image, camera, options);
@@ -35,8 +37,9 @@ TEST(ScopeMarkerPose, RecoversTheKnownPoseOfRenderedMarkersWithinAMillimetreAndH
       }
     }
   }
-  std::printf("%d poses, 50 mm marker at 180-320 mm, 640 x 480, f 500 px: worst %.3f mm, %.3f deg\n", n,
-              worst_mm, worst_deg);
+  std::printf(
+      "%d poses, 50 mm marker at 180-350 mm, tilt 0-45 deg, 640 x 480, f 500 px: worst %.3f mm, %.3f deg\n",
+      n, worst_mm, worst_deg);
   // Another marker id is not this one.
   MarkerOptions other = options;
   other.marker_id = 3;

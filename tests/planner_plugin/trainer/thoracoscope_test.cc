@@ -3,10 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdio>
-
-#include "planner_plugin/trainer/imu_orientation_filter.h"
-#include "tests/planner_plugin/trainer/synthetic_imu.h"
 
 namespace pectus::trainer {
 namespace {
@@ -66,50 +62,6 @@ TEST(Thoracoscope, CameraProjectsKnownPointsWithinHalfAPixelOfThePinholeModel) {
     EXPECT_NEAR(axis_pixel.x(), 0.5 * (o.width_px - 1), 1e-9);
     // Behind the camera: not projected.
     EXPECT_FALSE(camera.Project(pose, tip - R_scene_camera * Eigen::Vector3d(0, 0, 10), &edge));
-  }
-}
-
-// The RMS orientation error over 5 min at 100 Hz of the filter on synthetic data (bias from the first 10 s,
-// when the scope lies still at its port), degrees.
-double RmsError(const testing::SyntheticImuOptions& o, double* worst) {
-  const testing::SyntheticImu imu = testing::MakeSyntheticImu(o);
-  MadgwickFilter filter({}, imu.truth.front());
-  filter.SetGyroBias(testing::StillBias(imu, o.still_s));
-  double sum_sq = 0;
-  *worst = 0;
-  for (std::size_t k = 1; k < imu.time_s.size(); ++k) {
-    filter.Update(imu.gyro_rad_s[k], imu.accel_m_s2[k], imu.time_s[k] - imu.time_s[k - 1]);
-    const double e = testing::AngleDeg(filter.orientation(), imu.truth[k]);
-    sum_sq += e * e;
-    *worst = std::max(*worst, e);
-  }
-  return std::sqrt(sum_sq / static_cast<double>(imu.time_s.size() - 1));
-}
-
-TEST(ImuOrientationFilter, FiveMinutesOfNoisyGyroWithATurnOnBiasStayWithinHalfADegreeRms) {
-  // White noise and a turn-on bias of up to 0.5 deg/s per axis, measured at the port: <= 0.5 deg RMS.
-  for (unsigned seed : {1u, 2u, 3u, 4u, 5u}) {
-    testing::SyntheticImuOptions o;
-    o.seed = seed;
-    o.gyro_bias_walk_deg_s_rts = 0;
-    double worst = 0;
-    const double rms = RmsError(o, &worst);
-    std::printf("seed %u, no bias walk: %.3f deg RMS, %.3f deg at worst\n", seed, rms, worst);
-    EXPECT_LE(rms, 0.5);
-  }
-}
-
-TEST(ImuOrientationFilter, AWanderingBiasTurnsIntoHeadingErrorNothingCorrects) {
-  // With the bias also wandering (0.0003 deg/s/sqrt(s)), the heading, which gravity does not see, drifts:
-  // 0.22-1.0 deg RMS over these seeds (docs/trainer.md): the 0.5 deg holds on some only. Guarded
-  // here at 1.5 deg so that a worse filter shows.
-  for (unsigned seed : {1u, 2u, 3u, 4u, 5u}) {
-    testing::SyntheticImuOptions o;
-    o.seed = seed;
-    double worst = 0;
-    const double rms = RmsError(o, &worst);
-    std::printf("seed %u, bias walk: %.3f deg RMS, %.3f deg at worst\n", seed, rms, worst);
-    EXPECT_LE(rms, 1.5);
   }
 }
 

@@ -183,5 +183,32 @@ TEST(ServoLoop, TicksOnItsOwnThreadAtTheRate) {
   EXPECT_NEAR(s.period_mean_ms, 1.0, 0.3);
 }
 
+TEST(ServoLoop, SpinsOrSleepsAsToldAndFallsBackSilentlyWithoutRealtimePriority) {
+  // Sleeping to the deadline (no spin) and asking for SCHED_FIFO: granted or not, the loop ticks at the
+  // rate; what it got is reported.
+  ServoLoopOptions o;
+  o.spin_us = 0;
+  o.realtime_priority = 10;
+  ServoLoop loop(o);
+  // Counted from the loop's first tick, not by a wall-clock window: on a loaded machine the thread may
+  // start late (it once started after the 100 ms such a window gave it, at load 20).
+  std::atomic<int> ticks{0};
+  loop.Start([&](double) { ticks.fetch_add(1); });
+  for (int i = 0; i < 10000 && ticks.load() < 100; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  loop.Stop();
+  const ServoLoopStatistics s = loop.Statistics();
+  std::printf("%s (SCHED_FIFO %s)\n", s.BriefReport().c_str(), s.realtime ? "granted" : "refused");
+  EXPECT_EQ(s.ticks, ticks.load());
+  EXPECT_GE(s.ticks, 100);
+  EXPECT_LT(s.ticks, 1000);  // stopped soon after the 100th
+  // A spin longer than the period, or a priority out of SCHED_FIFO's range, is refused up front.
+  o.spin_us = 1500;
+  EXPECT_THROW(ServoLoop{o}, Error);
+  o.spin_us = 200;
+  o.realtime_priority = 100;
+  EXPECT_THROW(ServoLoop{o}, Error);
+}
+
 }  // namespace
 }  // namespace pectus::trainer
