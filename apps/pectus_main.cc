@@ -20,7 +20,8 @@ namespace pectus::cli {
 
 std::filesystem::path StageOutput(Context* context, const Command& command,
                                   const std::filesystem::path& target) {
-  RefuseOverwritingInputs(target, command.Inputs());
+  if (!context->inputs) context->inputs.emplace(command.Inputs());
+  context->inputs->Refuse(target);
   return context->outputs.Stage(target);
 }
 

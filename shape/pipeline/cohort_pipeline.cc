@@ -1,5 +1,7 @@
 #include "shape/pipeline/cohort_pipeline.h"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -520,10 +522,16 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
   SubjectStore modelled(run.work, "model", inputs), finished(run.work, "outputs", inputs);
   std::exception_ptr model_error;
   if (runner.IsLeader()) {
+    // The other processes wait meanwhile: the leader takes their cores (the bytes do not depend on it).
+    const int threads = omp_get_max_threads();
+    omp_set_num_threads(runner.SerialThreads());
     try {
+      Clock::time_point start = Clock::now();
       result.subjects.reserve(inputs.size());
       for (int i = 0; i < n; ++i) result.subjects.push_back(in_memory ? registered.Take(i) : grids.Get(i));
+      result.timings_s.Add("read back", Since(start));
       BuildModelOnLeader(options, &result);
+      start = Clock::now();
       if (!in_memory) {
         std::error_code ec;
         fs::remove_all(run.work / "model", ec);
@@ -532,9 +540,11 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
         }
         if (result.model) WriteMeanRecord(run.work, *result.model);
       }
+      result.timings_s.Add("model records", Since(start));
     } catch (...) {
       model_error = std::current_exception();
     }
+    omp_set_num_threads(threads);
   }
   // The mean, once per process, for the third task (read from the work folder on other processes).
   std::once_flag mean_once;
@@ -586,7 +596,9 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
   const std::vector<int> no_tasks;
   runner.Run(model_error ? no_tasks : finished.Missing(largest_first), finish);
   if (runner.IsLeader() && !in_memory && !model_error) {
+    const Clock::time_point start = Clock::now();
     for (int i = 0; i < n; ++i) result.subjects[i] = finished.Get(i);
+    result.timings_s.Add("read back", Since(start));
   }
 
   // 9. The files that need every subject's distances (the report's maps on one colour scale), on the farm.
@@ -602,11 +614,17 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
     }
     std::once_flag scale_once;
     double scale = 0.0;
+    std::mutex seconds_mutex;
+    double seconds = 0.0;  // this process's part
     runner.Run(model_error ? no_tasks : largest_first, [&](int i) {
+      const Clock::time_point start = Clock::now();
       std::call_once(scale_once, [&] { scale = ReadExactText(scale_path); });
       const SubjectOutcome s = in_memory ? result.subjects[i] : finished.Get(i);
       run.subject_pictures(s, scale, SubjectFilesFolder(run.work, s.name));
+      const std::lock_guard<std::mutex> lock(seconds_mutex);
+      seconds += Since(start);
     });
+    result.timings_s.Add("pictures", seconds);
   }
   if (model_error) std::rethrow_exception(model_error);
   if (!runner.IsLeader()) return result;
