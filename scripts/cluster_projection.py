@@ -41,6 +41,9 @@ def main():
     ap.add_argument("--ranks", type=int, nargs="+", default=[1, 2, 8, 16, 32, 64])
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--farm-only", action="store_true", help="leave rank 0's own part out (S = 0)")
+    ap.add_argument("--serial-from", metavar="REPORT",
+                    help="take S(N) from this run's report instead (a run of another size, e.g. 2000 subjects: "
+                         "its rank-0 stages, scaled from its N as above)")
     a = ap.parse_args()
     r = json.load(open(a.report))
     subjects = [s for s in r["subjects"]]
@@ -54,6 +57,14 @@ def main():
     linear = sum(total.get(k, 0.0) for k in ("read back", "model records", "mean measures", "write"))
     if not any(phase_c):  # a run from before the outputs were farmed: its distances ran on rank 0
         linear += total.get("distance", 0.0)
+    n_serial = n0
+    if a.serial_from:
+        other = json.load(open(a.serial_from))
+        n_serial = len(other["subjects"])
+        model = sum(other["timings_s"].get(k, 0.0) for k in ("model", "quality"))
+        linear = sum(other["timings_s"].get(k, 0.0) for k in ("read back", "model records", "mean measures", "write"))
+        print(f"rank 0 alone from {a.serial_from} ({n_serial} subjects): model {model:.2f} s, records and "
+              f"outputs {linear:.2f} s")
     print(f"measured: {n0} subjects; per subject surface {sum(phase_a)/n0:.3f} s, registration and grid "
           f"{sum(phase_b)/n0:.3f} s, distance and files {sum(phase_c)/n0:.3f} s, picture {phase_d[0]:.3f} s "
           f"(mean); rank 0 alone: model {model:.2f} s, records and outputs {linear:.2f} s")
@@ -64,7 +75,7 @@ def main():
         else:
             draw = [rng.randrange(n0) for _ in range(n)]
             ta, tb, tc, td = ([t[i] for i in draw] for t in (phase_a, phase_b, phase_c, phase_d))
-        serial = 0.0 if a.farm_only else model * (n / n0) ** 2 + linear * (n / n0)
+        serial = 0.0 if a.farm_only else model * (n / n_serial) ** 2 + linear * (n / n_serial)
         t1 = sum(ta) + sum(tb) + sum(tc) + sum(td) + serial
         for p in a.ranks:
             for largest, name in ((True, "largest first"), (False, "subject order")):
