@@ -215,8 +215,8 @@ void BuildModelOnLeader(const PipelineOptions& options, PipelineResult* result) 
     l.position = sum / count;
   }
   try {
-    result->mean_measures =
-        MeasureChest(model.ToMesh(model.mean), ComputeChestRoi(mean_landmarks, options.roi, "mean landmarks"));
+    result->mean_measures = MeasureChest(model.ToMesh(model.mean),
+                                         ComputeChestRoi(mean_landmarks, options.roi, "mean landmarks"));
   } catch (const Error& e) {
     result->mean_measures.message = e.what();
   }
@@ -378,8 +378,8 @@ fs::path SubjectFilesFolder(const fs::path& work, const std::string& name) { ret
 
 void RemoveSubjectResults(const fs::path& work) {
   std::error_code ec;
-  for (const char* phase : {"surface", "registered", "grids", "model", "outputs", "files", "mean.rec",
-                            "picture_scale"}) {
+  for (const char* phase :
+       {"surface", "registered", "grids", "model", "outputs", "files", "mean.rec", "picture_scale"}) {
     fs::remove_all(work / phase, ec);
     if (ec) ThrowFailure("cannot remove the subjects' results: " + ec.message(), (work / phase).string());
   }
@@ -576,7 +576,8 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
     }
     if (s.ok && the_mean()) {
       const Clock::time_point start = Clock::now();
-      s.to_mean = ComputeDistanceMap(s.grid.mesh.vertices.positions, *the_mean(), options.distance, "mean shape");
+      s.to_mean =
+          ComputeDistanceMap(s.grid.mesh.vertices.positions, *the_mean(), options.distance, "mean shape");
       s.timings_s.Add("distance", Since(start));
     }
     if (run.subject_files) {

@@ -257,8 +257,8 @@ std::vector<ReportFile> MakePipelineReport(const PipelineResult& r, const Pipeli
       picture = file.path;
       files.push_back(std::move(file));
     }
-    html << "<div><img src=\"" << picture << "\"><br>RMS " << Num(s.to_mean.stats.rms) << " mm, max " << Num(s.to_mean.stats.max_abs)
-         << " mm</div>";
+    html << "<div><img src=\"" << picture << "\"><br>RMS " << Num(s.to_mean.stats.rms) << " mm, max "
+         << Num(s.to_mean.stats.max_abs) << " mm</div>";
   }
   html << "</div>\n<p>Stage times per subject are in the JSON report; merge "
        << Num(r.timings_s.Seconds("merge"), 1) << " s, reconstruct "

@@ -144,13 +144,14 @@ Similarity3 SimilarityFrom(const json& j) {
 // its distances to the mean.
 json ModelJson(const SubjectOutcome& s) {
   const DistanceStats& d = s.to_mean.stats;
-  return {{"T_aligned_registered", SimilarityJson(s.T_aligned_registered)},
-          {"filled", {s.vertices_filled_from_cohort, s.largest_fill_change_mm}},
-          {"scores", Blob(s.scores)},
-          {"distances", Blob(s.to_mean.distances)},
-          {"closest", Blob(s.to_mean.closest)},
-          {"stats", {d.count, d.min, d.max, d.max_abs, d.mean, d.mean_abs, d.rms, d.p50, d.p90, d.p95, d.p99}},
-          {"message", s.to_mean.message}};
+  return {
+      {"T_aligned_registered", SimilarityJson(s.T_aligned_registered)},
+      {"filled", {s.vertices_filled_from_cohort, s.largest_fill_change_mm}},
+      {"scores", Blob(s.scores)},
+      {"distances", Blob(s.to_mean.distances)},
+      {"closest", Blob(s.to_mean.closest)},
+      {"stats", {d.count, d.min, d.max, d.max_abs, d.mean, d.mean_abs, d.rms, d.p50, d.p90, d.p95, d.p99}},
+      {"message", s.to_mean.message}};
 }
 
 void ModelFrom(const json& j, SubjectOutcome* s) {

@@ -103,8 +103,8 @@ TEST(ImputeMissingVertices, AModelOfTheFirstOthersFillsALargerCohort) {
   const int N = 30;
   const Eigen::MatrixXd truth = LowRankShapes(N, 0.01, &rng);
   Mask seen = Mask::Constant(N, 441, true);
-  Hide(3, 30.0, 30.0, 10.0, &seen);   // within the model's rows
-  Hide(17, 0.0, 60.0, 15.0, &seen);   // beyond them
+  Hide(3, 30.0, 30.0, 10.0, &seen);  // within the model's rows
+  Hide(17, 0.0, 60.0, 15.0, &seen);  // beyond them
   Hide(29, 45.0, 15.0, 8.0, &seen);
   Eigen::MatrixXd start = truth;
   for (int n : {3, 17, 29})
