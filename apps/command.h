@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,8 @@ struct Context {
   /// Where per-subject tasks run: this process's threads, or the MPI ranks under mpirun. Only the
   /// runner's leader writes the report and commits the outputs.
   TaskRunner* runner = nullptr;
+  /// The command's inputs, resolved at the first StageOutput, which refuses every output among them.
+  std::optional<InputGuard> inputs;
 };
 
 /// One `pectus <name>` subcommand.

@@ -40,6 +40,15 @@ MpiSession::MpiSession(int* argc, char*** argv) {
 
 MpiSession::~MpiSession() { MPI_Finalize(); }
 
+int MpiSession::NodeRanks() const {
+  MPI_Comm node;
+  MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank_, MPI_INFO_NULL, &node);
+  int size = 1;
+  MPI_Comm_size(node, &size);
+  MPI_Comm_free(&node);
+  return size;
+}
+
 void MpiTaskRunner::HandOut(const std::vector<int>& order, std::string* first_error) const {
   std::size_t next = 0;
   int finished = 0;
@@ -75,8 +84,15 @@ void MpiTaskRunner::Run(const std::vector<int>& order, const std::function<void(
   for (;;) {
     MPI_Send(error.data(), static_cast<int>(error.size()), MPI_CHAR, 0, kRequestTag, MPI_COMM_WORLD);
     error.clear();
-    int next = -1;
-    MPI_Recv(&next, 1, MPI_INT, 0, kTaskTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    // Wait for the answer without spinning: rank 0 may be busy alone for a while (the model), and a
+    // waiting rank should leave its core to it (TaskRunner::SerialThreads).
+    int next = -1, answered = 0;
+    MPI_Request request;
+    MPI_Irecv(&next, 1, MPI_INT, 0, kTaskTag, MPI_COMM_WORLD, &request);
+    for (MPI_Test(&request, &answered, MPI_STATUS_IGNORE); !answered;
+         MPI_Test(&request, &answered, MPI_STATUS_IGNORE)) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
     if (next < 0) break;
     try {
       task(next);
@@ -95,6 +111,8 @@ void MpiTaskRunner::Run(const std::vector<int>& order, const std::function<void(
 }
 
 void MpiTaskRunner::Barrier() { MPI_Barrier(MPI_COMM_WORLD); }
+
+int MpiTaskRunner::SerialThreads() const { return omp_get_max_threads() * node_ranks_; }
 
 std::string MpiTaskRunner::Describe() const {
   return "MPI, " + std::to_string(size_) + " rank(s) of " + std::to_string(omp_get_max_threads()) +

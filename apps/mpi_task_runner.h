@@ -27,6 +27,8 @@ class MpiSession {
   MpiSession& operator=(const MpiSession&) = delete;
   int rank() const { return rank_; }
   int size() const { return size_; }
+  /// Ranks on this rank's node (this one included). Collective: every rank calls it.
+  int NodeRanks() const;
 
  private:
   int rank_ = 0, size_ = 1;
@@ -35,9 +37,12 @@ class MpiSession {
 /// The task farm over MPI_COMM_WORLD (see the file's comment).
 class MpiTaskRunner : public TaskRunner {
  public:
-  explicit MpiTaskRunner(const MpiSession& session) : rank_(session.rank()), size_(session.size()) {}
+  explicit MpiTaskRunner(const MpiSession& session)
+      : rank_(session.rank()), size_(session.size()), node_ranks_(session.NodeRanks()) {}
   void Run(const std::vector<int>& order, const std::function<void(int)>& task) override;
   bool IsLeader() const override { return rank_ == 0; }
+  /// This rank's threads times the ranks on its node: they wait (without spinning) while rank 0 works alone.
+  int SerialThreads() const override;
   int Processes() const override { return size_; }
   void Barrier() override;
   std::string Describe() const override;
@@ -46,7 +51,7 @@ class MpiTaskRunner : public TaskRunner {
   // Rank 0's hand-out loop: answers each rank's request with the next task, or -1 when none is left,
   // until every rank had its -1; keeps the first task error a request carried.
   void HandOut(const std::vector<int>& order, std::string* first_error) const;
-  int rank_, size_;
+  int rank_, size_, node_ranks_;
 };
 
 }  // namespace pectus::cli

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <Eigen/Core>
 #include <algorithm>
 #include <cstdio>
 #include <optional>
@@ -20,7 +21,8 @@ namespace pectus::cli {
 
 std::filesystem::path StageOutput(Context* context, const Command& command,
                                   const std::filesystem::path& target) {
-  RefuseOverwritingInputs(target, command.Inputs());
+  if (!context->inputs) context->inputs.emplace(command.Inputs());
+  context->inputs->Refuse(target);
   return context->outputs.Stage(target);
 }
 
@@ -115,6 +117,11 @@ int Main(int argc, char** argv) {
   const int all_cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   context.threads = threads > 0 ? threads : under_mpi ? 1 : all_cores;
   omp_set_num_threads(context.threads);
+  // Eigen's own threads stay off: it splits a large product by the thread count, and so its sums' order
+  // (a 200-subject model's Gram matrix differed in the last bits between 1 and 2 threads). Pectus's loops
+  // run in parallel instead, each item computed alone, so the bytes of every output do not depend on
+  // --threads or the ranks (docs/cluster.md).
+  Eigen::setNbThreads(1);
   for (auto& [sub, command] : subs) {
     if (!sub->parsed()) continue;
     try {

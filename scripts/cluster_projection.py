@@ -4,13 +4,18 @@
 Input: the --report JSON of a run with one thread (`pectus pipeline C --out O --threads 1 --report r.json`):
 each subject's stage times (s) and the run's own stages. The model of a run on P ranks of one thread each:
 
-  T(P) = A(P) + B(P) + S(N)
-  A(P), B(P)  the makespans of the two farmed phases: subjects' surfaces (read, merge, reconstruct), then
-              their registration and grid (register, resample, measures), each task handed to the first
-              free rank in the order given (largest first, or the subjects' order), a rank waiting for the
-              last task of phase A before phase B (the reference must be known);
-  S(N)        rank 0 alone: the model (Procrustes, imputation, PCA: taken as growing with N^2, the Gram
-              matrix), the distance maps and the outputs (with N), measured on this run.
+  T(P) = A(P) + B(P) + C(P) + D(P) + S(N)
+  A(P) .. D(P) the makespans of the four farmed phases: subjects' surfaces (read, merge, reconstruct), their
+              registration and grid (register, resample, measures), their distance to the mean and output
+              files (distance, files), their report pictures (the run's "pictures" spread evenly over the
+              subjects); each task handed to the first free rank in the order given (largest first, or the
+              subjects' order), every rank waiting for the last task of one phase before the next (the
+              reference, the model, the colour scale);
+  S(N)        rank 0 alone: the model (Procrustes, imputation, PCA: "model", "quality", taken as growing with
+              N^2, the Gram matrix) and what grows with N: reading the records back, writing the model's
+              per-subject records, the mean's measures, the outputs ("read back", "model records",
+              "mean measures", "write"), measured on this run. Before the outputs were farmed, the report
+              had "distance" on rank 0 and the subjects' files in "write": those count in S as they ran.
   efficiency  T(1) / (P T(P)).
 --farm-only leaves S out: how the farm itself scales.
 
@@ -36,33 +41,45 @@ def main():
     ap.add_argument("--ranks", type=int, nargs="+", default=[1, 2, 8, 16, 32, 64])
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--farm-only", action="store_true", help="leave rank 0's own part out (S = 0)")
+    ap.add_argument("--serial-from", metavar="REPORT",
+                    help="take S(N) from this run's report instead (a run of another size, e.g. 2000 subjects: "
+                         "its rank-0 stages, scaled from its N as above)")
     a = ap.parse_args()
     r = json.load(open(a.report))
     subjects = [s for s in r["subjects"]]
     phase_a = [sum(s["timings_s"].get(k, 0.0) for k in ("read", "merge", "reconstruct")) for s in subjects]
     phase_b = [sum(s["timings_s"].get(k, 0.0) for k in ("register", "resample", "measures")) for s in subjects]
+    phase_c = [sum(s["timings_s"].get(k, 0.0) for k in ("distance", "files")) for s in subjects]
     n0 = len(subjects)
     total = r["timings_s"]
-    farmed = sum(phase_a) + sum(phase_b)
+    phase_d = [total.get("pictures", 0.0) / n0] * n0
     model = sum(total.get(k, 0.0) for k in ("model", "quality"))
-    linear = total.get("distance", 0.0) + total.get("write", 0.0)
-    wall = sum(r["timings_s"].get(k, 0.0) for k in ("pipeline", "write")) if "pipeline" in r["timings_s"] else None
+    linear = sum(total.get(k, 0.0) for k in ("read back", "model records", "mean measures", "write"))
+    if not any(phase_c):  # a run from before the outputs were farmed: its distances ran on rank 0
+        linear += total.get("distance", 0.0)
+    n_serial = n0
+    if a.serial_from:
+        other = json.load(open(a.serial_from))
+        n_serial = len(other["subjects"])
+        model = sum(other["timings_s"].get(k, 0.0) for k in ("model", "quality"))
+        linear = sum(other["timings_s"].get(k, 0.0) for k in ("read back", "model records", "mean measures", "write"))
+        print(f"rank 0 alone from {a.serial_from} ({n_serial} subjects): model {model:.2f} s, records and "
+              f"outputs {linear:.2f} s")
     print(f"measured: {n0} subjects; per subject surface {sum(phase_a)/n0:.3f} s, registration and grid "
-          f"{sum(phase_b)/n0:.3f} s (mean); rank 0 alone: model {model:.2f} s, distance + outputs {linear:.2f} s")
+          f"{sum(phase_b)/n0:.3f} s, distance and files {sum(phase_c)/n0:.3f} s, picture {phase_d[0]:.3f} s "
+          f"(mean); rank 0 alone: model {model:.2f} s, records and outputs {linear:.2f} s")
     rng = random.Random(a.seed)
     for n in a.subjects:
         if n == n0:
-            ta, tb = phase_a, phase_b
+            ta, tb, tc, td = phase_a, phase_b, phase_c, phase_d
         else:
             draw = [rng.randrange(n0) for _ in range(n)]
-            ta, tb = [phase_a[i] for i in draw], [phase_b[i] for i in draw]
-        serial = 0.0 if a.farm_only else model * (n / n0) ** 2 + linear * (n / n0)
-        t1 = sum(ta) + sum(tb) + serial
+            ta, tb, tc, td = ([t[i] for i in draw] for t in (phase_a, phase_b, phase_c, phase_d))
+        serial = 0.0 if a.farm_only else model * (n / n_serial) ** 2 + linear * (n / n_serial)
+        t1 = sum(ta) + sum(tb) + sum(tc) + sum(td) + serial
         for p in a.ranks:
-            for order, name in ((sorted, "largest first"), (list, "subject order")):
-                oa = sorted(ta, reverse=True) if order is sorted else ta
-                ob = sorted(tb, reverse=True) if order is sorted else tb
-                tp = makespan(oa, p) + makespan(ob, p) + serial
+            for largest, name in ((True, "largest first"), (False, "subject order")):
+                tp = serial + sum(makespan(sorted(t, reverse=True) if largest else t, p) for t in (ta, tb, tc, td))
                 print(f"N={n:5d} P={p:3d} {name:14s} T={tp:9.1f} s  speed-up {t1/tp:6.2f}  "
                       f"efficiency {100*t1/(p*tp):5.1f} %  (rank 0 alone {serial:.1f} s)")
 

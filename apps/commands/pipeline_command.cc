@@ -2,6 +2,7 @@
 // landmarks, as `pectus synth cohort` writes them) to the average chest with its modes, model quality,
 // each subject's distance to the mean, and one HTML report (pictures and numbers).
 #include "apps/command.h"
+#include "shape/core/atomic_file.h"
 #include "shape/core/error.h"
 #include "shape/core/log.h"
 #include "shape/model/profile_fit.h"
@@ -114,6 +115,23 @@ class PipelineCommand : public Command {
     run.resume = resume_ || gather_ || !share.whole();
     run.subjects_only = !share.whole();
     run.gather = gather_;
+    // 8-9. Each subject's files on the farm too (after the model): its meshes, then its distance picture
+    // on the cohort's colour scale; the leader moves them into the outputs.
+    run.subject_files = [](const SubjectOutcome& s, const fs::path& folder) {
+      WriteSubjectFiles(s, [&](const fs::path& name) {
+        fs::create_directories((folder / name).parent_path());
+        return folder / name;
+      });
+    };
+    run.picture_scale = [this](const std::vector<SubjectOutcome>& subjects) {
+      return DistanceMapRange(subjects, report_);
+    };
+    run.subject_pictures = [this](const SubjectOutcome& s, double scale, const fs::path& folder) {
+      if (s.to_mean.distances.size() == 0) return;
+      const ReportFile picture = SubjectDistancePicture(s, scale, report_);
+      fs::create_directories((folder / picture.path).parent_path());
+      WriteFileAtomically(folder / picture.path, picture.bytes);
+    };
     const bool leader = context->runner->IsLeader() && share.whole();
     fs::path html;
     if (leader) html = StageOutput(context, *this, out / "report.html");  // refuses an input early
@@ -159,7 +177,8 @@ class PipelineCommand : public Command {
         {{"source", "pectus pipeline"}, {"cohort", cohort_}, {"reference", result.reference}}, out,
         [&](const fs::path& target) {
           return target == html_target ? html : StageOutput(context, *this, target);
-        });
+        },
+        run.work);
     nlohmann::json summary = PipelineJson(result);
     for (const auto& [key, value] : summary.items()) context->report[key] = value;
     context->report["cohort"] = cohort_;

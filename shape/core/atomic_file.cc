@@ -1,5 +1,6 @@
 #include "shape/core/atomic_file.h"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -93,13 +94,37 @@ void OutputTransaction::CommitAll() {
   committed_ = true;
 }
 
+namespace {
+
+// The device and inode of an existing file (links followed, as fs::equivalent does).
+bool FileIdentity(const fs::path& path, std::pair<std::uint64_t, std::uint64_t>* id) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return false;
+  *id = {static_cast<std::uint64_t>(st.st_dev), static_cast<std::uint64_t>(st.st_ino)};
+  return true;
+}
+
+}  // namespace
+
 void RefuseOverwritingInputs(const fs::path& output, const std::vector<fs::path>& inputs) {
+  InputGuard(inputs).Refuse(output);
+}
+
+InputGuard::InputGuard(const std::vector<fs::path>& inputs) {
+  for (const fs::path& in : inputs) {
+    std::error_code ec;
+    canonical_.insert(fs::weakly_canonical(in, ec).string());
+    std::pair<std::uint64_t, std::uint64_t> id;
+    if (FileIdentity(in, &id)) files_.insert(id);
+  }
+}
+
+void InputGuard::Refuse(const fs::path& output) const {
   std::error_code ec;
-  const fs::path out = fs::weakly_canonical(output, ec);
-  for (const auto& in : inputs) {
-    const fs::path canon = fs::weakly_canonical(in, ec);
-    const bool same = (out == canon) || (fs::exists(output, ec) && fs::exists(in, ec) && fs::equivalent(output, in, ec));
-    if (same) ThrowUsage("output " + output.string() + " is also an input; pectus never overwrites its input");
+  std::pair<std::uint64_t, std::uint64_t> id;
+  if (canonical_.count(fs::weakly_canonical(output, ec).string()) > 0 ||
+      (FileIdentity(output, &id) && files_.count(id) > 0)) {
+    ThrowUsage("output " + output.string() + " is also an input; pectus never overwrites its input");
   }
 }
 

@@ -1,10 +1,13 @@
 // pectus: outputs written atomically (temporary file in the same folder, then rename).
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <string>
 #include <string_view>
+#include <unordered_set>
 #include <vector>
 
 namespace pectus {
@@ -59,5 +62,20 @@ class OutputTransaction {
 /// its input).
 void RefuseOverwritingInputs(const std::filesystem::path& output,
                              const std::vector<std::filesystem::path>& inputs);
+
+/// RefuseOverwritingInputs for many outputs against the same inputs: the inputs are resolved once (their
+/// canonical paths and their files' device and inode), so that each output costs O(1) look-ups rather than
+/// O(#inputs) (a cohort's thousands of outputs against its thousands of sweeps).
+class InputGuard {
+ public:
+  explicit InputGuard(const std::vector<std::filesystem::path>& inputs);
+  /// Throws Error(kUsage) if `output` is one of the inputs: the same canonical path, or the same file
+  /// reached another way (a link).
+  void Refuse(const std::filesystem::path& output) const;
+
+ private:
+  std::unordered_set<std::string> canonical_;
+  std::set<std::pair<std::uint64_t, std::uint64_t>> files_;  // (device, inode) of each existing input
+};
 
 }  // namespace pectus

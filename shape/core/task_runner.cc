@@ -46,6 +46,8 @@ void SerialTaskRunner::Run(const std::vector<int>& order, const std::function<vo
   if (!first_error.empty()) ThrowFailure(first_error);
 }
 
+int TaskRunner::SerialThreads() const { return omp_get_max_threads(); }
+
 std::string SerialTaskRunner::Describe() const {
   std::string s = "one process, " + std::to_string(omp_get_max_threads()) + " thread(s)";
   if (!share_.whole()) s += ", share " + std::to_string(share_.index) + "/" + std::to_string(share_.count);

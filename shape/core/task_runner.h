@@ -26,6 +26,9 @@ class TaskRunner {
   virtual int Processes() const { return 1; }
   /// Waits until every process got here (a no-op on one process).
   virtual void Barrier() {}
+  /// Threads the leader may use for work it does alone between two Run() calls (the model), while the
+  /// other processes wait: its own, and under MPI those of the ranks on its node (they wait idle).
+  virtual int SerialThreads() const;
   /// One line for logs and reports: "serial, 2 threads", "MPI, 3 ranks", "shard 2/3".
   virtual std::string Describe() const = 0;
 };

@@ -18,6 +18,7 @@ bool ImputationOptions::IsValid(std::string* why) const {
     return false;
   };
   if (max_iterations < 1) return fail("imputation needs at least 1 iteration");
+  if (max_others < 2) return fail("the imputation's model of the others needs at least 2 subjects");
   if (!(tolerance_mm > 0.0) || !std::isfinite(tolerance_mm))
     return fail("imputation tolerance must be > 0 mm");
   if (!(noise_mm > 0.0) || !std::isfinite(noise_mm)) return fail("imputation noise must be > 0 mm");
@@ -60,13 +61,15 @@ struct Posterior {
   }
 };
 
+// G holds X_S X' (S: the first max_others + 1 rows; every row for a cohort that small), so G(a, b) for a
+// in S and any b.
 Posterior PosteriorFromOthers(const Eigen::MatrixXd& X, const Eigen::MatrixXd& G, Eigen::Index n,
-                              const std::vector<Eigen::Index>& unseen, double noise_variance) {
-  const Eigen::Index N = X.rows();
-  const Eigen::Index others = N - 1;
+                              const std::vector<Eigen::Index>& unseen, double noise_variance,
+                              int max_others) {
   Posterior post;
-  for (Eigen::Index k = 0; k < N; ++k)
+  for (Eigen::Index k = 0; k < G.rows() && static_cast<int>(post.others.size()) < max_others; ++k)
     if (k != n) post.others.push_back(k);
+  const auto others = static_cast<Eigen::Index>(post.others.size());
   const std::vector<Eigen::Index>& idx = post.others;
   const auto inv = post.inv = 1.0 / static_cast<double>(others);
   // Centring among the others, in subject space: Gc = P G_oo P with P = I - 1 1' / N'.
@@ -107,8 +110,9 @@ Posterior PosteriorFromOthers(const Eigen::MatrixXd& X, const Eigen::MatrixXd& G
 
 // The fill of subject n's unseen coordinates: the posterior mean of the others' model.
 Eigen::VectorXd FillFromOthers(const Eigen::MatrixXd& X, const Eigen::MatrixXd& G, Eigen::Index n,
-                               const std::vector<Eigen::Index>& unseen, double noise_variance) {
-  const Posterior post = PosteriorFromOthers(X, G, n, unseen, noise_variance);
+                               const std::vector<Eigen::Index>& unseen, double noise_variance,
+                               int max_others) {
+  const Posterior post = PosteriorFromOthers(X, G, n, unseen, noise_variance, max_others);
   Eigen::VectorXd fill(static_cast<Eigen::Index>(unseen.size()));
   for (std::size_t j = 0; j < unseen.size(); ++j)
     fill[static_cast<Eigen::Index>(j)] = post.Mean(X, unseen[j]);
@@ -147,7 +151,7 @@ void AddLocalCorrection(const Eigen::MatrixXd& X, const Eigen::MatrixXd& G, Eige
   std::vector<Eigen::Index> rim_coordinates;
   for (const auto& r : rim)
     rim_coordinates.insert(rim_coordinates.end(), {3 * r.second, 3 * r.second + 1, 3 * r.second + 2});
-  const Posterior post = PosteriorFromOthers(X, G, n, unseen, o.noise_mm * o.noise_mm);
+  const Posterior post = PosteriorFromOthers(X, G, n, unseen, o.noise_mm * o.noise_mm, o.max_others);
   const auto b = static_cast<Eigen::Index>(rim.size());
   Eigen::MatrixXd residual(b, 3);
   for (Eigen::Index i = 0; i < b; ++i)
@@ -177,8 +181,11 @@ void AddLocalCorrection(const Eigen::MatrixXd& X, const Eigen::MatrixXd& G, Eige
   }
 }
 
-// G = X X' (N x N), from the lower triangle.
-Eigen::MatrixXd GramMatrix(const Eigen::MatrixXd& X) {
+// G = X_S X' with S the first max_others + 1 rows: X X' (N x N, from the lower triangle) for a cohort
+// that small, else (max_others + 1) x N.
+Eigen::MatrixXd GramMatrix(const Eigen::MatrixXd& X, int max_others) {
+  const Eigen::Index s = static_cast<Eigen::Index>(max_others) + 1;
+  if (X.rows() > s) return X.topRows(s) * X.transpose();
   Eigen::MatrixXd G = Eigen::MatrixXd::Zero(X.rows(), X.rows());
   G.selfadjointView<Eigen::Lower>().rankUpdate(X);
   return G.selfadjointView<Eigen::Lower>();
@@ -223,13 +230,13 @@ ImputationResult ImputeMissingVertices(const Eigen::MatrixXd& shapes,
   Eigen::MatrixXd X = shapes;
   for (int it = 0; it < options.max_iterations && !to_fill.empty(); ++it) {
     // One sweep: every subject filled from the others' fills of the sweep before (Jacobi).
-    const Eigen::MatrixXd G = GramMatrix(X);
+    const Eigen::MatrixXd G = GramMatrix(X, options.max_others);
     std::vector<Eigen::VectorXd> fills(to_fill.size());
 #pragma omp parallel for schedule(dynamic)
     for (std::int64_t k = 0; k < static_cast<std::int64_t>(to_fill.size()); ++k) {
       const Eigen::Index n = to_fill[static_cast<std::size_t>(k)];
       fills[static_cast<std::size_t>(k)] =
-          FillFromOthers(X, G, n, unseen[static_cast<std::size_t>(n)], noise_variance);
+          FillFromOthers(X, G, n, unseen[static_cast<std::size_t>(n)], noise_variance, options.max_others);
     }
     double change = 0.0;
     for (std::size_t k = 0; k < to_fill.size(); ++k) {
@@ -250,7 +257,7 @@ ImputationResult ImputeMissingVertices(const Eigen::MatrixXd& shapes,
   if (to_fill.empty()) result.converged = true;
   if (options.local_scale_mm > 0.0 && !to_fill.empty()) {
     // The local correction of every fill, once the fills have converged.
-    const Eigen::MatrixXd G = GramMatrix(X);
+    const Eigen::MatrixXd G = GramMatrix(X, options.max_others);
     std::vector<Eigen::VectorXd> fills(to_fill.size());
 #pragma omp parallel for schedule(dynamic)
     for (std::int64_t k = 0; k < static_cast<std::int64_t>(to_fill.size()); ++k) {

@@ -46,6 +46,11 @@ struct ImputationOptions {
   /// A subject is filled only if at least this fraction of its vertices is seen ((0, 1]); a subject
   /// seen less keeps the resampler's fill and is reported (ImputationResult::too_little_seen).
   double min_seen_fraction = 0.5;
+  /// The model of the others is made of at most this many subjects (>= 2): the first max_others + 1 rows
+  /// of the cohort but the one filled. Up to max_others + 1 subjects that is every other subject; a larger
+  /// cohort (thousands: docs/cluster.md) costs O(K^3) per subject and O(K N 3m) per sweep with K =
+  /// max_others, rather than O(N^3) and O(N^2 3m), for a covariance estimated from K shapes.
+  int max_others = 256;
 
   /// False, with the reason, for a value out of range.
   bool IsValid(std::string* why) const;

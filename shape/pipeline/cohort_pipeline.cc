@@ -1,13 +1,20 @@
 #include "shape/pipeline/cohort_pipeline.h"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <exception>
+#include <fstream>
+#include <mutex>
 #include <sstream>
 
 #include "registration/generalised_procrustes.h"
 #include "registration/kdtree.h"
+#include "shape/core/atomic_file.h"
 #include "shape/core/error.h"
 #include "shape/io/landmark_io.h"
 #include "shape/io/mesh_io.h"
@@ -93,6 +100,7 @@ void MoveSubject(const Similarity3& T, SubjectOutcome* s) {
   s->landmarks = s->landmarks.Transformed(T);
   s->measures.deepest_point = T * s->measures.deepest_point;
   s->T_reference_subject = T * s->T_reference_subject;
+  s->T_aligned_registered = T * s->T_aligned_registered;
 }
 
 // Which grid vertices of each good subject count as seen: within `gap_mm` of its scan data ("scan_gap_mm",
@@ -168,6 +176,82 @@ Eigen::MatrixXd FillUnseenVertices(const std::vector<int>& good,
   }
   result->imputation_message = filled.message;
   return std::move(filled.shapes);
+}
+
+// 7. The model of the subjects in `result` that made it: their grids aligned to their mean (Procrustes),
+// unseen vertices filled, PCA, quality; their scores; the mean's measures (on the mean landmark ROI).
+void BuildModelOnLeader(const PipelineOptions& options, PipelineResult* result) {
+  std::vector<int> good;
+  for (int i = 0; i < static_cast<int>(result->subjects.size()); ++i) {
+    if (result->subjects[i].ok) good.push_back(i);
+  }
+  result->succeeded = static_cast<int>(good.size());
+  if (good.size() < 2) return;
+  Clock::time_point start = Clock::now();
+  const bool impute = static_cast<int>(good.size()) >= options.impute_min_subjects;
+  const auto seen = SeenVertices(good, impute ? options.impute_gap_mm : 0.0, *result);
+  AlignGridsToTheirMean(good, options.procrustes_iterations, seen, result);
+  const Eigen::MatrixXd shapes = FillUnseenVertices(good, seen, options, result);
+  ShapeModel& model = result->model.emplace(BuildShapeModel(shapes, options.model, "resampled subjects"));
+  for (int i : good) model.names.push_back(result->subjects[i].name);
+  model.faces = GridFaces(options.resample.grid);
+  for (std::size_t k = 0; k < good.size(); ++k) {
+    result->subjects[good[k]].scores = model.scores.row(static_cast<Eigen::Index>(k)).transpose();
+  }
+  result->timings_s.Add("model", Since(start));
+  if (options.quality && good.size() >= 3) {
+    start = Clock::now();
+    result->quality = EvaluateModelQuality(shapes, options.quality_options);
+    result->timings_s.Add("quality", Since(start));
+  }
+  start = Clock::now();
+  LandmarkSet mean_landmarks = result->subjects[good[0]].landmarks;
+  for (Landmark& l : mean_landmarks.items) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    int count = 0;
+    for (int i : good) {
+      if (const Landmark* m = result->subjects[i].landmarks.Find(l.label)) sum += m->position, ++count;
+    }
+    l.position = sum / count;
+  }
+  try {
+    result->mean_measures = MeasureChest(model.ToMesh(model.mean),
+                                         ComputeChestRoi(mean_landmarks, options.roi, "mean landmarks"));
+  } catch (const Error& e) {
+    result->mean_measures.message = e.what();
+  }
+  result->timings_s.Add("mean measures", Since(start));
+}
+
+// The mean shape as a mesh record in the work folder, for the processes that compute the distances to it.
+void WriteMeanRecord(const fs::path& work, const ShapeModel& model) {
+  SubjectOutcome mean;
+  mean.name = "mean shape";
+  mean.surface = model.ToMesh(model.mean);
+  internal::WriteSubjectRecord(work / "mean.rec", mean);
+}
+
+std::optional<TriangleMesh> ReadMeanRecord(const fs::path& work) {
+  std::error_code ec;
+  if (!fs::exists(work / "mean.rec", ec)) return std::nullopt;
+  return std::move(internal::ReadSubjectRecord(work / "mean.rec").surface);
+}
+
+// A double as text that reads back to the same bits (hexadecimal floating point).
+std::string ExactText(double value) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%a", value);
+  return text;
+}
+
+double ReadExactText(const fs::path& path) {
+  std::ifstream in(path);
+  std::string text;
+  in >> text;
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0') ThrowBadInput(path.string(), "does not hold a number");
+  return value;
 }
 
 // The subjects' results of one phase ("surface": stages 1-3; "registered": 4-6): in memory, or one record
@@ -290,9 +374,12 @@ std::vector<CohortSubject> FindCohortSubjects(const fs::path& folder, const std:
   return subjects;
 }
 
+fs::path SubjectFilesFolder(const fs::path& work, const std::string& name) { return work / "files" / name; }
+
 void RemoveSubjectResults(const fs::path& work) {
   std::error_code ec;
-  for (const char* phase : {"surface", "registered"}) {
+  for (const char* phase :
+       {"surface", "registered", "grids", "model", "outputs", "files", "mean.rec", "picture_scale"}) {
     fs::remove_all(work / phase, ec);
     if (ec) ThrowFailure("cannot remove the subjects' results: " + ec.message(), (work / phase).string());
   }
@@ -335,7 +422,11 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
   TaskRunner& runner = run.runner != nullptr ? *run.runner : serial;
   if (!run.resume && !run.work.empty() && runner.IsLeader()) RemoveSubjectResults(run.work);
   runner.Barrier();
+  const bool in_memory = run.work.empty();
+  if (in_memory && (run.subject_files || run.subject_pictures))
+    ThrowUsage("pipeline: the subjects' output files are made in a work folder; none was given");
   SubjectStore surfaces(run.work, "surface", inputs), registered(run.work, "registered", inputs);
+  SubjectStore grids(run.work, "grids", inputs);
   if (const std::vector<int> missing = registered.Missing(); run.gather && !missing.empty()) {
     std::string names;
     for (std::size_t k = 0; k < std::min<std::size_t>(missing.size(), 10); ++k)
@@ -415,59 +506,129 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
     }
     s.ok = s.failed_stage.empty();
     if (!options.keep_surfaces) s.surface = TriangleMesh();
+    if (!in_memory) {  // the subject without its surface, for the model (written first: `registered` commits)
+      SubjectOutcome light = s;
+      light.surface = TriangleMesh();
+      grids.Put(i, light);
+    }
     registered.Put(i, s);
     report(s, "resample");
   });
-  if (!runner.IsLeader() || run.subjects_only) return result;
-  result.subjects.reserve(inputs.size());
-  for (int i = 0; i < n; ++i) result.subjects.push_back(registered.Take(i));
+  if (run.subjects_only) return result;
 
-  // 7. The model of the subjects that made it.
-  std::vector<int> good;
-  for (int i = 0; i < n; ++i) {
-    if (result.subjects[i].ok) good.push_back(i);
-  }
-  result.succeeded = static_cast<int>(good.size());
-  Clock::time_point start = Clock::now();
-  if (good.size() >= 2) {
-    const bool impute = static_cast<int>(good.size()) >= options.impute_min_subjects;
-    const auto seen = SeenVertices(good, impute ? options.impute_gap_mm : 0.0, result);
-    AlignGridsToTheirMean(good, options.procrustes_iterations, seen, &result);
-    const Eigen::MatrixXd shapes = FillUnseenVertices(good, seen, options, &result);
-    ShapeModel& model = result.model.emplace(BuildShapeModel(shapes, options.model, "resampled subjects"));
-    for (int i : good) model.names.push_back(result.subjects[i].name);
-    model.faces = GridFaces(options.resample.grid);
-    result.timings_s.Add("model", Since(start));
-    if (options.quality && good.size() >= 3) {
-      start = Clock::now();
-      result.quality = EvaluateModelQuality(shapes, options.quality_options);
-      result.timings_s.Add("quality", Since(start));
-    }
-    // 8. Each subject's distance to the mean, and the mean's own measures (on the mean landmark ROI).
-    start = Clock::now();
-    const TriangleMesh mean = model.ToMesh(model.mean);
-    LandmarkSet mean_landmarks = result.subjects[good[0]].landmarks;
-    for (Landmark& l : mean_landmarks.items) {
-      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-      int count = 0;
-      for (int i : good) {
-        if (const Landmark* m = result.subjects[i].landmarks.Find(l.label)) sum += m->position, ++count;
-      }
-      l.position = sum / count;
-    }
-    for (std::size_t k = 0; k < good.size(); ++k) {
-      SubjectOutcome& s = result.subjects[good[k]];
-      s.to_mean = ComputeDistanceMap(s.grid.mesh.vertices.positions, mean, options.distance, "mean shape");
-      s.scores = model.scores.row(static_cast<Eigen::Index>(k)).transpose();
-    }
+  // 7. The model of the subjects that made it, on the leader, from their grids read back one by one in
+  // subject order (with a work folder, without their surfaces: they are not all held at once). Each
+  // subject's part of it (alignment, fills, scores) is committed for the third task, with the mean.
+  SubjectStore modelled(run.work, "model", inputs), finished(run.work, "outputs", inputs);
+  std::exception_ptr model_error;
+  if (runner.IsLeader()) {
+    // The other processes wait meanwhile: the leader takes their cores (the bytes do not depend on it).
+    const int threads = omp_get_max_threads();
+    omp_set_num_threads(runner.SerialThreads());
     try {
-      result.mean_measures =
-          MeasureChest(mean, ComputeChestRoi(mean_landmarks, options.roi, "mean landmarks"));
-    } catch (const Error& e) {
-      result.mean_measures.message = e.what();
+      Clock::time_point start = Clock::now();
+      result.subjects.reserve(inputs.size());
+      for (int i = 0; i < n; ++i) result.subjects.push_back(in_memory ? registered.Take(i) : grids.Get(i));
+      result.timings_s.Add("read back", Since(start));
+      BuildModelOnLeader(options, &result);
+      start = Clock::now();
+      if (!in_memory) {
+        std::error_code ec;
+        fs::remove_all(run.work / "model", ec);
+        for (int i = 0; i < n; ++i) {
+          if (result.subjects[i].ok && result.model) modelled.Put(i, result.subjects[i]);
+        }
+        if (result.model) WriteMeanRecord(run.work, *result.model);
+      }
+      result.timings_s.Add("model records", Since(start));
+    } catch (...) {
+      model_error = std::current_exception();
     }
-    result.timings_s.Add("distance", Since(start));
+    omp_set_num_threads(threads);
   }
+  // The mean, once per process, for the third task (read from the work folder on other processes).
+  std::once_flag mean_once;
+  std::optional<TriangleMesh> mean;
+  auto the_mean = [&]() -> const std::optional<TriangleMesh>& {
+    std::call_once(mean_once, [&] {
+      if (runner.IsLeader() && result.model) {
+        mean = result.model->ToMesh(result.model->mean);
+      } else if (!in_memory) {
+        mean = ReadMeanRecord(run.work);
+      }
+    });
+    return mean;
+  };
+
+  // 8. Each subject's distance to the mean, then its output files (subjects in parallel, on the farm).
+  auto finish = [&](int i) {
+    SubjectOutcome s;
+    if (in_memory) {
+      s = std::move(result.subjects[i]);
+    } else {
+      s = registered.Get(i);  // with its surface, as registered
+      if (modelled.Has(i)) {
+        SubjectOutcome m = modelled.Get(i);
+        TransformInPlace(m.T_aligned_registered, &s.surface);
+        m.surface = std::move(s.surface);
+        s = std::move(m);
+      }
+    }
+    if (s.ok && the_mean()) {
+      const Clock::time_point start = Clock::now();
+      s.to_mean =
+          ComputeDistanceMap(s.grid.mesh.vertices.positions, *the_mean(), options.distance, "mean shape");
+      s.timings_s.Add("distance", Since(start));
+    }
+    if (run.subject_files) {
+      const Clock::time_point start = Clock::now();
+      const fs::path folder = SubjectFilesFolder(run.work, s.name);
+      fs::create_directories(folder);
+      run.subject_files(s, folder);
+      s.timings_s.Add("files", Since(start));
+    }
+    if (in_memory) {
+      result.subjects[i] = std::move(s);
+    } else {
+      s.surface = TriangleMesh();
+      finished.Put(i, s);  // commits the subject's third task
+    }
+  };
+  const std::vector<int> no_tasks;
+  runner.Run(model_error ? no_tasks : finished.Missing(largest_first), finish);
+  if (runner.IsLeader() && !in_memory && !model_error) {
+    const Clock::time_point start = Clock::now();
+    for (int i = 0; i < n; ++i) result.subjects[i] = finished.Get(i);
+    result.timings_s.Add("read back", Since(start));
+  }
+
+  // 9. The files that need every subject's distances (the report's maps on one colour scale), on the farm.
+  if (run.subject_pictures) {
+    const fs::path scale_path = run.work / "picture_scale";
+    if (runner.IsLeader() && !model_error) {
+      try {
+        const double scale = run.picture_scale ? run.picture_scale(result.subjects) : 0.0;
+        WriteFileAtomically(scale_path, ExactText(scale));
+      } catch (...) {
+        model_error = std::current_exception();  // thrown below, once the other processes are let go
+      }
+    }
+    std::once_flag scale_once;
+    double scale = 0.0;
+    std::mutex seconds_mutex;
+    double seconds = 0.0;  // this process's part
+    runner.Run(model_error ? no_tasks : largest_first, [&](int i) {
+      const Clock::time_point start = Clock::now();
+      std::call_once(scale_once, [&] { scale = ReadExactText(scale_path); });
+      const SubjectOutcome s = in_memory ? result.subjects[i] : finished.Get(i);
+      run.subject_pictures(s, scale, SubjectFilesFolder(run.work, s.name));
+      const std::lock_guard<std::mutex> lock(seconds_mutex);
+      seconds += Since(start);
+    });
+    result.timings_s.Add("pictures", seconds);
+  }
+  if (model_error) std::rethrow_exception(model_error);
+  if (!runner.IsLeader()) return result;
   Timings subjects;
   for (const SubjectOutcome& s : result.subjects) subjects.Add(s.timings_s);
   subjects.Add(result.timings_s);

@@ -131,6 +131,9 @@ struct SubjectOutcome {
   std::int64_t faces = 0;           ///< of the reconstructed surface
   double fit_accuracy_mm = 0.0;     ///< RBF fitting accuracy (dissertation Eq. 11)
   Similarity3 T_reference_subject;  ///< subject scan frame to the reference's
+  /// The model stage's rigid alignment of the registered subject to the grids' mean (Procrustes), already
+  /// composed into T_reference_subject; identity before the model stage.
+  Similarity3 T_aligned_registered;
   double landmark_rms_mm = 0.0, icp_rms_mm = 0.0;
   bool icp_accepted = false;         ///< the ICP refinement was kept (else the landmark pose)
   std::string registration_message;  ///< what the fine step found, and why it was not kept
@@ -186,8 +189,11 @@ using PipelineObserver = std::function<void(const SubjectOutcome& subject, const
 
 /// Where the subjects' stages run and where their results are kept (docs/cluster.md). Each subject goes
 /// through two tasks, its surface (stages 1-3) and its registration and grid (5-6, after the reference is
-/// known), each committing the subject's result as one file when it finishes; the model is then built
-/// from those files read back in subject order, so the outputs are the same bytes whatever ran where.
+/// known), each committing the subject's result as one file when it finishes; the model is then built on
+/// the leader from those files read back in subject order, without the subjects' surfaces (with a work
+/// folder), and each subject goes through a third task: its distances to the mean and its output files
+/// (`subject_files`), then, once every subject's distances are known, a fourth: its files that depend on
+/// all of them (`subject_pictures`). So the outputs are the same bytes whatever ran where.
 struct PipelineRun {
   /// Runs the subjects' tasks; nullptr: SerialTaskRunner (this process's threads).
   TaskRunner* runner = nullptr;
@@ -203,16 +209,34 @@ struct PipelineRun {
   /// Every subject's results must be in `work` already (the shares' gather): Error(kUsage) naming those
   /// missing instead of computing them here.
   bool gather = false;
+  /// Writes one subject's output files into `folder`, at their paths relative to the output folder, in the
+  /// third task (after the model): called with the subject's whole outcome (its surface aligned with its
+  /// grid, its distances to the mean), on whichever process runs the task. The files stay in
+  /// `work/files/NAME/` for the leader to move into the outputs (SubjectFilesFolder). Needs `work`;
+  /// empty: none.
+  std::function<void(const SubjectOutcome& subject, const std::filesystem::path& folder)> subject_files;
+  /// On the leader, once every subject's distances are known: one number every fourth task gets (the
+  /// colour scale of the report's distance maps), from the subjects' outcomes without their surfaces.
+  std::function<double(const std::vector<SubjectOutcome>& subjects)> picture_scale;
+  /// The fourth task: one subject's files that need `scale` (its picture on the common scale), written
+  /// into `folder` as subject_files does. Empty: none.
+  std::function<void(const SubjectOutcome& subject, double scale, const std::filesystem::path& folder)>
+      subject_pictures;
 };
 
-/// Removes the subjects' results that RunCohortPipeline kept in `work` (its two sub-folders), and `work`
+/// The folder of subject `name`'s files written by PipelineRun::subject_files and subject_pictures.
+std::filesystem::path SubjectFilesFolder(const std::filesystem::path& work, const std::string& name);
+
+/// Removes the subjects' results that RunCohortPipeline kept in `work` (its sub-folders), and `work`
 /// itself if that leaves it empty. Nothing else in `work` is touched.
 void RemoveSubjectResults(const std::filesystem::path& work);
 
 /// Runs the pipeline. Throws Error(kUsage) for invalid options or an unknown reference name, and
 /// Error(kFailure) if no subject reconstructs (nothing to register to); a failing subject never throws.
 /// Only the runner's leader returns the whole result; other processes (and `subjects_only`) return the
-/// reference's name and an empty list of subjects.
+/// reference's name and an empty list of subjects. With a work folder the leader's subjects have no
+/// surface (they are not all held at once: `subject_files` gets each one's); without one they keep it
+/// (PipelineOptions::keep_surfaces).
 PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& subjects,
                                  const PipelineOptions& options = {}, const PipelineObserver& observer = {},
                                  const PipelineRun& run = {});

@@ -117,6 +117,28 @@ nlohmann::json PipelineJson(const PipelineResult& r) {
   return out;
 }
 
+double DistanceMapRange(const std::vector<SubjectOutcome>& subjects, const PipelineReportOptions& o) {
+  if (o.distance_range_mm > 0.0) return o.distance_range_mm;
+  double range = 0.0;
+  for (const SubjectOutcome& s : subjects) {
+    if (s.to_mean.distances.size() > 0) range = std::max(range, s.to_mean.stats.p99);
+  }
+  return std::max(1.0, std::ceil(range));
+}
+
+std::string SubjectPicturePath(const SubjectOutcome& s) { return "figures/distance_" + s.name + ".png"; }
+
+ReportFile SubjectDistancePicture(const SubjectOutcome& s, double range_mm, const PipelineReportOptions& o) {
+  SurfaceMapFigure fig;
+  fig.title = s.name;
+  fig.min = -range_mm;
+  fig.max = range_mm;
+  fig.up = -s.grid.roi.sternal;
+  fig.size = o.picture_px;
+  return {SubjectPicturePath(s),
+          render::EncodePng(SurfaceMapImage(s.grid.mesh, s.to_mean.distances, s.grid.roi.normal, fig))};
+}
+
 std::vector<ReportFile> MakePipelineReport(const PipelineResult& r, const PipelineReportOptions& o) {
   std::vector<ReportFile> files;
   auto figure = [&](const std::string& name, const render::Image& image) {
@@ -222,30 +244,21 @@ std::vector<ReportFile> MakePipelineReport(const PipelineResult& r, const Pipeli
   }
 
   // Distance maps on one scale.
-  double range = o.distance_range_mm;
-  if (!(range > 0.0)) {
-    for (const SubjectOutcome& s : r.subjects) {
-      if (s.to_mean.distances.size() > 0) range = std::max(range, s.to_mean.stats.p99);
-    }
-    range = std::max(1.0, std::ceil(range));
-  }
+  const double range = DistanceMapRange(r.subjects, o);
   html << "<h2>Each subject against the mean</h2>\n<p>Signed distance of each resampled subject to the mean "
           "shape "
           "(positive: in front of the mean), one colour scale &plusmn;"
        << Num(range, 1) << " mm.</p>\n<div class=\"maps\">";
   for (const SubjectOutcome& s : r.subjects) {
     if (s.to_mean.distances.size() == 0) continue;
-    SurfaceMapFigure fig;
-    fig.title = s.name;
-    fig.min = -range;
-    fig.max = range;
-    fig.up = -s.grid.roi.sternal;
-    fig.size = o.picture_px;
-    html << "<div><img src=\""
-         << figure("distance_" + s.name + ".png",
-                   SurfaceMapImage(s.grid.mesh, s.to_mean.distances, s.grid.roi.normal, fig))
-         << "\"><br>RMS " << Num(s.to_mean.stats.rms) << " mm, max " << Num(s.to_mean.stats.max_abs)
-         << " mm</div>";
+    std::string picture = SubjectPicturePath(s);
+    if (!o.subject_pictures_made) {
+      ReportFile file = SubjectDistancePicture(s, range, o);
+      picture = file.path;
+      files.push_back(std::move(file));
+    }
+    html << "<div><img src=\"" << picture << "\"><br>RMS " << Num(s.to_mean.stats.rms) << " mm, max "
+         << Num(s.to_mean.stats.max_abs) << " mm</div>";
   }
   html << "</div>\n<p>Stage times per subject are in the JSON report; merge "
        << Num(r.timings_s.Seconds("merge"), 1) << " s, reconstruct "

@@ -21,6 +21,9 @@ struct PipelineReportOptions {
   double mode_sd = 2.0;  ///< > 0
   int picture_px = 420;  ///< height of the surface pictures
   nlohmann::json run;    ///< shown as "run" facts: the command, the folders, wall time (any JSON object)
+  /// The subjects' distance pictures are made elsewhere (SubjectDistancePicture, one task per subject on
+  /// the farm): MakePipelineReport only shows them.
+  bool subject_pictures_made = false;
 };
 
 /// One file of the report, relative to the output folder ("report.html", "figures/mean.png").
@@ -33,6 +36,18 @@ struct ReportFile {
 /// which subjects failed: they are listed with their stage and message.
 std::vector<ReportFile> MakePipelineReport(const PipelineResult& result,
                                            const PipelineReportOptions& options = {});
+
+/// The colour scale of the distance maps, +-mm: options.distance_range_mm, or if that is 0, the largest
+/// 99th percentile of |d| over the subjects rounded up to a whole mm (at least 1).
+double DistanceMapRange(const std::vector<SubjectOutcome>& subjects, const PipelineReportOptions& options);
+
+/// The report's path of a subject's distance picture: "figures/distance_NAME.png".
+std::string SubjectPicturePath(const SubjectOutcome& subject);
+
+/// A subject's distance to the mean pictured on its grid, on the scale +-range_mm (DistanceMapRange), as the
+/// report shows it (a subject with distances to the mean).
+ReportFile SubjectDistancePicture(const SubjectOutcome& subject, double range_mm,
+                                  const PipelineReportOptions& options);
 
 /// The per-subject and per-model figures as JSON (for --report): one object per subject with its stage
 /// results, and the model's variance table.

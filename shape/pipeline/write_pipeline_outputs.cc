@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "shape/core/atomic_file.h"
+#include "shape/core/error.h"
 #include "shape/io/csv_writer.h"
 #include "shape/io/landmark_io.h"
 #include "shape/io/mesh_io.h"
@@ -13,9 +14,50 @@ namespace pectus {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+// Moves every file under `from` (a subject's files made on the farm, at their paths in the outputs) to
+// where `target` stages it: a rename, or a copy where the work folder is on another file system.
+void MoveSubjectFiles(const fs::path& from, const std::function<fs::path(const fs::path&)>& target) {
+  std::error_code ec;
+  if (!fs::is_directory(from, ec)) return;
+  std::vector<fs::path> files;
+  for (const fs::directory_entry& e : fs::recursive_directory_iterator(from)) {
+    if (e.is_regular_file()) files.push_back(fs::relative(e.path(), from));
+  }
+  std::sort(files.begin(), files.end());
+  for (const fs::path& name : files) {
+    const fs::path to = target(name);
+    fs::rename(from / name, to, ec);
+    if (ec) {
+      ec.clear();
+      fs::copy_file(from / name, to, fs::copy_options::overwrite_existing, ec);
+      if (ec) ThrowFailure("cannot move a subject's file into the outputs: " + ec.message(), to.string());
+    }
+  }
+}
+
+}  // namespace
+
+void WriteSubjectFiles(const SubjectOutcome& s, const std::function<fs::path(const fs::path&)>& target) {
+  const fs::path dir = fs::path("subjects") / s.name;
+  if (s.surface.num_faces() > 0) WriteMesh(target(dir / "surface.ply"), s.surface);
+  if (!s.ok) return;
+  WriteMesh(target(dir / "grid.ply"), s.grid.mesh);
+  WriteLandmarks(target(dir / "landmarks.mrk.json"), s.landmarks);
+  if (s.to_mean.distances.size() > 0) {
+    TriangleMesh coloured = s.grid.mesh;
+    coloured.vertices.scalars["distance_mm"] = s.to_mean.distances;
+    const double r = std::max(1.0, s.to_mean.stats.max_abs);
+    coloured.vertices.colors = ColorsForValues(s.to_mean.distances, -r, r);
+    WriteMesh(target(dir / "distance_to_mean.ply"), coloured);
+  }
+}
+
 std::vector<fs::path> WritePipelineOutputs(const PipelineResult& result, const PipelineReportOptions& report,
                                            const nlohmann::json& model_info, const fs::path& folder,
-                                           const std::function<fs::path(const fs::path&)>& stage) {
+                                           const std::function<fs::path(const fs::path&)>& stage,
+                                           const fs::path& work) {
   std::vector<fs::path> written;
   auto target = [&](const fs::path& name) {
     written.push_back(folder / name);
@@ -46,23 +88,18 @@ std::vector<fs::path> WritePipelineOutputs(const PipelineResult& result, const P
               "specificity_mm", "specificity_sd_mm"},
              table);
   }
-  // Each subject's meshes and landmarks.
+  // Each subject's meshes and landmarks (and its picture in the report): made on the farm, or here.
   for (const SubjectOutcome& s : result.subjects) {
-    const fs::path dir = fs::path("subjects") / s.name;
-    if (s.surface.num_faces() > 0) WriteMesh(target(dir / "surface.ply"), s.surface);
-    if (!s.ok) continue;
-    WriteMesh(target(dir / "grid.ply"), s.grid.mesh);
-    WriteLandmarks(target(dir / "landmarks.mrk.json"), s.landmarks);
-    if (s.to_mean.distances.size() > 0) {
-      TriangleMesh coloured = s.grid.mesh;
-      coloured.vertices.scalars["distance_mm"] = s.to_mean.distances;
-      const double r = std::max(1.0, s.to_mean.stats.max_abs);
-      coloured.vertices.colors = ColorsForValues(s.to_mean.distances, -r, r);
-      WriteMesh(target(dir / "distance_to_mean.ply"), coloured);
+    if (work.empty()) {
+      WriteSubjectFiles(s, [&](const fs::path& name) { return target(name); });
+    } else {
+      MoveSubjectFiles(SubjectFilesFolder(work, s.name), target);
     }
   }
   // The report and its figures.
-  for (const ReportFile& file : MakePipelineReport(result, report)) {
+  PipelineReportOptions report_options = report;
+  report_options.subject_pictures_made = !work.empty();
+  for (const ReportFile& file : MakePipelineReport(result, report_options)) {
     WriteFileAtomically(target(file.path), file.bytes);
   }
   return written;

@@ -20,9 +20,19 @@ namespace pectus {
 /// distance_mm). Then report.html and its figures (MakePipelineReport). Each file goes through
 /// `stage(target)`, which returns the path to write it to (a transaction's staging). Returns the target
 /// paths written. Throws Error(kFailure) naming a file that cannot be written.
+/// With `work` (PipelineRun::work of a run whose subject_files were WriteSubjectFiles and subject_pictures
+/// SubjectDistancePicture), each subject's files were made on the farm: they are moved from
+/// SubjectFilesFolder(work, NAME) rather than written from `result` (whose subjects have no surface then).
 std::vector<std::filesystem::path> WritePipelineOutputs(
     const PipelineResult& result, const PipelineReportOptions& report, const nlohmann::json& model_info,
     const std::filesystem::path& folder,
-    const std::function<std::filesystem::path(const std::filesystem::path&)>& stage);
+    const std::function<std::filesystem::path(const std::filesystem::path&)>& stage,
+    const std::filesystem::path& work = {});
+
+/// One subject's files: under subjects/NAME/, surface.ply (its registered surface, if kept and made) and,
+/// if it made it, grid.ply, landmarks.mrk.json and distance_to_mean.ply (coloured, scalar distance_mm).
+/// Each goes to `target(relative path)`.
+void WriteSubjectFiles(const SubjectOutcome& subject,
+                       const std::function<std::filesystem::path(const std::filesystem::path&)>& target);
 
 }  // namespace pectus

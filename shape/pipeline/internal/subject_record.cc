@@ -11,7 +11,7 @@ namespace pectus::internal {
 namespace {
 
 using nlohmann::json;
-constexpr int kVersion = 1;
+constexpr int kVersion = 2;
 
 // A dense Eigen matrix as {rows, cols, bytes} (storage order kept: the bytes are the matrix's own).
 template <class M>
@@ -140,6 +140,34 @@ Similarity3 SimilarityFrom(const json& j) {
   return T;
 }
 
+// What the model stage adds to a subject: its alignment, the fill of its unseen vertices, its scores and
+// its distances to the mean.
+json ModelJson(const SubjectOutcome& s) {
+  const DistanceStats& d = s.to_mean.stats;
+  return {
+      {"T_aligned_registered", SimilarityJson(s.T_aligned_registered)},
+      {"filled", {s.vertices_filled_from_cohort, s.largest_fill_change_mm}},
+      {"scores", Blob(s.scores)},
+      {"distances", Blob(s.to_mean.distances)},
+      {"closest", Blob(s.to_mean.closest)},
+      {"stats", {d.count, d.min, d.max, d.max_abs, d.mean, d.mean_abs, d.rms, d.p50, d.p90, d.p95, d.p99}},
+      {"message", s.to_mean.message}};
+}
+
+void ModelFrom(const json& j, SubjectOutcome* s) {
+  s->T_aligned_registered = SimilarityFrom(j.at("T_aligned_registered"));
+  s->vertices_filled_from_cohort = j.at("filled").at(0);
+  s->largest_fill_change_mm = j.at("filled").at(1);
+  FromBlob(j.at("scores"), &s->scores);
+  FromBlob(j.at("distances"), &s->to_mean.distances);
+  FromBlob(j.at("closest"), &s->to_mean.closest);
+  const json& v = j.at("stats");
+  DistanceStats& d = s->to_mean.stats;
+  d.count = v.at(0), d.min = v.at(1), d.max = v.at(2), d.max_abs = v.at(3), d.mean = v.at(4);
+  d.mean_abs = v.at(5), d.rms = v.at(6), d.p50 = v.at(7), d.p90 = v.at(8), d.p95 = v.at(9), d.p99 = v.at(10);
+  s->to_mean.message = j.at("message");
+}
+
 }  // namespace
 
 void WriteSubjectRecord(const std::filesystem::path& path, const SubjectOutcome& s) {
@@ -167,7 +195,8 @@ void WriteSubjectRecord(const std::filesystem::path& path, const SubjectOutcome&
                   {"landmarks", landmarks},
                   {"grid", GridJson(s.grid)},
                   {"measures", MeasuresJson(s.measures)},
-                  {"timings_s", TimingsJson(s.timings_s)}};
+                  {"timings_s", TimingsJson(s.timings_s)},
+                  {"model", ModelJson(s)}};
   const std::vector<std::uint8_t> bytes = json::to_cbor(j);
   WriteFileAtomically(path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
@@ -207,6 +236,7 @@ SubjectOutcome ReadSubjectRecord(const std::filesystem::path& path) {
     s.grid = GridFrom(j.at("grid"));
     s.measures = MeasuresFrom(j.at("measures"));
     s.timings_s = TimingsFrom(j.at("timings_s"));
+    ModelFrom(j.at("model"), &s);
   } catch (const std::exception& e) {
     ThrowBadInput(path.string(), std::string("is not a pectus subject record: ") + e.what());
   }

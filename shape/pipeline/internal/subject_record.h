@@ -9,8 +9,8 @@
 
 namespace pectus::internal {
 
-/// Writes `subject` (every field up to the stage it reached: not to_mean, scores or the fills, which the
-/// model stage makes) to `path` atomically.
+/// Writes `subject` (every field, those of the model stage too: its alignment, fills, scores and distances
+/// to the mean) to `path` atomically.
 void WriteSubjectRecord(const std::filesystem::path& path, const SubjectOutcome& subject);
 
 /// Reads a record written by WriteSubjectRecord. Throws Error(kBadInput) naming the file if it is not one.

@@ -95,6 +95,37 @@ TEST(ImputeMissingVertices, RecoversShapesOfALowRankModelFromWrongStartingValues
   }
 }
 
+// A cohort larger than the model of the others (max_others): subjects inside and outside its first
+// max_others + 1 rows are filled from a model of max_others of them, which spans the same three modes; with
+// max_others at least N - 1 the fill is the every-other-subject one, bit for bit.
+TEST(ImputeMissingVertices, AModelOfTheFirstOthersFillsALargerCohort) {
+  std::mt19937 rng(5);
+  const int N = 30;
+  const Eigen::MatrixXd truth = LowRankShapes(N, 0.01, &rng);
+  Mask seen = Mask::Constant(N, 441, true);
+  Hide(3, 30.0, 30.0, 10.0, &seen);  // within the model's rows
+  Hide(17, 0.0, 60.0, 15.0, &seen);  // beyond them
+  Hide(29, 45.0, 15.0, 8.0, &seen);
+  Eigen::MatrixXd start = truth;
+  for (int n : {3, 17, 29})
+    for (Eigen::Index v = 0; v < 441; ++v)
+      if (!seen(n, v)) start(n, 3 * v + 2) += 10.0;
+  ImputationOptions o;
+  o.noise_mm = 0.05;
+  o.max_others = 12;
+  const ImputationResult r = ImputeMissingVertices(start, seen, o);
+  EXPECT_TRUE(r.converged) << r.message;
+  for (int n : {3, 17, 29}) EXPECT_LT(LargestError(r.shapes, truth, n, seen), 0.1) << "subject " << n;
+  o.max_others = N - 1;
+  const ImputationResult all = ImputeMissingVertices(start, seen, o);
+  o.max_others = 1000;
+  EXPECT_TRUE(ImputeMissingVertices(start, seen, o).shapes == all.shapes);
+  EXPECT_FALSE(r.shapes == all.shapes);  // 12 others are not all 29
+  for (int n : {3, 17, 29}) EXPECT_LT(LargestError(all.shapes, truth, n, seen), 0.1) << "subject " << n;
+  o.max_others = 1;
+  EXPECT_THROW(ImputeMissingVertices(start, seen, o), Error);
+}
+
 TEST(ImputeMissingVertices, TheLocalCorrectionJoinsABumpTheModelCannotPredict) {
   std::mt19937 rng(5);
   Eigen::MatrixXd truth = LowRankShapes(12, 0.01, &rng);
