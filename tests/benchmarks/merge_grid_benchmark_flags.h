@@ -27,6 +27,7 @@ struct Flags {
   int points_per_pair = -1;  // < 0: MergeSweeps's default
   int rounds = -1;           // < 0: MergeSweeps's default
   int fit_tracker = -1;      // 0 / 1; < 0: MergeSweeps's default
+  int final_every_point = -1;  // 0 / 1; < 0: MergeSweeps's default
   bool open3d = true;
 };
 
@@ -102,6 +103,8 @@ inline Flags Parse(int argc, char** argv) {
       f.normal_neighbours = std::stoi(value());
     else if (key == "--fit-tracker")
       f.fit_tracker = std::stoi(value());
+    else if (key == "--final-every-point")
+      f.final_every_point = std::stoi(value());
     else if (key == "--rounds")
       f.rounds = std::stoi(value());
     else if (key == "--points-per-pair")
