@@ -174,7 +174,8 @@ std::vector<std::vector<std::uint32_t>> OverlapRows(const std::vector<SweepSurfa
       std::uint32_t nearest = 0;
       double d2 = 0.0;
       const Eigen::Vector3d x = T_t_s * positions.row(r).transpose() - S[target].target->origin();
-      if (S[target].target->tree().NearestWithin(x, gate_mm, &nearest, &d2)) rows[k].push_back(std::uint32_t(r));
+      if (S[target].target->tree().NearestWithin(x, gate_mm, &nearest, &d2))
+        rows[k].push_back(std::uint32_t(r));
     }
   }
   return rows;

@@ -164,12 +164,12 @@ Eigen::MatrixXd ModelInformation(const std::vector<PointCloud>& clouds, const st
   }
   OrientSweeps(truth, options.StartingRadiusMm(), 0, &sweeps);
   const auto links = FindSweepLinks(sweeps, truth, options.StartingRadiusMm(), options.min_overlap_fraction);
-  const bool every_point =
-      options.final_every_point && options.final_min_pinned_ratio < options.tracker_adjustment.min_pinned_ratio;
+  const bool every_point = options.final_every_point &&
+                           options.final_min_pinned_ratio < options.tracker_adjustment.min_pinned_ratio;
   const auto pairs =
-      every_point
-          ? AllCorrespondences(sweeps, truth, links, OverlapRows(sweeps, truth, links, 6.0 * spacing), 3.0 * spacing)
-          : AllCorrespondences(sweeps, truth, links, options.global_points_per_pair, 3.0 * spacing);
+      every_point ? AllCorrespondences(sweeps, truth, links, OverlapRows(sweeps, truth, links, 6.0 * spacing),
+                                       3.0 * spacing)
+                  : AllCorrespondences(sweeps, truth, links, options.global_points_per_pair, 3.0 * spacing);
   PosePrior prior;
   prior.T_world_sweep = truth;
   for (const auto& w : sweeps) prior.centre.push_back(w.centroid);
