@@ -213,10 +213,16 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
     std::vector<SweepCorrespondence> pairs;
     TrackerAdjustmentOptions adjustment = options.tracker_adjustment;
     Eigen::MatrixXd information;  // the last tracker step's joint normal matrix
-    auto run_rounds = [&](double first_gate, int rounds, bool fixed) {
+    // With `every_point`, each overlap's points are listed once at the first round (within twice the gate)
+    // and all of them are paired every round.
+    auto run_rounds = [&](double first_gate, int rounds, bool fixed, bool every_point = false) {
       double round_gate = first_gate;
+      std::vector<std::vector<std::uint32_t>> rows;
+      if (every_point) rows = OverlapRows(sweeps, P, links, 2.0 * first_gate);
       for (int round = 0; round < rounds; ++round) {
-        if (!fixed || round == 0)
+        if ((!fixed || round == 0) && every_point)
+          pairs = AllCorrespondences(sweeps, P, links, rows, round_gate);
+        else if (!fixed || round == 0)
           pairs = AllCorrespondences(sweeps, P, links, options.global_points_per_pair, round_gate);
         const std::vector<Rigid3> previous = P;
         if (prior) {
@@ -285,7 +291,7 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
     // the data pin them stay held.
     if (final_rounds) {
       adjustment.min_pinned_ratio = options.final_min_pinned_ratio;
-      run_rounds(gate, options.global_rounds, false);
+      run_rounds(gate, options.global_rounds, false, options.final_every_point);
     }
     result.timings_s.Add("global_adjustment", Since(t0));
   }

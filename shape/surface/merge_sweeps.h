@@ -56,6 +56,11 @@ struct SweepMergeOptions {
   /// let a plane strip slide on its normals' noise (lambda scatters about 1 along a free direction).
   /// tracker_adjustment.min_pinned_ratio or more: no final rounds (docs/benchmarks/merge.md).
   double final_min_pinned_ratio = 2.0;
+  /// With final rounds: their correspondences come from every point of each overlap (each point of the
+  /// source within twice the finest gate of the target at the start of the final rounds), not from the
+  /// subsample and not capped by global_points_per_pair: the information the weakly pinned directions
+  /// get grows about fourfold (sample_spacings 2 keeps a quarter of the points), the cost about twofold.
+  bool final_every_point = true;
   /// With a tracker prior: after the rounds, estimate how far off the stated accuracy the tracker really
   /// was from the corrections along the directions the overlaps pin (empirical Bayes: their squares, less
   /// the share the data's own noise puts there by the joint step's information, per pinned direction),

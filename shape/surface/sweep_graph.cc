@@ -160,6 +160,44 @@ std::vector<SweepCorrespondence> AllCorrespondences(const std::vector<SweepSurfa
   return all;
 }
 
+std::vector<std::vector<std::uint32_t>> OverlapRows(const std::vector<SweepSurface>& S,
+                                                    const std::vector<Rigid3>& P,
+                                                    const std::vector<SweepLink>& links, double gate_mm) {
+  std::vector<std::vector<std::uint32_t>> rows(links.size() * 2);
+#pragma omp parallel for schedule(dynamic)
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    const SweepLink& l = links[k / 2];
+    const std::size_t target = k % 2 ? l.j : l.i, source = k % 2 ? l.i : l.j;
+    const Rigid3 T_t_s = P[target].inverse() * P[source];
+    const Points3& positions = S[source].cloud->positions;
+    for (Eigen::Index r = 0; r < positions.rows(); ++r) {
+      std::uint32_t nearest = 0;
+      double d2 = 0.0;
+      const Eigen::Vector3d x = T_t_s * positions.row(r).transpose() - S[target].target->origin();
+      if (S[target].target->tree().NearestWithin(x, gate_mm, &nearest, &d2))
+        rows[k].push_back(std::uint32_t(r));
+    }
+  }
+  return rows;
+}
+
+std::vector<SweepCorrespondence> AllCorrespondences(const std::vector<SweepSurface>& S,
+                                                    const std::vector<Rigid3>& P,
+                                                    const std::vector<SweepLink>& links,
+                                                    const std::vector<std::vector<std::uint32_t>>& rows,
+                                                    double gate_mm) {
+  std::vector<std::vector<SweepCorrespondence>> found(links.size() * 2);
+#pragma omp parallel for schedule(dynamic)
+  for (std::size_t k = 0; k < found.size(); ++k) {
+    const SweepLink& l = links[k / 2];
+    found[k] = k % 2 ? FindSweepCorrespondences(S, P, l.j, l.i, rows[k], 0, gate_mm)
+                     : FindSweepCorrespondences(S, P, l.i, l.j, rows[k], 0, gate_mm);
+  }
+  std::vector<SweepCorrespondence> all;
+  for (auto& f : found) all.insert(all.end(), f.begin(), f.end());
+  return all;
+}
+
 void PosesFromTree(const std::vector<SweepLink>& links, const std::vector<Rigid3>& T_i_j,
                    const std::vector<bool>& ok, std::size_t anchor, std::vector<Rigid3>* P) {
   std::vector<bool> placed(P->size(), false);

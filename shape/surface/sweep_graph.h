@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "shape/core/geometry.h"
@@ -43,6 +44,21 @@ double DistanceToNearestSweep(const std::vector<SweepSurface>& S, const std::vec
 std::vector<SweepCorrespondence> AllCorrespondences(const std::vector<SweepSurface>& S,
                                                     const std::vector<Rigid3>& P,
                                                     const std::vector<SweepLink>& links, int per_pair,
+                                                    double gate_mm);
+
+/// Every row of a link's source sweep (not only its subsample) with a point of its target within gate_mm
+/// at the poses P: the candidates of the correspondences with every point. Two lists per link, in
+/// AllCorrespondences's order: [2k] rows of links[k].j near links[k].i, [2k + 1] rows of i near j.
+std::vector<std::vector<std::uint32_t>> OverlapRows(const std::vector<SweepSurface>& S,
+                                                    const std::vector<Rigid3>& P,
+                                                    const std::vector<SweepLink>& links, double gate_mm);
+
+/// Correspondences of every link in both directions from the given rows (OverlapRows), each row once
+/// (no cap), gated at gate_mm.
+std::vector<SweepCorrespondence> AllCorrespondences(const std::vector<SweepSurface>& S,
+                                                    const std::vector<Rigid3>& P,
+                                                    const std::vector<SweepLink>& links,
+                                                    const std::vector<std::vector<std::uint32_t>>& rows,
                                                     double gate_mm);
 
 /// Poses from a maximum spanning tree (by overlap) of the links whose pairwise registration succeeded

@@ -131,17 +131,27 @@ std::vector<SweepCorrespondence> FindSweepCorrespondences(const std::vector<Swee
                                                           const std::vector<Rigid3>& T_world_sweep,
                                                           std::size_t i, std::size_t j, int max_samples,
                                                           double gate_mm, double max_angle_deg) {
+  return FindSweepCorrespondences(sweeps, T_world_sweep, i, j, sweeps[j].samples, std::max(1, max_samples),
+                                  gate_mm, max_angle_deg);
+}
+
+std::vector<SweepCorrespondence> FindSweepCorrespondences(const std::vector<SweepSurface>& sweeps,
+                                                          const std::vector<Rigid3>& T_world_sweep,
+                                                          std::size_t i, std::size_t j,
+                                                          const std::vector<std::uint32_t>& rows,
+                                                          int max_samples, double gate_mm,
+                                                          double max_angle_deg) {
   const SweepSurface& a = sweeps[i];
   const SweepSurface& b = sweeps[j];
   const Rigid3 T_i_j = T_world_sweep[i].inverse() * T_world_sweep[j];
-  const std::size_t n = b.samples.size();
-  const std::size_t stride = std::max<std::size_t>(1, n / std::size_t(std::max(1, max_samples)));
+  const std::size_t n = rows.size();
+  const std::size_t stride = max_samples > 0 ? std::max<std::size_t>(1, n / std::size_t(max_samples)) : 1;
   const double gate2 = gate_mm * gate_mm;
   const double min_cos = std::cos(max_angle_deg * M_PI / 180.0);
   std::vector<SweepCorrespondence> out;
   out.reserve(n / stride + 1);
   for (std::size_t s = 0; s < n; s += stride) {
-    const std::uint32_t r = b.samples[s];
+    const std::uint32_t r = rows[s];
     const Eigen::Vector3d p = b.cloud->positions.row(r).transpose();
     std::uint32_t k;
     double d2;

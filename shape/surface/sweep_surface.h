@@ -14,7 +14,11 @@ namespace pectus {
 
 /// Options of PrepareSweep.
 struct SweepSurfaceOptions {
-  int normal_neighbours = 16;  ///< k of the PCA normals (>= 3)
+  /// k of the PCA normals (>= 3). 32 rather than 16: the normals' noise, which the joint adjustment
+  /// counts against the information of every direction (TrackerAdjustmentOptions::min_pinned_ratio),
+  /// halves, and the narrow overlaps of a chest's strips pin more (issue-13 grid at 2-4 mm, 15-40 %:
+  /// the whole line met in 13 and 12 of 36 cells against 11 and 8; docs/benchmarks/merge.md).
+  int normal_neighbours = 32;
   int border_neighbours = 24;  ///< k of the border test (>= 4)
   /// A point is on the border of the sweep (its edge or the rim of a hole in it) when its
   /// border_neighbours nearest neighbours, seen from it in its tangent plane, leave an angular gap wider
@@ -79,6 +83,15 @@ std::vector<SweepCorrespondence> FindSweepCorrespondences(const std::vector<Swee
                                                           const std::vector<Rigid3>& T_world_sweep,
                                                           std::size_t i, std::size_t j, int max_samples,
                                                           double gate_mm, double max_angle_deg = 45.0);
+
+/// The same from the given rows of sweep j (e.g. every point of its overlap with i) instead of its
+/// subsample: at most max_samples of them, evenly strided (<= 0: every row).
+std::vector<SweepCorrespondence> FindSweepCorrespondences(const std::vector<SweepSurface>& sweeps,
+                                                          const std::vector<Rigid3>& T_world_sweep,
+                                                          std::size_t i, std::size_t j,
+                                                          const std::vector<std::uint32_t>& rows,
+                                                          int max_samples, double gate_mm,
+                                                          double max_angle_deg = 45.0);
 
 /// RMS of the point-to-plane residuals of `pairs` at the poses T_world_sweep (mm); 0 if empty.
 double PointToPlaneRms(const std::vector<SweepCorrespondence>& pairs,

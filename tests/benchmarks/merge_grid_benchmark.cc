@@ -24,7 +24,7 @@
 //       [--spacing 1.5] [--no-open3d] [--png merge_grid.png] [--workdir /tmp/pectus_merge_grid]
 //       [--prior-deg D --prior-mm M --prior-lever L] [--min-overlap-fraction F] [--border-gap DEG]
 //       [--min-pinned-ratio R] [--final-pinned-ratio R] [--sample-spacings S] [--points-per-pair N]
-//       [--rounds N] [--fit-tracker 0|1] [--normal-neighbours K] [--model-bound]
+//       [--rounds N] [--fit-tracker 0|1] [--final-every-point 0|1] [--normal-neighbours K] [--model-bound]
 // (the tracker prior, SweepMergeOptions::tracker_deg/tracker_mm/tracker_lever_mm, defaults MergeSweeps's;
 // the others override SweepMergeOptions::min_overlap_fraction, global_points_per_pair and global_rounds,
 // SweepSurfaceOptions::border_gap_deg and sample_spacings, and
@@ -76,6 +76,7 @@ SweepMergeOptions MergeOptions(const Flags& f) {
   if (f.points_per_pair >= 0) options.global_points_per_pair = f.points_per_pair;
   if (f.rounds >= 0) options.global_rounds = f.rounds;
   if (f.fit_tracker >= 0) options.fit_tracker_accuracy = f.fit_tracker != 0;
+  if (f.final_every_point >= 0) options.final_every_point = f.final_every_point != 0;
   return options;
 }
 
@@ -163,7 +164,12 @@ Eigen::MatrixXd ModelInformation(const std::vector<PointCloud>& clouds, const st
   }
   OrientSweeps(truth, options.StartingRadiusMm(), 0, &sweeps);
   const auto links = FindSweepLinks(sweeps, truth, options.StartingRadiusMm(), options.min_overlap_fraction);
-  const auto pairs = AllCorrespondences(sweeps, truth, links, options.global_points_per_pair, 3.0 * spacing);
+  const bool every_point = options.final_every_point &&
+                           options.final_min_pinned_ratio < options.tracker_adjustment.min_pinned_ratio;
+  const auto pairs =
+      every_point ? AllCorrespondences(sweeps, truth, links, OverlapRows(sweeps, truth, links, 6.0 * spacing),
+                                       3.0 * spacing)
+                  : AllCorrespondences(sweeps, truth, links, options.global_points_per_pair, 3.0 * spacing);
   PosePrior prior;
   prior.T_world_sweep = truth;
   for (const auto& w : sweeps) prior.centre.push_back(w.centroid);

@@ -23,10 +23,11 @@ struct Flags {
   double final_pinned_ratio = -1.0;                                 // < 0: MergeSweeps's default
   double sample_spacings = -1.0;                                    // < 0: MergeSweeps's default
   int normal_neighbours = -1;                                       // < 0: MergeSweeps's default
-  bool model_bound = false;  // also the shape figure the merge's own information at the truth predicts
-  int points_per_pair = -1;  // < 0: MergeSweeps's default
-  int rounds = -1;           // < 0: MergeSweeps's default
-  int fit_tracker = -1;      // 0 / 1; < 0: MergeSweeps's default
+  bool model_bound = false;    // also the shape figure the merge's own information at the truth predicts
+  int points_per_pair = -1;    // < 0: MergeSweeps's default
+  int rounds = -1;             // < 0: MergeSweeps's default
+  int fit_tracker = -1;        // 0 / 1; < 0: MergeSweeps's default
+  int final_every_point = -1;  // 0 / 1; < 0: MergeSweeps's default
   bool open3d = true;
 };
 
@@ -102,6 +103,8 @@ inline Flags Parse(int argc, char** argv) {
       f.normal_neighbours = std::stoi(value());
     else if (key == "--fit-tracker")
       f.fit_tracker = std::stoi(value());
+    else if (key == "--final-every-point")
+      f.final_every_point = std::stoi(value());
     else if (key == "--rounds")
       f.rounds = std::stoi(value());
     else if (key == "--points-per-pair")

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <set>
 #include <utility>
 #include <vector>
@@ -129,6 +130,37 @@ TEST_F(SweepGraph, CorrespondencesOfEveryLinkBothWaysLieOnTheSurface) {
   // 0.5 mm times the cosine of 0 to 35 degrees between the shift and the normals (0.466 mm measured).
   EXPECT_GT(PointToPlaneRms(pairs, moved), 0.5 * std::cos(35 * kDegree));
   EXPECT_LT(PointToPlaneRms(pairs, moved), 0.5);
+}
+
+TEST_F(SweepGraph, OverlapRowsListEveryPointOfTheOverlapAndPairThemAll) {
+  for (std::size_t k = 0; k < sweeps_.size(); ++k) Face(k, true);
+  const std::vector<SweepLink> links = FindSweepLinks(sweeps_, poses_, 2.0, 0.1);
+  ASSERT_EQ(links.size(), 2u);
+  const auto rows = OverlapRows(sweeps_, poses_, links, 2.0);
+  ASSERT_EQ(rows.size(), 4u);
+  // Each list is exactly the source's points within 2 mm of a point of the target (brute force).
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    const SweepLink& l = links[k / 2];
+    const std::size_t target = k % 2 ? l.j : l.i, source = k % 2 ? l.i : l.j;
+    std::vector<std::uint32_t> expected;
+    for (Eigen::Index r = 0; r < clouds_[source].size(); ++r) {
+      const Eigen::Vector3d x = poses_[source] * clouds_[source].positions.row(r).transpose();
+      for (Eigen::Index q = 0; q < clouds_[target].size(); ++q) {
+        if ((poses_[target] * clouds_[target].positions.row(q).transpose() - x).norm() <= 2.0) {
+          expected.push_back(std::uint32_t(r));
+          break;
+        }
+      }
+    }
+    EXPECT_EQ(rows[k], expected) << "list " << k;
+  }
+  // Paired from every point, each way, against the subsample (cube of 2 spacings: about a quarter of the
+  // points): three to five times as many pairs, on the same surface.
+  const auto every = AllCorrespondences(sweeps_, poses_, links, rows, 2.0);
+  const auto subsample = AllCorrespondences(sweeps_, poses_, links, 100000, 2.0);
+  EXPECT_GT(every.size(), 3 * subsample.size());
+  EXPECT_LT(every.size(), 5 * subsample.size());
+  EXPECT_LT(PointToPlaneRms(every, poses_), 0.003);
 }
 
 TEST_F(SweepGraph, OrientsEveryLinkedSweepToTheAnchorsSideThenOutward) {
