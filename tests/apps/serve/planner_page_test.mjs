@@ -248,7 +248,13 @@ try {
     }
   }
   await page.mouse.up();
-  await page.waitForTimeout(400);
+  // The server's device has reached the last target (its glide and the requests keep up at their own pace:
+  // slower under the sanitizers), then 200 more servo ticks for the proxy to follow, and an answer after.
+  const reachedTick = (await page.waitForFunction(() => {
+    const s = window.pectus.state.trainer, t = s.target, d = s.tick?.device_mm;
+    return d && Math.hypot(d[0] - t[0], d[1] - t[1], d[2] - t[2]) < 0.5 && s.tick.tick;
+  }, null, { timeout: 60000 })).jsonValue();
+  await page.waitForFunction((n) => window.pectus.state.trainer.tick.tick > n + 200, await reachedTick, { timeout: 60000 });
   const live = await page.evaluate(() => {
     const s = window.pectus.state.trainer;
     const exit = s.info.tunnel.exit_port_mm;
