@@ -226,35 +226,46 @@ ImputationResult ImputeMissingVertices(const Eigen::MatrixXd& shapes,
     to_fill.push_back(n);
   }
 
+  // The core: the subjects every model of the others is made of (the first max_others + 1 rows; every row
+  // of a cohort that small). Only their fills feed back into the others', so only they are iterated; each
+  // subject beyond the core is filled once, from the core's converged fills (the same fixed point as
+  // sweeping it too, at a fraction of the cost for a cohort of thousands: docs/cluster.md).
   const double noise_variance = options.noise_mm * options.noise_mm;
+  const Eigen::Index core = std::min<Eigen::Index>(N, static_cast<Eigen::Index>(options.max_others) + 1);
+  std::vector<Eigen::Index> core_fill, late_fill;
+  for (Eigen::Index n : to_fill) (n < core ? core_fill : late_fill).push_back(n);
   Eigen::MatrixXd X = shapes;
-  for (int it = 0; it < options.max_iterations && !to_fill.empty(); ++it) {
-    // One sweep: every subject filled from the others' fills of the sweep before (Jacobi).
-    const Eigen::MatrixXd G = GramMatrix(X, options.max_others);
-    std::vector<Eigen::VectorXd> fills(to_fill.size());
+  // Fills subjects `rows` (all in the core, or all beyond it) from the others' current fills (Jacobi);
+  // returns the largest move of a filled coordinate.
+  auto sweep = [&](const std::vector<Eigen::Index>& rows, const Eigen::MatrixXd& G) {
+    std::vector<Eigen::VectorXd> fills(rows.size());
 #pragma omp parallel for schedule(dynamic)
-    for (std::int64_t k = 0; k < static_cast<std::int64_t>(to_fill.size()); ++k) {
-      const Eigen::Index n = to_fill[static_cast<std::size_t>(k)];
+    for (std::int64_t k = 0; k < static_cast<std::int64_t>(rows.size()); ++k) {
+      const Eigen::Index n = rows[static_cast<std::size_t>(k)];
       fills[static_cast<std::size_t>(k)] =
           FillFromOthers(X, G, n, unseen[static_cast<std::size_t>(n)], noise_variance, options.max_others);
     }
     double change = 0.0;
-    for (std::size_t k = 0; k < to_fill.size(); ++k) {
-      const Eigen::Index n = to_fill[k];
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      const Eigen::Index n = rows[k];
       const std::vector<Eigen::Index>& c = unseen[static_cast<std::size_t>(n)];
       for (std::size_t j = 0; j < c.size(); ++j) {
         change = std::max(change, std::abs(fills[k][static_cast<Eigen::Index>(j)] - X(n, c[j])));
         X(n, c[j]) = fills[k][static_cast<Eigen::Index>(j)];
       }
     }
+    return change;
+  };
+  for (int it = 0; it < options.max_iterations && !core_fill.empty(); ++it) {
     result.iterations = it + 1;
-    result.last_change_mm = change;
-    if (change <= options.tolerance_mm) {
+    result.last_change_mm = sweep(core_fill, GramMatrix(X.topRows(core), options.max_others));
+    if (result.last_change_mm <= options.tolerance_mm) {
       result.converged = true;
       break;
     }
   }
-  if (to_fill.empty()) result.converged = true;
+  if (core_fill.empty()) result.converged = true;
+  if (!late_fill.empty()) sweep(late_fill, GramMatrix(X, options.max_others));
   if (options.local_scale_mm > 0.0 && !to_fill.empty()) {
     // The local correction of every fill, once the fills have converged.
     const Eigen::MatrixXd G = GramMatrix(X, options.max_others);

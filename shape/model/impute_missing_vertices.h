@@ -47,9 +47,10 @@ struct ImputationOptions {
   /// seen less keeps the resampler's fill and is reported (ImputationResult::too_little_seen).
   double min_seen_fraction = 0.5;
   /// The model of the others is made of at most this many subjects (>= 2): the first max_others + 1 rows
-  /// of the cohort but the one filled. Up to max_others + 1 subjects that is every other subject; a larger
-  /// cohort (thousands: docs/cluster.md) costs O(K^3) per subject and O(K N 3m) per sweep with K =
-  /// max_others, rather than O(N^3) and O(N^2 3m), for a covariance estimated from K shapes.
+  /// of the cohort (the core) but the one filled. Up to max_others + 1 subjects that is every other
+  /// subject; in a larger cohort (thousands: docs/cluster.md) only the core's fills are iterated, and each
+  /// subject beyond it is filled once from the converged core: O(K^3) per subject and O(K^2 3m) per sweep
+  /// with K = max_others, rather than O(N^3) and O(N^2 3m), for a covariance estimated from K shapes.
   int max_others = 256;
 
   /// False, with the reason, for a value out of range.
@@ -59,7 +60,7 @@ struct ImputationOptions {
 /// What the imputation did.
 struct ImputationResult {
   Eigen::MatrixXd shapes;                 ///< N by 3m, the input with every unseen vertex filled, mm
-  int iterations = 0;                     ///< sweeps over the cohort run
+  int iterations = 0;                     ///< sweeps over the cohort (its core: max_others) run
   bool converged = false;                 ///< the last sweep moved no fill by more than the tolerance
   double last_change_mm = 0.0;            ///< largest move of a filled coordinate in the last sweep
   std::vector<int> filled_vertices;       ///< per subject: vertices filled from the others
