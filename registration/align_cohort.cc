@@ -3,15 +3,127 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "registration/pose_error.h"
 #include "registration/voxel_downsample.h"
+#include "shape/core/atomic_file.h"
 #include "shape/core/error.h"
 #include "shape/core/log.h"
 
 namespace pectus {
+namespace {
+namespace fs = std::filesystem;
+
+// One scan's fit: to the reference (RegisterPair), or of the mean onto it in a groupwise round (AlignIcp).
+struct ScanFit {
+  Similarity3 T;
+  bool success = false;
+  std::string message;
+  double rms_mm = 0.0, inlier_fraction = 1.0;
+};
+
+// The scans' fits of one phase: in memory, or one file per scan committed to `folder/NAME.fit` as it
+// finishes (CBOR: every double bit for bit, so a fit read back is the fit computed).
+class FitStore {
+ public:
+  FitStore(const fs::path& folder, const std::vector<CohortScan>& scans)
+      : folder_(folder), held_(scans.size()) {
+    for (const CohortScan& s : scans) names_.push_back(s.name);
+  }
+  bool Has(std::size_t i) const {
+    std::error_code ec;
+    return folder_.empty() ? held_[i].has_value() : fs::exists(Path(i), ec);
+  }
+  void Put(std::size_t i, const ScanFit& fit) {
+    if (folder_.empty()) {
+      held_[i] = fit;
+      return;
+    }
+    const Eigen::Matrix3d& R = fit.T.rotation;
+    const nlohmann::json j = {
+        {"scale", fit.T.scale},
+        {"rotation", std::vector<double>(R.data(), R.data() + 9)},
+        {"translation", {fit.T.translation.x(), fit.T.translation.y(), fit.T.translation.z()}},
+        {"success", fit.success},
+        {"message", fit.message},
+        {"rms_mm", fit.rms_mm},
+        {"inlier_fraction", fit.inlier_fraction}};
+    const std::vector<std::uint8_t> bytes = nlohmann::json::to_cbor(j);
+    fs::create_directories(folder_);
+    WriteFileAtomically(Path(i), std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+  }
+  ScanFit Get(std::size_t i) const {
+    if (folder_.empty()) return *held_[i];
+    std::ifstream in(Path(i), std::ios::binary);
+    if (!in) ThrowBadInput(Path(i).string(), "cannot be read (a scan's fit of `pectus register`)");
+    const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),
+                                          std::istreambuf_iterator<char>());
+    const nlohmann::json j = nlohmann::json::from_cbor(bytes, true, false);
+    ScanFit fit;
+    try {
+      if (j.is_discarded()) throw std::runtime_error("not CBOR");
+      fit.T.scale = j.at("scale").get<double>();
+      const auto R = j.at("rotation").get<std::vector<double>>();
+      const auto t = j.at("translation").get<std::vector<double>>();
+      if (R.size() != 9 || t.size() != 3) throw std::runtime_error("wrong sizes");
+      fit.T.rotation = Eigen::Map<const Eigen::Matrix3d>(R.data());
+      fit.T.translation = Eigen::Vector3d(t[0], t[1], t[2]);
+      fit.success = j.at("success").get<bool>();
+      fit.message = j.at("message").get<std::string>();
+      fit.rms_mm = j.at("rms_mm").get<double>();
+      fit.inlier_fraction = j.at("inlier_fraction").get<double>();
+    } catch (const std::exception& e) {
+      ThrowBadInput(Path(i).string(), std::string("is not a scan's fit of `pectus register` (") + e.what() +
+                                          "); remove the work folder and run again");
+    }
+    return fit;
+  }
+
+ private:
+  fs::path Path(std::size_t i) const { return folder_ / (names_[i] + ".fit"); }
+  fs::path folder_;
+  std::vector<std::string> names_;
+  std::vector<std::optional<ScanFit>> held_;
+};
+
+ScanFit FitOf(const PairRegistrationResult& r) {
+  ScanFit fit;
+  fit.T = r.T_target_source;
+  fit.success = r.success;
+  fit.message = r.message;
+  if (r.icp) {
+    fit.rms_mm = r.icp->rms_mm;
+    fit.inlier_fraction = r.icp->inlier_fraction;
+  }
+  return fit;
+}
+
+// The phase folders of a work folder: to-reference and groupwise-1, -2, ...
+std::vector<fs::path> FitFolders(const fs::path& work) {
+  std::vector<fs::path> folders;
+  std::error_code ec;
+  for (fs::directory_iterator it(work, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name == "to-reference" || name.rfind("groupwise-", 0) == 0) folders.push_back(it->path());
+  }
+  return folders;
+}
+
+}  // namespace
+
+void RemoveCohortFits(const fs::path& work) {
+  std::error_code ec;
+  for (const fs::path& folder : FitFolders(work)) {
+    fs::remove_all(folder, ec);
+    if (ec) ThrowFailure("cannot remove the scans' fits: " + ec.message(), folder.string());
+  }
+  if (fs::is_empty(work, ec)) fs::remove(work, ec);
+}
 
 bool CohortOptions::IsValid(std::string* why) const {
   auto fail = [&](const char* text) {
@@ -42,7 +154,8 @@ std::string CohortResult::BriefReport() const {
   return s.str();
 }
 
-CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptions& options) {
+CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptions& options,
+                         const CohortFarm& farm) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage("cohort registration: " + why);
   const std::size_t n = scans.size();
@@ -56,6 +169,17 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
                " scans have landmarks; give landmarks for all scans or for none");
   }
   const bool landmarks = with_landmarks == n;
+  SerialTaskRunner threads;
+  TaskRunner& runner = farm.runner != nullptr ? *farm.runner : threads;
+  if (runner.Processes() > 1 && farm.work.empty())
+    ThrowUsage("cohort registration on several processes needs a work folder they all see");
+  if (!farm.work.empty() && !farm.resume && runner.IsLeader()) RemoveCohortFits(farm.work);
+  runner.Barrier();
+  auto phase = [&](const std::string& name) { return farm.work.empty() ? fs::path() : farm.work / name; };
+  // The scans handed out largest first, so that the last to finish are small ones.
+  std::vector<double> sizes(n);
+  for (std::size_t i = 0; i < n; ++i) sizes[i] = static_cast<double>(scans[i].cloud.size());
+  const std::vector<int> largest_first = LargestFirst(sizes);
 
   CohortResult result;
   result.T_frame_scan.assign(n, Similarity3{});
@@ -63,14 +187,12 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
   result.messages.assign(n, "reference");
   result.rms_mm.assign(n, 0.0);
   result.inlier_fraction.assign(n, 1.0);
-  auto record = [&](std::size_t i, const PairRegistrationResult& r) {
-    result.T_frame_scan[i] = r.T_target_source;
-    result.success[i] = r.success;
-    result.messages[i] = r.message;
-    if (r.icp) {
-      result.rms_mm[i] = r.icp->rms_mm;
-      result.inlier_fraction[i] = r.icp->inlier_fraction;
-    }
+  auto record = [&](std::size_t i, const ScanFit& fit) {
+    result.T_frame_scan[i] = fit.T;
+    result.success[i] = fit.success;
+    result.messages[i] = fit.message;
+    result.rms_mm[i] = fit.rms_mm;
+    result.inlier_fraction[i] = fit.inlier_fraction;
   };
 
   // Every scan to the reference: the whole of kToReference, and the start of kGroupwise without landmarks.
@@ -83,16 +205,23 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
     const IcpTarget target = r.cloud.has_normals()
                                  ? IcpTarget(r.cloud.positions, r.cloud.normals, r.name)
                                  : IcpTarget(r.cloud.positions, options.pair.normals, r.name);
-    Progress progress("registering to " + r.name, static_cast<std::int64_t>(n));
-    for (std::size_t i = 0; i < n; ++i) {
-      if (i != ref) {
-        const PairRegistrationResult pr =
-            RegisterPair(target, scans[i].cloud, landmarks ? &*r.landmarks : nullptr,
-                         landmarks ? &*scans[i].landmarks : nullptr, Similarity3{}, options.pair);
-        record(i, pr);
-      }
-      progress.Advance();
+    FitStore fits(phase("to-reference"), scans);
+    std::vector<int> todo;
+    for (int i : largest_first) {
+      if (static_cast<std::size_t>(i) != ref && !fits.Has(static_cast<std::size_t>(i))) todo.push_back(i);
     }
+    Progress progress("registering to " + r.name, static_cast<std::int64_t>(todo.size()));
+    runner.Run(todo, [&](int i) {
+      const CohortScan& s = scans[static_cast<std::size_t>(i)];
+      fits.Put(static_cast<std::size_t>(i),
+               FitOf(RegisterPair(target, s.cloud, landmarks ? &*r.landmarks : nullptr,
+                                  landmarks ? &*s.landmarks : nullptr, Similarity3{}, options.pair)));
+      progress.Advance();
+    });
+    for (std::size_t i = 0; i < n; ++i) {
+      if (i != ref) record(i, fits.Get(i));
+    }
+    runner.Barrier();  // every process has read the fits before the leader may remove them
     result.timings_s.Add("register", since(t0));
     if (options.mode == CohortMode::kToReference) return result;
   } else {
@@ -174,19 +303,29 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
     next = UmeyamaAlignment(next, mean, no_weights, false, 0.0, "mean surface").Apply(next);
     mean = next;
 
-    // Every scan to the mean: ICP of the mean points onto the scan, inverted.
+    // Every scan to the mean: ICP of the mean points onto the scan, inverted (the scans on the farm).
+    FitStore round(phase("groupwise-" + std::to_string(result.iterations)), scans);
+    std::vector<int> todo;
+    for (int i : largest_first) {
+      if (!round.Has(static_cast<std::size_t>(i))) todo.push_back(i);
+    }
+    runner.Run(todo, [&](int index) {
+      const auto i = static_cast<std::size_t>(index);
+      const IcpResult r = AlignIcp(*targets[i], mean, Points3(), rigid[i].inverse(), icp);
+      round.Put(
+          i, {Similarity3::FromRigid(r.T_target_source), r.success, r.message, r.rms_mm, r.inlier_fraction});
+    });
     double moved = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
-      const IcpResult r = AlignIcp(*targets[i], mean, Points3(), rigid[i].inverse(), icp);
-      const Rigid3 updated = r.T_target_source.inverse();
-      moved = std::max(moved, RmsDisplacement(mean, Similarity3::FromRigid(rigid[i].inverse()),
-                                              Similarity3::FromRigid(r.T_target_source)));
-      rigid[i] = updated;
-      result.success[i] = r.success;
-      result.messages[i] = r.message;
-      result.rms_mm[i] = r.rms_mm;
-      result.inlier_fraction[i] = r.inlier_fraction;
+      const ScanFit fit = round.Get(i);
+      moved = std::max(moved, RmsDisplacement(mean, Similarity3::FromRigid(rigid[i].inverse()), fit.T));
+      rigid[i] = fit.T.RigidPart().inverse();
+      result.success[i] = fit.success;
+      result.messages[i] = fit.message;
+      result.rms_mm[i] = fit.rms_mm;
+      result.inlier_fraction[i] = fit.inlier_fraction;
     }
+    runner.Barrier();  // every process has read the round's fits before the leader may remove them
     progress.Advance();
     if (moved < options.groupwise_tolerance_mm) {
       result.converged = true;

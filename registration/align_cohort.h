@@ -2,6 +2,7 @@
 // groupwise by generalised Procrustes analysis to the evolving mean (Gower 1975).
 #pragma once
 
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -10,6 +11,7 @@
 #include "registration/register_pair.h"
 #include "shape/core/geometry.h"
 #include "shape/core/landmarks.h"
+#include "shape/core/task_runner.h"
 
 namespace pectus {
 
@@ -71,9 +73,29 @@ struct CohortResult {
   std::string BriefReport() const;
 };
 
+/// Where AlignCohort's per-scan fits run and where they are kept (docs/cluster.md): the registrations to
+/// the reference, and each groupwise round's ICP of the mean onto every scan, are tasks of `runner`; the
+/// rest (the landmark Procrustes, each round's mean surface) is computed by every process alike.
+struct CohortFarm {
+  /// The task farm: null for this process's threads (SerialTaskRunner).
+  TaskRunner* runner = nullptr;
+  /// Each scan's fit is committed to `work/PHASE/NAME.fit` as it finishes (PHASE: to-reference,
+  /// groupwise-R), bit for bit, and every process reads the others' fits from there: needed by a runner of
+  /// several processes. Empty: the fits are kept in memory.
+  std::filesystem::path work;
+  /// Keep the fits already in `work` (a killed run, resumed with the same scans and options) and compute
+  /// only the missing ones; false: the fits there are removed first.
+  bool resume = false;
+};
+
+/// Removes the fits AlignCohort kept in `work` (its phase folders), and `work` itself if that empties it.
+void RemoveCohortFits(const std::filesystem::path& work);
+
 /// Aligns a cohort (see CohortMode). The reference scan gets the identity (kToReference). A scan whose
 /// fit is poor is marked success = false with the reason; nothing is dropped silently. Throws
 /// Error(kUsage) for invalid options or an inconsistent cohort (some scans with landmarks, some without).
-CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptions& options = {});
+/// On a farm (`farm`), every process gets the same result, whatever the number of processes or threads.
+CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptions& options = {},
+                         const CohortFarm& farm = {});
 
 }  // namespace pectus

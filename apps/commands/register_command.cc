@@ -33,6 +33,8 @@ class RegisterCommand : public Command {
            "../shared/datasets/stanford_bunny/bun000.ply \\\n"
            "      --input-units m --initial start.json --transform T.json\n"
            "  pectus register --cohort scans/ --groupwise -o aligned/ --write-moved\n"
+           "  mpirun -n 8 pectus register --cohort scans/ -o aligned/   (the scans' fits shared over 8 "
+           "ranks)\n"
            "  (cohort: every .ply/.obj/.stl/.pcd/.xyz in the folder; landmarks beside each scan as "
            "STEM.mrk.json,\n"
            "   STEM.fcsv or STEM.csv; writes STEM.T.json per scan and summary.json)\n"
@@ -82,6 +84,10 @@ class RegisterCommand : public Command {
                     "ICP's last sample grows until sampling adds at most this fraction of the residuals' "
                     "robust scale to the pose's standard error; 0 keeps 30000 points (default 0.01)");
     app->add_flag("--no-refine", no_refine_, "Landmarks (or --initial) only, no ICP");
+    app->add_option("--work", work_,
+                    "Cohort: folder of the scans' fits until the outputs are written, on a file system every "
+                    "rank sees (default: OUTDIR/.pectus-work; emptied after a complete run)");
+    app->add_flag("--resume", resume_, "Cohort: keep the fits of a killed run and compute only the rest");
   }
   std::vector<fs::path> Inputs() const override {
     std::vector<fs::path> in;
@@ -116,8 +122,9 @@ class RegisterCommand : public Command {
       RunCohort(context);
     } else {
       if (moving_.empty() || fixed_.empty()) ThrowUsage("give MOVING --to FIXED, or --cohort DIR");
-      if (groupwise_ || write_moved_ || keep_going_ || !reference_.empty()) {
-        ThrowUsage("--groupwise, --reference, --write-moved and --keep-going are for --cohort");
+      if (groupwise_ || write_moved_ || keep_going_ || !reference_.empty() || !work_.empty() || resume_) {
+        ThrowUsage(
+            "--groupwise, --reference, --write-moved, --keep-going, --work and --resume are for --cohort");
       }
       RunPair(context);
     }
@@ -222,26 +229,36 @@ class RegisterCommand : public Command {
       co.reference = static_cast<int>(it - files.begin());
     }
 
-    // Stage every output first: a refused overwrite fails before any work.
+    // Stage every output first (the leader, which writes them): a refused overwrite fails before any work.
     const fs::path out = output_;
+    const bool leader = context->runner->IsLeader();
     std::vector<fs::path> staged_T(files.size()), staged_moved(files.size());
-    for (std::size_t i = 0; i < files.size(); ++i) {
-      staged_T[i] = StageOutput(context, *this, out / (files[i].stem().string() + ".T.json"));
-      if (write_moved_)
-        staged_moved[i] = StageOutput(context, *this, out / (files[i].stem().string() + ".ply"));
+    fs::path staged_summary;
+    if (leader) {
+      for (std::size_t i = 0; i < files.size(); ++i) {
+        staged_T[i] = StageOutput(context, *this, out / (files[i].stem().string() + ".T.json"));
+        if (write_moved_)
+          staged_moved[i] = StageOutput(context, *this, out / (files[i].stem().string() + ".ply"));
+      }
+      staged_summary = StageOutput(context, *this, out / "summary.json");
     }
-    const fs::path staged_summary = StageOutput(context, *this, out / "summary.json");
 
     std::vector<CohortScan> scans;
     {
       auto t = context->report.Stage("read");
       scans = ReadCohortScans(files, read_options_, landmark_options_);
     }
+    // The scans' fits on the task farm (docs/cluster.md): this process's threads, or the MPI ranks.
+    CohortFarm farm;
+    farm.runner = context->runner;
+    farm.work = work_.empty() ? out / ".pectus-work" : fs::path(work_);
+    farm.resume = resume_;
     CohortResult r;
     {
       auto t = context->report.Stage("register");
-      r = AlignCohort(scans, co);
+      r = AlignCohort(scans, co, farm);
     }
+    if (!leader) return;
 
     std::vector<std::string> failed;
     const nlohmann::json summary = CohortSummary(files, scans, r, co, &failed);
@@ -273,14 +290,16 @@ class RegisterCommand : public Command {
       }
     }
     WriteFileAtomically(staged_summary, summary.dump(2) + "\n");
+    RemoveCohortFits(farm.work);  // every output is staged
     Info(r.BriefReport() + " into the frame of " + summary["reference"].get<std::string>() + " -> " +
          output_);
   }
 
   std::string moving_, fixed_, moving_landmarks_, fixed_landmarks_, initial_, output_, transform_, cohort_,
-      reference_;
+      reference_, work_;
   std::string units_, method_, loss_;
-  bool groupwise_ = false, write_moved_ = false, keep_going_ = false, scale_ = false, no_refine_ = false;
+  bool groupwise_ = false, write_moved_ = false, keep_going_ = false, scale_ = false, no_refine_ = false,
+       resume_ = false;
   std::optional<double> trim_, max_distance_, final_distance_, patch_radius_, max_rms_, min_inliers_,
       pose_sd_fraction_;
   PairRegistrationOptions options_;

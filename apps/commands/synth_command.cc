@@ -1,7 +1,8 @@
 // pectus synth cohort|subject|pair|patient: synthetic handheld chest scans with their ground truth
 // (docs/datasets.md).
-#include <mutex>
+#include <fstream>
 #include <optional>
+#include <sstream>
 
 #include "apps/command.h"
 #include "datasets/chest_population.h"
@@ -17,6 +18,18 @@ namespace pectus::cli {
 namespace {
 
 namespace ds = pectus::datasets;
+namespace fs = std::filesystem;
+
+// A subject's record in the work folder (its size and points), written by the task that made it.
+nlohmann::json ReadRecord(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  nlohmann::json j = nlohmann::json::parse(text.str(), nullptr, false);
+  if (!in || j.is_discarded() || !j.contains("bytes") || !j.contains("points"))
+    ThrowBadInput(path.string(), "is not a subject's record of `pectus synth` (remove the work folder)");
+  return j;
+}
 
 class SynthCommand : public Command {
  public:
@@ -117,35 +130,77 @@ class SynthCommand : public Command {
     }
     // A single subject goes straight into --out; several get a folder each.
     const bool single = subjects.size() == 1 && !cohort_->parsed() && !patient_->parsed();
-    std::mutex stage_mutex;
-    const ds::StagePath stage = [&](const std::filesystem::path& target) {
-      std::lock_guard<std::mutex> lock(stage_mutex);
-      return StageOutput(context, *this, target);
+    auto folder_of = [&](std::size_t i) { return single ? out_ : out_ / subjects[i].name; };
+    // The subjects on the task farm (docs/cluster.md): each one scanned and its files written to the work
+    // folder, then its record committed (bytes, points); the leader moves the files into the outputs.
+    const TaskShare share = shard_.empty() ? TaskShare{} : ParseTaskShare(shard_);
+    if (!share.whole() && (gather_ || context->runner->Processes() > 1))
+      ThrowUsage("--shard runs one share on its own: not with --gather, nor under mpirun");
+    SerialTaskRunner share_runner(share);
+    TaskRunner& runner = share.whole() ? *context->runner : share_runner;
+    const fs::path work = work_.empty() ? out_ / ".pectus-work" : fs::path(work_);
+    const fs::path files = work / "synth", records = work / "synth-done";
+    auto record_of = [&](std::size_t i) { return records / (subjects[i].name + ".json"); };
+    const bool keep = resume_ || gather_ || !share.whole();
+    if (runner.IsLeader() && !keep) RemoveSynthResults(work);
+    runner.Barrier();
+    std::vector<int> missing;
+    for (std::size_t i = 0; i < subjects.size(); ++i) {
+      if (!fs::exists(record_of(i))) missing.push_back(static_cast<int>(i));
+    }
+    if (gather_ && !missing.empty()) {
+      std::string names;
+      for (std::size_t k = 0; k < std::min<std::size_t>(missing.size(), 10); ++k)
+        names += (k == 0 ? "" : ", ") + subjects[static_cast<std::size_t>(missing[k])].name;
+      if (missing.size() > 10) names += " and " + std::to_string(missing.size() - 10) + " more";
+      ThrowUsage("--gather: no share has made subject(s) " + names + " (they are not in " + work.string() +
+                 "); run their shares, or the whole run with --resume");
+    }
+    // Subject i: scanned, its files written to the work folder, then its record (the commit).
+    auto make_subject = [&](std::size_t i) {
+      const fs::path subject_files = files / subjects[i].name;
+      fs::remove_all(subject_files);  // what a killed run left of this subject
+      const ds::StagePath stage = [&](const fs::path& target) {
+        const fs::path path = subject_files / target.lexically_relative(folder_of(i));
+        fs::create_directories(path.parent_path());
+        return path;
+      };
+      const std::uint64_t scan_seed = ds::CohortScanSeed(seed_, static_cast<int>(i));
+      const ds::ScannedSubject scanned =
+          ds::ScanSubject(subjects[i], scan_, subject_.landmark_sd_mm, scan_seed);
+      const std::uintmax_t bytes = ds::WriteSubjectFolder(scanned, folder_of(i), write_, stage);
+      Eigen::Index points = 0;
+      for (const ds::Sweep& s : scanned.scan.sweeps) points += s.cloud.size();
+      if (preview_) ds::WriteSubjectPreview(scanned, folder_of(i) / "preview.png", stage);
+      fs::create_directories(records);
+      WriteFileAtomically(record_of(i), nlohmann::json{{"bytes", bytes}, {"points", points}}.dump() + "\n");
     };
-    std::vector<std::uintmax_t> bytes(subjects.size(), 0);
-    std::vector<Eigen::Index> points(subjects.size(), 0);
-    std::vector<std::string> errors(subjects.size());
     {
       auto t = report.Stage("scan_and_write");
-      Progress progress("synthesising subjects", static_cast<std::int64_t>(subjects.size()));
-#pragma omp parallel for schedule(dynamic)
-      for (std::size_t i = 0; i < subjects.size(); ++i) {
+      Progress progress("synthesising subjects", static_cast<std::int64_t>(missing.size()));
+      runner.Run(missing, [&](int index) {
+        const auto i = static_cast<std::size_t>(index);
         try {
-          const std::uint64_t scan_seed = ds::CohortScanSeed(seed_, static_cast<int>(i));
-          const ds::ScannedSubject scanned =
-              ds::ScanSubject(subjects[i], scan_, subject_.landmark_sd_mm, scan_seed);
-          const std::filesystem::path folder = single ? out_ : out_ / subjects[i].name;
-          bytes[i] = ds::WriteSubjectFolder(scanned, folder, write_, stage);
-          for (const ds::Sweep& s : scanned.scan.sweeps) points[i] += s.cloud.size();
-          if (preview_) ds::WriteSubjectPreview(scanned, folder / "preview.png", stage);
+          make_subject(i);
         } catch (const std::exception& e) {
-          errors[i] = e.what();
+          ThrowFailure(subjects[i].name + ": " + e.what());
         }
         progress.Advance();
-      }
+      });
     }
+    if (!share.whole()) {
+      Info("synth: share " + shard_ + " done; its subjects are in " + work.string() +
+           " (then: the same command with --gather)");
+    }
+    if (!runner.IsLeader() || !share.whole()) return;
+    std::vector<std::uintmax_t> bytes(subjects.size(), 0);
+    std::vector<Eigen::Index> points(subjects.size(), 0);
     for (std::size_t i = 0; i < subjects.size(); ++i) {
-      if (!errors[i].empty()) ThrowFailure(subjects[i].name + ": " + errors[i]);
+      const nlohmann::json r = ReadRecord(record_of(i));
+      bytes[i] = r.at("bytes").get<std::uintmax_t>();
+      points[i] = r.at("points").get<Eigen::Index>();
+      MoveFilesInto(files / subjects[i].name,
+                    [&](const fs::path& name) { return StageOutput(context, *this, folder_of(i) / name); });
     }
     if (cohort_->parsed()) WritePopulation(context);
     nlohmann::json list = nlohmann::json::array();
@@ -171,6 +226,7 @@ class SynthCommand : public Command {
     report["bytes_written"] = total_bytes;
     Info("wrote " + std::to_string(subjects.size()) + " subject(s), " + std::to_string(total_points) +
          " scan points, to " + out_.string());
+    RemoveSynthResults(work);  // every output is staged
   }
 
  private:
@@ -247,8 +303,27 @@ class SynthCommand : public Command {
         ->each([this](const std::string&) { write_.chest_wall = false; });
     sub->add_flag("--no-sweep-truth", no_sweep_truth_, "Do not write truth/sweep_NN.ply")
         ->each([this](const std::string&) { write_.sweep_truth = false; });
+    sub->add_option("--work", work_,
+                    "Folder of the subjects' results until the outputs are written, on a file system every "
+                    "rank sees (default: OUT/.pectus-work; emptied after a complete run)");
+    sub->add_flag("--resume", resume_, "Keep the subjects made by a killed run and make only the rest");
+    sub->add_option("--shard", shard_,
+                    "K/N: only share K of N of the subjects (a job array without MPI), kept in the work "
+                    "folder for --gather");
+    sub->add_flag("--gather", gather_,
+                  "Write the outputs from the subjects every share made (after --shard)");
     sub->add_flag("--preview", preview_,
                   "Also write preview.png (the subject, its sweeps coloured by sweep)");
+  }
+
+  // The subjects' files and records of a run on the farm, and the work folder if that empties it.
+  static void RemoveSynthResults(const fs::path& work) {
+    std::error_code ec;
+    for (const char* part : {"synth", "synth-done"}) {
+      fs::remove_all(work / part, ec);
+      if (ec) ThrowFailure("cannot remove the subjects' results: " + ec.message(), (work / part).string());
+    }
+    if (fs::is_empty(work, ec)) fs::remove(work, ec);
   }
 
   void AddPectusOptions(CLI::App* sub) {
@@ -319,6 +394,8 @@ class SynthCommand : public Command {
   std::string grid_ = "51x101";
   std::vector<int> rows_;
   bool all_rows_ = false, no_chest_wall_ = false, no_sweep_truth_ = false, preview_ = false;
+  std::string work_, shard_;
+  bool resume_ = false, gather_ = false;
   ds::ScanOptions scan_;
   ds::SubjectOptions subject_;
   ds::CohortOptions cohort_options_;

@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <system_error>
 
@@ -105,6 +106,26 @@ bool FileIdentity(const fs::path& path, std::pair<std::uint64_t, std::uint64_t>*
 }
 
 }  // namespace
+
+void MoveFilesInto(const fs::path& from, const std::function<fs::path(const fs::path&)>& target) {
+  std::error_code ec;
+  if (!fs::is_directory(from, ec)) return;
+  std::vector<fs::path> files;
+  for (const fs::directory_entry& e : fs::recursive_directory_iterator(from)) {
+    if (e.is_regular_file()) files.push_back(fs::relative(e.path(), from));
+  }
+  std::sort(files.begin(), files.end());
+  for (const fs::path& name : files) {
+    const fs::path to = target(name);
+    fs::rename(from / name, to, ec);
+    if (ec) {
+      ec.clear();
+      fs::copy_file(from / name, to, fs::copy_options::overwrite_existing, ec);
+      if (ec)
+        ThrowFailure("cannot move a file of the work folder into the outputs: " + ec.message(), to.string());
+    }
+  }
+}
 
 void RefuseOverwritingInputs(const fs::path& output, const std::vector<fs::path>& inputs) {
   InputGuard(inputs).Refuse(output);

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <set>
 #include <string>
 #include <string_view>
@@ -57,6 +58,12 @@ class OutputTransaction {
   std::vector<std::pair<std::filesystem::path, std::filesystem::path>> staged_;  // temp, target
   bool committed_ = false;
 };
+
+/// Moves every file under `from` (files made by a task in a work folder, at their paths relative to the
+/// outputs) to where `target(relative path)` says, in path order: a rename, or a copy where the work folder
+/// is on another file system. Nothing if `from` does not exist. Throws Error(kFailure) naming the file.
+void MoveFilesInto(const std::filesystem::path& from,
+                   const std::function<std::filesystem::path(const std::filesystem::path&)>& target);
 
 /// Throws Error(kUsage) if `output` names the same file as any of `inputs` (pectus never overwrites
 /// its input).

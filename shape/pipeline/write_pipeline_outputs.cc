@@ -14,31 +14,6 @@ namespace pectus {
 
 namespace fs = std::filesystem;
 
-namespace {
-
-// Moves every file under `from` (a subject's files made on the farm, at their paths in the outputs) to
-// where `target` stages it: a rename, or a copy where the work folder is on another file system.
-void MoveSubjectFiles(const fs::path& from, const std::function<fs::path(const fs::path&)>& target) {
-  std::error_code ec;
-  if (!fs::is_directory(from, ec)) return;
-  std::vector<fs::path> files;
-  for (const fs::directory_entry& e : fs::recursive_directory_iterator(from)) {
-    if (e.is_regular_file()) files.push_back(fs::relative(e.path(), from));
-  }
-  std::sort(files.begin(), files.end());
-  for (const fs::path& name : files) {
-    const fs::path to = target(name);
-    fs::rename(from / name, to, ec);
-    if (ec) {
-      ec.clear();
-      fs::copy_file(from / name, to, fs::copy_options::overwrite_existing, ec);
-      if (ec) ThrowFailure("cannot move a subject's file into the outputs: " + ec.message(), to.string());
-    }
-  }
-}
-
-}  // namespace
-
 void WriteSubjectFiles(const SubjectOutcome& s, const std::function<fs::path(const fs::path&)>& target) {
   const fs::path dir = fs::path("subjects") / s.name;
   if (s.surface.num_faces() > 0) WriteMesh(target(dir / "surface.ply"), s.surface);
@@ -93,7 +68,7 @@ std::vector<fs::path> WritePipelineOutputs(const PipelineResult& result, const P
     if (work.empty()) {
       WriteSubjectFiles(s, [&](const fs::path& name) { return target(name); });
     } else {
-      MoveSubjectFiles(SubjectFilesFolder(work, s.name), target);
+      MoveFilesInto(SubjectFilesFolder(work, s.name), target);
     }
   }
   // The report and its figures.

@@ -4,21 +4,17 @@
 // with the serial run's on one 6-subject cohort; report.html is compared without what a run cannot
 // repeat: its run facts (the command, threads, summed stage times) and the per-subject wall times.
 #include <gtest/gtest.h>
-#include <signal.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <chrono>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <regex>
 #include <sstream>
 #include <string>
-#include <thread>
 
 #include "tests/support/cli_run.h"
+#include "tests/support/cluster_run.h"
 #include "tests/support/scratch_dir.h"
 
 namespace pectus {
@@ -30,13 +26,6 @@ using testing_support::Pectus;
 
 // Coarse enough to take seconds under the sanitizers, fine enough to reconstruct (pipeline_command_test).
 const char* const kOptions = " --grid 21x41 --surface-spacing 3 --merge-spacing 0 --no-quality --quiet";
-
-std::string Read(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  return bytes.str();
-}
 
 // report.html without its run facts, the summed stage times and each subject's time (the last cell of a
 // subject's row): the only parts that depend on the run rather than on the cohort.
@@ -53,15 +42,11 @@ std::string WithoutWallTimes(const std::string& html) {
   return kept;
 }
 
-// Every output file under `folder` (relative path -> bytes), the work folder left out.
+// Every output file under `folder`, report.html without what a run cannot repeat.
 std::map<std::string, std::string> Outputs(const fs::path& folder) {
-  std::map<std::string, std::string> files;
-  for (const fs::directory_entry& e : fs::recursive_directory_iterator(folder)) {
-    if (!e.is_regular_file()) continue;
-    const std::string name = fs::relative(e.path(), folder).string();
-    if (name.rfind(".pectus-work", 0) == 0) continue;
-    files[name] = name == "report.html" ? WithoutWallTimes(Read(e.path())) : Read(e.path());
-  }
+  std::map<std::string, std::string> files = testing_support::FilesUnder(folder);
+  if (auto html = files.find("report.html"); html != files.end())
+    html->second = WithoutWallTimes(html->second);
   return files;
 }
 
@@ -108,13 +93,8 @@ class PipelineCluster : public testing_support::ScratchDirTest {
 TEST_F(PipelineCluster, MpiRanksGiveTheSerialBytes) {
   for (int ranks : {1, 2, 3}) {
     const std::string out = P("ranks" + std::to_string(ranks));
-    // CI runs as root: Open MPI refuses that unless told, here for this command only. Under the
-    // sanitizers, full stacks for LeakSanitizer (cmake/sanitizers/lsan.supp: Open MPI's own leaks).
-    const CliRun run = Pectus("pipeline " + Cohort() + " --out " + out + kOptions,
-                              "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
-                              "ASAN_OPTIONS=\"$ASAN_OPTIONS:fast_unwind_on_malloc=0\" " PECTUS_MPIEXEC
-                              " --oversubscribe -n " +
-                                  std::to_string(ranks));
+    const CliRun run =
+        Pectus("pipeline " + Cohort() + " --out " + out + kOptions, testing_support::MpiLauncher(ranks));
     ASSERT_EQ(run.code, 0) << ranks << " ranks: " << run.output;
     ExpectSerialBytes(out, std::to_string(ranks) + " ranks");
   }
@@ -155,33 +135,11 @@ TEST_F(PipelineCluster, KilledRunResumedGivesTheSerialBytes) {
   const fs::path records = fs::path(out) / ".pectus-work" / "surface";
   // One thread, so that subjects finish one by one; killed (SIGKILL: no clean-up) once 3 of the 6 have
   // their surface committed.
-  const std::string command = "exec " PECTUS_EXECUTABLE " pipeline " + Cohort() + " --out " + out + kOptions +
-                              " --threads 1 > /dev/null 2>&1";
-  const pid_t pid = fork();
-  ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  auto count = [&] {
-    std::error_code ec;
-    std::size_t n = 0;
-    for (fs::directory_iterator it(records, ec), end; !ec && it != end; it.increment(ec)) {
-      if (it->path().extension() == ".rec") ++n;
-    }
-    return n;
-  };
-  int status = 0;
-  bool exited = false;
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(5);
-  while (count() < 3 && !exited && std::chrono::steady_clock::now() < deadline) {
-    exited = waitpid(pid, &status, WNOHANG) == pid;
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
-  ASSERT_FALSE(exited) << "the run finished before it could be killed half way";
-  kill(pid, SIGKILL);
-  ASSERT_EQ(waitpid(pid, &status, 0), pid);
-  ASSERT_TRUE(WIFSIGNALED(status));
+  auto count = [&] { return testing_support::CountFiles(records, ".rec"); };
+  const testing_support::Killed killed = testing_support::KillWhen(
+      "pipeline " + Cohort() + " --out " + out + kOptions + " --threads 1", [&] { return count() >= 3; });
+  ASSERT_FALSE(killed.finished_first) << "the run finished before it could be killed half way";
+  ASSERT_TRUE(killed.killed);
   EXPECT_FALSE(fs::exists(fs::path(out) / "model.h5"));
   EXPECT_GE(count(), 3u);
   const std::size_t done = count();
