@@ -6,6 +6,10 @@
 //                                                that `pectus pipeline COHORT --out OUT` made
 //   model_benchmark cohort COHORT OUT            the pipeline's mean and modes against the generator's truth
 //                                                and a Monte Carlo population of M (--population M, --pool P)
+//   model_benchmark population COHORT OUT FILE [--work DIR]
+//                                                only the Monte Carlo reference of `cohort`, its model's
+//                                                doubles to FILE; under mpirun on the task farm (one rank
+//                                                per core), the same bytes for any number of ranks
 //   model_benchmark all [WORK=/tmp/pectus_model_benchmark] [PECTUS=the pectus beside this build]
 //                                                every acceptance figure of issue 6 in one run: synth cohorts
 //                                                of 11 (seed 7) and 30 (seed 11), `pectus pipeline` on each
@@ -28,10 +32,14 @@ int main() {
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 #include <vector>
 
+#ifdef PECTUS_HAVE_MPI
+#include "apps/mpi_task_runner.h"
+#endif
 #include "model_benchmark_holefill.h"
 #include "model_benchmark_truth.h"
 #include "shape/io/landmark_io.h"
@@ -225,14 +233,25 @@ nlohmann::json All(const fs::path& work, const std::string& pectus,
 
 int main(int argc, char** argv) {
   using namespace pectus::bench;
+  // Under mpirun the population reference's subjects are farmed out (`population`): one thread per rank.
+#ifdef PECTUS_HAVE_MPI
+  std::optional<pectus::cli::MpiSession> mpi;
+  if (pectus::cli::LaunchedByMpi()) {
+    mpi.emplace(&argc, &argv);
+    omp_set_num_threads(1);
+  }
+#endif
   try {
     // --population M [--pool P]: the Monte Carlo reference's sizes (model_benchmark_population.h).
     PopulationReferenceOptions reference;
     std::vector<char*> args;
+    std::string work;
     for (int i = 0; i < argc; ++i) {
       const std::string a = argv[i];
       if ((a == "--population" || a == "--pool") && i + 1 < argc)
         (a == "--pool" ? reference.pool : reference.subjects) = std::atoi(argv[++i]);
+      else if (a == "--work" && i + 1 < argc)
+        work = argv[++i];
       else
         args.push_back(argv[i]);
     }
@@ -252,12 +271,24 @@ int main(int argc, char** argv) {
                                            .lexically_normal()
                                            .string();
       result = All(argc > 2 ? argv[2] : "/tmp/pectus_model_benchmark", pectus, reference);
+    } else if (what == "population" && argc >= 5) {
+      Eigen::setNbThreads(1);  // the reference's bytes must not depend on the thread count (cluster.md)
+      std::ifstream in(fs::path(argv[3]) / "pipeline.json");
+      pectus::SerialTaskRunner threads;
+      ChainFarm farm{&threads, work.empty() ? fs::path(argv[4]).string() + ".work" : work};
+#ifdef PECTUS_HAVE_MPI
+      std::optional<pectus::cli::MpiTaskRunner> ranks;
+      if (mpi) farm.runner = &ranks.emplace(*mpi);
+#endif
+      result = PopulationOnly(argv[2], argv[3], nlohmann::json::parse(in), reference, farm, argv[4]);
+      if (!farm.runner->IsLeader()) return 0;
+      fs::remove_all(farm.work);
     } else if (what == "cohort" && argc >= 4) {
       std::ifstream in(fs::path(argv[3]) / "pipeline.json");
       result = CompareWithTruth(argv[2], argv[3], nlohmann::json::parse(in), reference);
     } else {
-      std::cerr << "usage: model_benchmark pca [N] | holefill COHORT OUT [PNG] | cohort COHORT OUT | all "
-                   "[WORK] [PECTUS]\n"
+      std::cerr << "usage: model_benchmark pca [N] | holefill COHORT OUT [PNG] | cohort COHORT OUT | "
+                   "population COHORT OUT FILE [--work DIR] | all [WORK] [PECTUS]\n"
                    "  [--population M=2000] [--pool P=1000]: the population reference's subjects, and the\n"
                    "  independent pool from which cohorts of N are drawn for the sampling spread (0: none)\n"
                    "  (OUT is the folder of `pectus pipeline COHORT --out OUT --report OUT/pipeline.json`)\n";

@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -20,6 +22,8 @@
 #include "datasets/chest_population.h"
 #include "datasets/seeding.h"
 #include "model_benchmark_chain.h"
+#include "shape/core/atomic_file.h"
+#include "shape/core/task_runner.h"
 #include "shape/model/shape_model.h"
 
 namespace pectus::bench {
@@ -50,12 +54,21 @@ struct ChainGrids {
   double wall_s = 0.0, cpu_s = 0.0;
 };
 
+/// Where the population's subjects go through the chain: this process's threads, or a task farm
+/// (`model_benchmark population` under mpirun, docs/cluster.md) whose tasks commit each subject's grid to
+/// `work` (raw doubles; an empty file for a subject the chain threw on), read back in seed order by the
+/// leader, so that the reference is the same bytes whatever the number of ranks.
+struct ChainFarm {
+  TaskRunner* runner = nullptr;
+  std::filesystem::path work;
+};
+
 /// `count` subjects, seeds DeriveSeed(base_seed, kSubject, 0, 1, ...) but those in `exclude`, through the
-/// chain in parallel; progress on stderr.
+/// chain in parallel; progress on stderr. On a farm, only the leader's rows are filled.
 inline ChainGrids PopulationThroughChain(std::uint64_t base_seed, int count,
                                          const std::set<std::uint64_t>& exclude, const IcpTarget& target,
                                          const LandmarkSet& landmarks, const PipelineOptions& options,
-                                         const std::string& label) {
+                                         const std::string& label, const ChainFarm& farm = {}) {
   std::vector<std::uint64_t> seeds;
   int skipped = 0;
   for (std::uint64_t i = 0; static_cast<int>(seeds.size()) < count; ++i) {
@@ -71,8 +84,7 @@ inline ChainGrids PopulationThroughChain(std::uint64_t base_seed, int count,
   const double t0 = Now(), cpu0 = CpuSeconds();
   std::vector<Eigen::VectorXd> grids(seeds.size());
   int done = 0;
-#pragma omp parallel for schedule(dynamic)
-  for (int i = 0; i < count; ++i) {
+  auto through_chain = [&](int i) {
     try {  // nothing may leave an OpenMP region; a subject the chain cannot take is counted and left out
       const datasets::ChestSurface surface(datasets::SampleSubject(population, seeds[i]).parameters);
       grids[i] = ThroughChain(surface, target, landmarks, options);
@@ -84,6 +96,33 @@ inline ChainGrids PopulationThroughChain(std::uint64_t base_seed, int count,
     if (++done % 100 == 0 || done == count)
       std::cerr << label << ": " << done << " of " << count << " subjects through the chain, " << Now() - t0
                 << " s\n";
+  };
+  if (farm.runner == nullptr) {
+#pragma omp parallel for schedule(dynamic)
+    for (int i = 0; i < count; ++i) through_chain(i);
+  } else {
+    const std::filesystem::path folder = farm.work / label;
+    auto path = [&](int i) { return folder / (std::to_string(seeds[i]) + ".grid"); };
+    std::vector<int> todo;
+    for (int i = 0; i < count; ++i)
+      if (!std::filesystem::exists(path(i))) todo.push_back(i);  // kept by a killed run
+    std::filesystem::create_directories(folder);
+    farm.runner->Run(todo, [&](int i) {
+      through_chain(i);
+      WriteFileAtomically(path(i),
+                          std::string_view(reinterpret_cast<const char*>(grids[i].data()),
+                                           sizeof(double) * static_cast<std::size_t>(grids[i].size())));
+      grids[i].resize(0);
+    });
+    if (!farm.runner->IsLeader()) return out;
+    for (int i = 0; i < count; ++i) {  // in seed order, whoever made them
+      std::ifstream in(path(i), std::ios::binary | std::ios::ate);
+      const auto bytes = static_cast<std::size_t>(in.tellg());
+      if (!in || bytes % sizeof(double) != 0) throw std::runtime_error(path(i).string() + ": not a grid");
+      grids[i].resize(static_cast<Eigen::Index>(bytes / sizeof(double)));
+      in.seekg(0);
+      in.read(reinterpret_cast<char*>(grids[i].data()), static_cast<std::streamsize>(bytes));
+    }
   }
   std::erase_if(grids, [](const Eigen::VectorXd& g) { return g.size() == 0; });
   out.failed = count - static_cast<int>(grids.size());
@@ -132,16 +171,25 @@ struct PopulationReference {
 
 /// Builds the reference for a cohort of `n` subjects whose pipeline mean is `frame` (the reference is
 /// moved onto it rigidly); `exclude` holds the cohort's own seeds.
+/// On a farm (`farm`), the other processes return an empty reference after the chain.
 inline PopulationReference BuildPopulationReference(const PopulationReferenceOptions& o, int n,
                                                     const Eigen::VectorXd& frame,
                                                     const std::set<std::uint64_t>& exclude,
                                                     const IcpTarget& target, const LandmarkSet& landmarks,
-                                                    const PipelineOptions& options) {
+                                                    const PipelineOptions& options,
+                                                    const ChainFarm& farm = {}) {
   std::string why;
   if (!o.IsValid(&why)) throw std::invalid_argument("population reference: " + why);
   PopulationReference ref;
   ChainGrids grids =
-      PopulationThroughChain(o.seed, o.subjects, exclude, target, landmarks, options, "reference");
+      PopulationThroughChain(o.seed, o.subjects, exclude, target, landmarks, options, "reference", farm);
+  const bool with_pool = o.pool >= n && o.pool != 0;
+  if (farm.runner != nullptr && !farm.runner->IsLeader()) {  // the pool's farm too, then nothing
+    if (with_pool)
+      PopulationThroughChain(datasets::Mix64(o.seed), o.pool, exclude, target, landmarks, options,
+                             "independent pool", farm);
+    return ref;
+  }
   double t = Now();
   AlignRowsToTheirMean(options.procrustes_iterations, frame, &grids.rows);
   ShapeModelOptions keep;
@@ -161,12 +209,12 @@ inline PopulationReference BuildPopulationReference(const PopulationReferenceOpt
                               {"largest_angle_deg_k1_to_k", AnglesForEachK(even, odd, o.modes)}};
   grids.rows.resize(0, 0);
   ref.report["pca_wall_s"] = Now() - t;
-  if (o.pool < n || o.pool == 0) return ref;
+  if (!with_pool) return ref;
 
   // Sampling spread of an N-subject cohort: random cohorts of n from an independent pool of true grids,
   // their mean and modes against the reference.
   ChainGrids pool = PopulationThroughChain(datasets::Mix64(o.seed), o.pool, exclude, target, landmarks,
-                                           options, "independent pool");
+                                           options, "independent pool", farm);
   AlignRowsToTheirMean(options.procrustes_iterations, frame, &pool.rows);
   std::mt19937_64 rng(o.seed ^ static_cast<std::uint64_t>(n));
   const int pool_size = static_cast<int>(pool.rows.rows());

@@ -9,12 +9,13 @@
 #pragma once
 
 #include <filesystem>
-#include <map>
-#include <stdexcept>
 #include <fstream>
+#include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <set>
+#include <stdexcept>
 
 #include "model_benchmark_chain.h"
 #include "model_benchmark_population.h"
@@ -62,6 +63,79 @@ inline TriangleMesh TrueSurfaceInReferenceFrame(const std::filesystem::path& coh
   }
   TransformInPlace(Similarity3::FromMatrix(T, "T_reference_subject"), &truth);
   return truth;
+}
+
+/// Subject `s`'s generator seed (COHORT/NAME/truth/subject.json; 0 if it has none).
+inline std::uint64_t SubjectSeed(const std::filesystem::path& cohort, const nlohmann::json& s) {
+  std::ifstream in(cohort / s["name"].get<std::string>() / "truth/subject.json");
+  return in ? nlohmann::json::parse(in)["seed"].get<std::uint64_t>() : 0;
+}
+
+/// What the population's chain takes from the pipeline's output: the reference subject's surface and
+/// landmarks, and the cohort's own seeds (left out of the population).
+struct ReferenceChainInputs {
+  std::unique_ptr<IcpTarget> target;
+  LandmarkSet landmarks;
+  std::set<std::uint64_t> cohort_seeds;
+};
+
+inline ReferenceChainInputs ReferenceChainInputsOf(const std::filesystem::path& cohort,
+                                                   const std::filesystem::path& out,
+                                                   const nlohmann::json& report) {
+  const std::string ref = report["reference"];
+  const TriangleMesh ref_surface = ReadMesh(out / "subjects" / ref / "surface.ply");
+  ReferenceChainInputs in{
+      std::make_unique<IcpTarget>(ref_surface.vertices.positions, ref_surface.vertices.normals, ref),
+      ReadLandmarks(out / "subjects" / ref / "landmarks.mrk.json"),
+      {}};
+  for (const nlohmann::json& s : report["subjects"]) in.cohort_seeds.insert(SubjectSeed(cohort, s));
+  return in;
+}
+
+/// The pipeline's grid options and its subjects' grids (rows), from OUT and its report.
+inline Eigen::MatrixXd PipelineGrids(const std::filesystem::path& out, const nlohmann::json& report) {
+  std::vector<Eigen::VectorXd> rows;
+  for (const nlohmann::json& s : report["subjects"]) {
+    if (s["ok"].get<bool>())
+      rows.push_back(ToShapeVector(
+          ReadMesh(out / "subjects" / s["name"].get<std::string>() / "grid.ply").vertices.positions));
+  }
+  Eigen::MatrixXd P(static_cast<Eigen::Index>(rows.size()), rows.empty() ? 0 : rows[0].size());
+  for (std::size_t i = 0; i < rows.size(); ++i) P.row(static_cast<Eigen::Index>(i)) = rows[i].transpose();
+  return P;
+}
+
+/// Only the Monte Carlo reference of OUT's pipeline (section 2 of CompareWithTruth, on `farm`), its model
+/// written to `file` (raw doubles: mean, variances, basis) by the leader: the bytes to compare between
+/// runs on different numbers of ranks. JSON on the leader; null on the other processes.
+inline nlohmann::json PopulationOnly(const std::filesystem::path& cohort, const std::filesystem::path& out,
+                                     const nlohmann::json& report, const PopulationReferenceOptions& o,
+                                     const ChainFarm& farm, const std::filesystem::path& file) {
+  PipelineOptions options;
+  options.resample.grid =
+      GridSize{report["grid"]["lateral"].get<int>(), report["grid"]["sternal"].get<int>()};
+  const Eigen::MatrixXd P = PipelineGrids(out, report);
+  const ShapeModel mp = BuildShapeModel(P);
+  const ReferenceChainInputs chain = ReferenceChainInputsOf(cohort, out, report);
+  const double t0 = Now();
+  const PopulationReference ref = BuildPopulationReference(o, int(P.rows()), mp.mean, chain.cohort_seeds,
+                                                           *chain.target, chain.landmarks, options, farm);
+  if (farm.runner != nullptr && !farm.runner->IsLeader()) return nullptr;
+  std::string bytes;
+  auto put = [&](const double* data, Eigen::Index size) {
+    bytes.append(reinterpret_cast<const char*>(data), sizeof(double) * static_cast<std::size_t>(size));
+  };
+  put(ref.model.mean.data(), ref.model.mean.size());
+  put(ref.model.variances.data(), ref.model.variances.size());
+  put(ref.model.basis.data(), ref.model.basis.size());
+  WriteFileAtomically(file, bytes);
+  nlohmann::json j = ref.report;
+  j["file"] = file.string();
+  j["file_bytes"] = bytes.size();
+  j["modes"] = ref.model.num_modes();
+  j["wall_s"] = Now() - t0;
+  j["processes"] = farm.runner != nullptr ? farm.runner->Processes() : 1;
+  return j;
 }
 
 /// The pipeline's output OUT of COHORT (`report`: OUT/pipeline.json) against the truth: each subject's grid
@@ -115,17 +189,13 @@ inline nlohmann::json CompareWithTruth(const std::filesystem::path& cohort, cons
 
   // 2. The population: M subjects through the same chain (same reference subject and options), aligned
   // and modelled as the pipeline does (model_benchmark_population.h), moved onto the pipeline's mean.
-  const std::string ref = report["reference"];
-  const TriangleMesh ref_surface = ReadMesh(out / "subjects" / ref / "surface.ply");
-  const IcpTarget target(ref_surface.vertices.positions, ref_surface.vertices.normals, ref);
-  const LandmarkSet ref_landmarks = ReadLandmarks(out / "subjects" / ref / "landmarks.mrk.json");
-  std::set<std::uint64_t> cohort_seeds;
+  const ReferenceChainInputs chain = ReferenceChainInputsOf(cohort, out, report);
+  const IcpTarget& target = *chain.target;
+  const LandmarkSet& ref_landmarks = chain.landmarks;
+  const std::set<std::uint64_t>& cohort_seeds = chain.cohort_seeds;
   std::vector<std::uint64_t> seed_of;  // of each subject in `truth`
   for (const nlohmann::json& s : report["subjects"]) {
-    std::ifstream in(cohort / s["name"].get<std::string>() / "truth/subject.json");
-    const std::uint64_t seed = in ? nlohmann::json::parse(in)["seed"].get<std::uint64_t>() : 0;
-    cohort_seeds.insert(seed);
-    if (s["ok"].get<bool>()) seed_of.push_back(seed);
+    if (s["ok"].get<bool>()) seed_of.push_back(SubjectSeed(cohort, s));
   }
   // Check of the reference's path: the same subjects drawn again from their seeds and put through the
   // chain as the reference's subjects are, against their true grids (the truth's path). Both are the same
