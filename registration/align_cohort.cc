@@ -173,7 +173,10 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
   TaskRunner& runner = farm.runner != nullptr ? *farm.runner : threads;
   if (runner.Processes() > 1 && farm.work.empty())
     ThrowUsage("cohort registration on several processes needs a work folder they all see");
-  if (!farm.work.empty() && !farm.resume && runner.IsLeader()) RemoveCohortFits(farm.work);
+  if ((farm.fits_only || farm.gather) && (farm.work.empty() || options.mode != CohortMode::kToReference))
+    ThrowUsage("cohort registration in shares is for the registration to a reference, with a work folder");
+  if (!farm.work.empty() && !farm.resume && !farm.fits_only && !farm.gather && runner.IsLeader())
+    RemoveCohortFits(farm.work);
   runner.Barrier();
   auto phase = [&](const std::string& name) { return farm.work.empty() ? fs::path() : farm.work / name; };
   // The scans handed out largest first, so that the last to finish are small ones.
@@ -210,6 +213,14 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
     for (int i : largest_first) {
       if (static_cast<std::size_t>(i) != ref && !fits.Has(static_cast<std::size_t>(i))) todo.push_back(i);
     }
+    if (farm.gather && !todo.empty()) {
+      std::string names;
+      for (std::size_t k = 0; k < std::min<std::size_t>(todo.size(), 10); ++k)
+        names += (k == 0 ? "" : ", ") + scans[static_cast<std::size_t>(todo[k])].name;
+      if (todo.size() > 10) names += " and " + std::to_string(todo.size() - 10) + " more";
+      ThrowUsage("--gather: no share has registered scan(s) " + names + " (their fits are not in " +
+                 farm.work.string() + "); run their shares, or the whole run with --resume");
+    }
     Progress progress("registering to " + r.name, static_cast<std::int64_t>(todo.size()));
     runner.Run(todo, [&](int i) {
       const CohortScan& s = scans[static_cast<std::size_t>(i)];
@@ -218,6 +229,7 @@ CohortResult AlignCohort(const std::vector<CohortScan>& scans, const CohortOptio
                                   landmarks ? &*s.landmarks : nullptr, Similarity3{}, options.pair)));
       progress.Advance();
     });
+    if (farm.fits_only) return CohortResult{};
     for (std::size_t i = 0; i < n; ++i) {
       if (i != ref) record(i, fits.Get(i));
     }

@@ -86,6 +86,11 @@ struct CohortFarm {
   /// Keep the fits already in `work` (a killed run, resumed with the same scans and options) and compute
   /// only the missing ones; false: the fits there are removed first.
   bool resume = false;
+  /// Only this runner's fits, then return an empty result: one share of a job array (kToReference; the
+  /// groupwise rounds need every scan's fit of the round before). Implies resume.
+  bool fits_only = false;
+  /// Every fit must be in `work` already (the shares' gather): Error(kUsage) naming the scans without one.
+  bool gather = false;
 };
 
 /// Removes the fits AlignCohort kept in `work` (its phase folders), and `work` itself if that empties it.

@@ -88,6 +88,12 @@ class RegisterCommand : public Command {
                     "Cohort: folder of the scans' fits until the outputs are written, on a file system every "
                     "rank sees (default: OUTDIR/.pectus-work; emptied after a complete run)");
     app->add_flag("--resume", resume_, "Cohort: keep the fits of a killed run and compute only the rest");
+    app->add_option(
+        "--shard", shard_,
+        "Cohort, to the reference: K/N: only share K of N of the scans (a job array without MPI), "
+        "kept in the work folder for --gather");
+    app->add_flag("--gather", gather_,
+                  "Cohort: write the outputs from the fits every share made (after --shard)");
   }
   std::vector<fs::path> Inputs() const override {
     std::vector<fs::path> in;
@@ -122,7 +128,8 @@ class RegisterCommand : public Command {
       RunCohort(context);
     } else {
       if (moving_.empty() || fixed_.empty()) ThrowUsage("give MOVING --to FIXED, or --cohort DIR");
-      if (groupwise_ || write_moved_ || keep_going_ || !reference_.empty() || !work_.empty() || resume_) {
+      if (groupwise_ || write_moved_ || keep_going_ || !reference_.empty() || !work_.empty() || resume_ ||
+          !shard_.empty() || gather_) {
         ThrowUsage(
             "--groupwise, --reference, --write-moved, --keep-going, --work and --resume are for --cohort");
       }
@@ -231,7 +238,15 @@ class RegisterCommand : public Command {
 
     // Stage every output first (the leader, which writes them): a refused overwrite fails before any work.
     const fs::path out = output_;
-    const bool leader = context->runner->IsLeader();
+    const TaskShare share = shard_.empty() ? TaskShare{} : ParseTaskShare(shard_);
+    if (!share.whole() && (gather_ || context->runner->Processes() > 1))
+      ThrowUsage("--shard runs one share on its own: not with --gather, nor under mpirun");
+    if ((!share.whole() || gather_) && groupwise_)
+      ThrowUsage(
+          "--shard and --gather are for the registration to a reference: the groupwise rounds need "
+          "every scan's fit of the round before (run --groupwise under mpirun or on one machine)");
+    SerialTaskRunner share_runner(share);
+    const bool leader = context->runner->IsLeader() && share.whole();
     std::vector<fs::path> staged_T(files.size()), staged_moved(files.size());
     fs::path staged_summary;
     if (leader) {
@@ -250,13 +265,19 @@ class RegisterCommand : public Command {
     }
     // The scans' fits on the task farm (docs/cluster.md): this process's threads, or the MPI ranks.
     CohortFarm farm;
-    farm.runner = context->runner;
+    farm.runner = share.whole() ? context->runner : &share_runner;
     farm.work = work_.empty() ? out / ".pectus-work" : fs::path(work_);
     farm.resume = resume_;
+    farm.fits_only = !share.whole();
+    farm.gather = gather_;
     CohortResult r;
     {
       auto t = context->report.Stage("register");
       r = AlignCohort(scans, co, farm);
+    }
+    if (!share.whole()) {
+      Info("register: share " + shard_ + " done; its scans' fits are in " + farm.work.string() +
+           " (then: the same command with --gather)");
     }
     if (!leader) return;
 
@@ -296,10 +317,10 @@ class RegisterCommand : public Command {
   }
 
   std::string moving_, fixed_, moving_landmarks_, fixed_landmarks_, initial_, output_, transform_, cohort_,
-      reference_, work_;
+      reference_, work_, shard_;
   std::string units_, method_, loss_;
   bool groupwise_ = false, write_moved_ = false, keep_going_ = false, scale_ = false, no_refine_ = false,
-       resume_ = false;
+       resume_ = false, gather_ = false;
   std::optional<double> trim_, max_distance_, final_distance_, patch_radius_, max_rms_, min_inliers_,
       pose_sd_fraction_;
   PairRegistrationOptions options_;

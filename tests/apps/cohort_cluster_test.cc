@@ -1,5 +1,5 @@
 // `pectus synth cohort` and `pectus register --cohort` on a task farm (docs/cluster.md), as a user runs
-// them: on MPI ranks (`mpirun -n 2, 3`), in shares gathered afterwards (synth), and killed half way then
+// them: on MPI ranks (`mpirun -n 2, 3`), in shares gathered afterwards, and killed half way then
 // resumed. Each run's outputs are compared byte for byte with the serial run's.
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -109,7 +109,7 @@ TEST_F(CohortCluster, MpiRanksGiveTheSerialBytes) {
 }
 #endif
 
-TEST_F(CohortCluster, SynthSharesGatheredGiveTheSerialBytes) {
+TEST_F(CohortCluster, SharesGatheredGiveTheSerialBytes) {
   const std::string out = P("shares");
   auto share = [&](int k) {
     const CliRun run = Pectus(std::string(kSynth) + " -o " + out + " --shard " + std::to_string(k) + "/3");
@@ -126,6 +126,25 @@ TEST_F(CohortCluster, SynthSharesGatheredGiveTheSerialBytes) {
   run = Pectus(std::string(kSynth) + " -o " + out + " --gather");
   ASSERT_EQ(run.code, 0) << run.output;
   ExpectSame(synth_, out, "synth cohort in 3 shares gathered");
+
+  // register --cohort (to the reference) in 3 shares; groupwise shares are refused with the reason.
+  const std::string aligned = P("aligned_shares");
+  for (int k : {2, 1, 3}) {
+    run = Pectus(RegisterArgs(aligned) + " --shard " + std::to_string(k) + "/3");
+    ASSERT_EQ(run.code, 0) << "share " << k << ": " << run.output;
+    EXPECT_FALSE(fs::exists(fs::path(aligned) / "summary.json")) << "a share wrote outputs";
+    if (k == 2) {
+      run = Pectus(RegisterArgs(aligned) + " --gather");
+      EXPECT_EQ(run.code, 2) << run.output;
+      EXPECT_NE(run.output.find("subject_003"), std::string::npos) << run.output;  // share 1's
+    }
+  }
+  run = Pectus(RegisterArgs(aligned) + " --gather");
+  ASSERT_EQ(run.code, 0) << run.output;
+  ExpectSame(to_reference_, aligned, "register --cohort in 3 shares gathered");
+  run = Pectus(RegisterArgs(P("groupwise_share")) + kGroupwise + " --shard 1/2");
+  EXPECT_EQ(run.code, 2) << run.output;
+  EXPECT_NE(run.output.find("groupwise rounds need"), std::string::npos) << run.output;
 }
 
 TEST_F(CohortCluster, KilledRunsResumedGiveTheSerialBytes) {
