@@ -2,6 +2,7 @@
 // commands in docs/benchmarks/model.md.
 //   model_benchmark pca [SUBJECTS=1000]          PCA time (Gram route) against Eigen's SVD and numpy's SVD
 //                                                and Gram route, as ratios
+//   model_benchmark impute [SUBJECTS=2000]       the imputation of unseen vertices: time and fill error
 //   model_benchmark holefill COHORT OUT [PNG]    hole filling and the profile-fit choice, on the surfaces
 //                                                that `pectus pipeline COHORT --out OUT` made
 //   model_benchmark cohort COHORT OUT            the pipeline's mean and modes against the generator's truth
@@ -33,6 +34,7 @@ int main() {
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <random>
 #include <stdexcept>
 #include <thread>
 #include <vector>
@@ -45,6 +47,7 @@ int main() {
 #include "shape/io/landmark_io.h"
 #include "shape/io/mesh_io.h"
 #include "shape/model/hole_fill_validation.h"
+#include "shape/model/impute_missing_vertices.h"
 #include "shape/model/model_figures.h"
 #include "shape/model/shape_model.h"
 
@@ -52,6 +55,69 @@ namespace pectus::bench {
 namespace {
 
 namespace fs = std::filesystem;
+
+// The imputation of unseen vertices (shape/model/impute_missing_vertices.h) on N subjects of the
+// generator's population on the 51 x 101 grid: 60 % of them with a hole (a disk of 4 to 12 grid cells'
+// radius, at a random place), started 5 mm off the truth there; the time of ImputeMissingVertices with the
+// pipeline's options (a model of the first 256 others, the core iterated, the rest filled once), and the
+// fills against the truth.
+nlohmann::json Impute(int n) {
+  const datasets::PopulationModel population = datasets::PopulationModel::Default();
+  const datasets::ShapeGrid grid;
+  Eigen::MatrixXd truth(n, 3 * grid.size());
+#pragma omp parallel for schedule(dynamic)
+  for (int i = 0; i < n; ++i) {
+    const datasets::ChestSurface s(datasets::SampleSubject(population, 1000 + i).parameters);
+    truth.row(i) = ToShapeVector(datasets::SampleGrid(s, grid)).transpose();
+  }
+  Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> seen =
+      Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic>::Constant(n, grid.size(), true);
+  Eigen::MatrixXd start = truth;
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int holed = 0;
+  for (int i = 0; i < n; ++i) {
+    if (i % 5 >= 3) continue;
+    ++holed;
+    const double cu = u(rng) * (grid.nu - 1), cv = u(rng) * (grid.nv - 1), r = 4.0 + 8.0 * u(rng);
+    for (int a = 0; a < grid.nu; ++a)
+      for (int b = 0; b < grid.nv; ++b)
+        if (std::hypot(a - cu, b - cv) <= r) {
+          const int v = b * grid.nu + a;
+          seen(i, v) = false;
+          start(i, 3 * v + 2) += 5.0;
+        }
+  }
+  // Without the local correction first (its share of the time), then as the pipeline runs it.
+  ImputationOptions options = PipelineOptions().imputation;
+  options.local_scale_mm = 0.0;
+  double t = Now(), cpu0 = CpuSeconds();
+  ImputeMissingVertices(start, seen, options, "population");
+  const double without_local = Now() - t, without_local_cpu = CpuSeconds() - cpu0;
+  t = Now(), cpu0 = CpuSeconds();
+  const ImputationResult r = ImputeMissingVertices(start, seen, PipelineOptions().imputation, "population");
+  const double wall = Now() - t, cpu = CpuSeconds() - cpu0;
+  double sum = 0.0, worst = 0.0;
+  int count = 0;
+  for (int i = 0; i < n; ++i)
+    for (int v = 0; v < grid.size(); ++v)
+      if (!seen(i, v)) {
+        const double d = (r.shapes.row(i).segment<3>(3 * v) - truth.row(i).segment<3>(3 * v)).norm();
+        sum += d * d, worst = std::max(worst, d), ++count;
+      }
+  return {{"subjects", n},
+          {"holed_subjects", holed},
+          {"unseen_vertices", count},
+          {"threads", omp_get_max_threads()},
+          {"seconds", wall},
+          {"cpu_seconds", cpu},
+          {"without_local_correction", {{"seconds", without_local}, {"cpu_seconds", without_local_cpu}}},
+          {"iterations", r.iterations},
+          {"converged", r.converged},
+          {"message", r.message},
+          {"fill_to_truth_rms_mm", std::sqrt(sum / std::max(1, count))},
+          {"fill_to_truth_max_mm", worst}};
+}
 
 // 1. PCA of N subjects of the generator's population sampled on a 51 x 101 grid (15453 numbers each), by
 // every route in the same run from the same uncentred matrix (centring inside every time): pectus's
@@ -259,7 +325,9 @@ int main(int argc, char** argv) {
     argv = args.data();
     const std::string what = argc > 1 ? argv[1] : "pca";
     nlohmann::json result;
-    if (what == "pca") {
+    if (what == "impute") {
+      result = Impute(argc > 2 ? std::atoi(argv[2]) : 2000);
+    } else if (what == "pca") {
       result = Pca(argc > 2 ? std::atoi(argv[2]) : 1000);
     } else if (what == "holefill" && argc >= 4) {
       std::ifstream in(fs::path(argv[3]) / "pipeline.json");
@@ -287,11 +355,12 @@ int main(int argc, char** argv) {
       std::ifstream in(fs::path(argv[3]) / "pipeline.json");
       result = CompareWithTruth(argv[2], argv[3], nlohmann::json::parse(in), reference);
     } else {
-      std::cerr << "usage: model_benchmark pca [N] | holefill COHORT OUT [PNG] | cohort COHORT OUT | "
-                   "population COHORT OUT FILE [--work DIR] | all [WORK] [PECTUS]\n"
-                   "  [--population M=2000] [--pool P=1000]: the population reference's subjects, and the\n"
-                   "  independent pool from which cohorts of N are drawn for the sampling spread (0: none)\n"
-                   "  (OUT is the folder of `pectus pipeline COHORT --out OUT --report OUT/pipeline.json`)\n";
+      std::cerr
+          << "usage: model_benchmark pca [N] | impute [N] | holefill COHORT OUT [PNG] | cohort COHORT OUT | "
+             "population COHORT OUT FILE [--work DIR] | all [WORK] [PECTUS]\n"
+             "  [--population M=2000] [--pool P=1000]: the population reference's subjects, and the\n"
+             "  independent pool from which cohorts of N are drawn for the sampling spread (0: none)\n"
+             "  (OUT is the folder of `pectus pipeline COHORT --out OUT --report OUT/pipeline.json`)\n";
       return 2;
     }
     std::cout << result.dump(2) << std::endl;
