@@ -48,12 +48,18 @@ class CohortCluster : public testing_support::ScratchDirTest {
       fs::copy_file(subject / "truth" / "surface.ply", suite_ / "scans" / (name + ".ply"));
       fs::copy_file(subject / "landmarks.mrk.json", suite_ / "scans" / (name + ".mrk.json"));
     }
-    for (const char* mode : {"", kGroupwise}) {
-      const std::string out = (suite_ / (*mode ? "groupwise" : "to_reference")).string();
-      run = Pectus(RegisterArgs(out) + mode);
-      ASSERT_EQ(run.code, 0) << run.output;
-      (*mode ? groupwise_ : to_reference_) = FilesUnder(out);
+    run = Pectus(RegisterArgs((suite_ / "to_reference").string()));
+    ASSERT_EQ(run.code, 0) << run.output;
+    to_reference_ = FilesUnder(suite_ / "to_reference");
+  }
+  // The serial groupwise run (20 rounds: seconds), made by the tests that compare with it.
+  static const std::map<std::string, std::string>& Groupwise() {
+    if (groupwise_.empty()) {
+      const CliRun run = Pectus(RegisterArgs((suite_ / "groupwise").string()) + kGroupwise);
+      EXPECT_EQ(run.code, 0) << run.output;
+      groupwise_ = FilesUnder(suite_ / "groupwise");
     }
+    return groupwise_;
   }
   static void TearDownTestSuite() { fs::remove_all(suite_); }
   // Different people's whole torsos: registered on the chest about the landmarks, with their scale.
@@ -81,13 +87,10 @@ TEST_F(CohortCluster, SerialRunsWriteWhatAUserExpects) {
   EXPECT_EQ(synth_.count("population/mean.ply"), 1u);
   EXPECT_EQ(synth_.count("synth.json"), 1u);
   EXPECT_EQ(to_reference_.size(), 6u);
-  for (const auto* files : {&to_reference_, &groupwise_}) {
-    ASSERT_EQ(files->count("summary.json"), 1u);
-    const nlohmann::json summary = nlohmann::json::parse(files->at("summary.json"));
-    ASSERT_EQ(summary["scans"].size(), 5u);
-    EXPECT_EQ(summary["scans"][0]["transform"].size(), summary["scans"][4]["transform"].size());
-    if (files == &to_reference_) EXPECT_TRUE(summary["all_succeeded"].get<bool>()) << summary.dump(1);
-  }
+  ASSERT_EQ(to_reference_.count("summary.json"), 1u);
+  const nlohmann::json summary = nlohmann::json::parse(to_reference_.at("summary.json"));
+  ASSERT_EQ(summary["scans"].size(), 5u);
+  EXPECT_TRUE(summary["all_succeeded"].get<bool>()) << summary.dump(1);
 }
 
 #ifdef PECTUS_MPIEXEC
@@ -102,7 +105,7 @@ TEST_F(CohortCluster, MpiRanksGiveTheSerialBytes) {
       const std::string out = P(std::string(*mode ? "groupwise" : "to_reference") + r);
       run = Pectus(RegisterArgs(out) + mode, testing_support::MpiLauncher(ranks));
       ASSERT_EQ(run.code, 0) << ranks << " ranks" << mode << ": " << run.output;
-      ExpectSame(*mode ? groupwise_ : to_reference_, out,
+      ExpectSame(*mode ? Groupwise() : to_reference_, out,
                  "register --cohort" + std::string(mode) + " on " + r + " ranks");
     }
   }
@@ -174,7 +177,7 @@ TEST_F(CohortCluster, KilledRunsResumedGiveTheSerialBytes) {
   EXPECT_EQ(testing_support::CountFiles(work / "groupwise-1", ".fit"), 5u);
   run = Pectus(RegisterArgs(out) + kGroupwise + " --resume");
   ASSERT_EQ(run.code, 0) << run.output;
-  ExpectSame(groupwise_, out, "register --cohort --groupwise killed and resumed");
+  ExpectSame(Groupwise(), out, "register --cohort --groupwise killed and resumed");
 }
 
 }  // namespace
