@@ -1,17 +1,80 @@
 #include "planner_plugin/plugin/run_fem_dataset.h"
 
+#include <unistd.h>
+
 #include <cstdio>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "planner_plugin/io/fem_dataset_h5.h"
 #include "shape/core/error.h"
-#include "shape/io/patient_table_io.h"
 
 namespace pectus::planner {
+namespace {
 
-FemDatasetSummary RunFemDataset(const std::filesystem::path& table, const std::filesystem::path& output,
-                                const PlannerSettings& settings,
+namespace fs = std::filesystem;
+
+// A folder removed with everything in it when the object goes.
+struct ScratchFolder {
+  explicit ScratchFolder(fs::path p) : path(std::move(p)) {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+    if (!fs::create_directories(path, ec) || ec) ThrowFailure("cannot create the folder: " + ec.message(), path.string());
+  }
+  ~ScratchFolder() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+  ScratchFolder(const ScratchFolder&) = delete;
+  ScratchFolder& operator=(const ScratchFolder&) = delete;
+  fs::path path;
+};
+
+}  // namespace
+
+FemDatasetSummary RunFemDatasetPart(const GenericRibcage& generic, const PatientTableRow& row,
+                                    const fs::path& part, const PlannerSettings& settings,
+                                    const BarResponseBasisOptions* basis_options) {
+  FemDatasetSummary summary;
+  const std::vector<BarLoad> loads = DissertationLoadCases();
+  std::vector<BarLoad> positions;
+  for (const BarLoad& load : loads) {
+    if (positions.empty() || positions.back().position != load.position)
+      positions.push_back({load.position, false, 1.0});
+  }
+  std::optional<PlannerSession> session;
+  {
+    auto t = summary.timings_s.Time("patient_ribcages");
+    session.emplace(generic, MeasurementsOf(row), settings);  // refuses a fit that misses the CT
+  }
+  std::vector<BarResult> results;
+  std::vector<ForceToLift> lift;
+  {
+    auto t = summary.timings_s.Time("fem");
+    results = session->fem().Solve(loads);
+    lift = session->fem().ForceToLiftSternum(positions);
+  }
+  std::optional<StoredResponseBasis> basis;
+  if (basis_options != nullptr) {
+    auto t = summary.timings_s.Time("response_basis");
+    session->BuildBasis(*basis_options);
+    basis = session->StoreBasis();
+  }
+  {
+    auto t = summary.timings_s.Time("write");
+    FemDatasetWriter writer(part, generic, loads, settings.fem.materials);
+    writer.AddPatient(session->ribcage(), results, lift, row.haller_index, basis ? &*basis : nullptr);
+    writer.Commit();
+    summary.surface_nodes = writer.num_surface_nodes();
+  }
+  summary.patients = 1;
+  summary.load_cases = static_cast<std::int64_t>(loads.size());
+  summary.results = summary.load_cases;
+  return summary;
+}
+
+FemDatasetSummary RunFemDataset(const fs::path& table, const fs::path& output, const PlannerSettings& settings,
                                 const std::function<void(std::int64_t, std::int64_t)>& progress,
                                 const BarResponseBasisOptions* basis_options) {
   FemDatasetSummary summary;
@@ -22,52 +85,26 @@ FemDatasetSummary RunFemDataset(const std::filesystem::path& table, const std::f
     rows = ReadPatientTable(table);
     generic = BuildGenericRibcage(settings.generic);
   }
-  const std::vector<BarLoad> loads = DissertationLoadCases();
-  std::vector<BarLoad> positions;
-  for (const BarLoad& load : loads) {
-    if (positions.empty() || positions.back().position != load.position)
-      positions.push_back({load.position, false, 1.0});
-  }
-  std::optional<FemDatasetWriter> writer;
-  {
-    auto t = summary.timings_s.Time("write");
-    writer.emplace(output, generic, loads, settings.fem.materials);
-  }
+  // The parts beside the output (the same file system), removed afterwards.
+  const ScratchFolder folder(output.parent_path() /
+                             ("." + output.filename().string() + ".parts-" + std::to_string(::getpid())));
+  std::vector<fs::path> parts;
   const auto total = static_cast<std::int64_t>(rows.size());
   for (std::int64_t i = 0; i < total; ++i) {
-    const PatientTableRow& row = rows[static_cast<std::size_t>(i)];
-    std::optional<PlannerSession> session;
-    {
-      auto t = summary.timings_s.Time("patient_ribcages");
-      session.emplace(generic, MeasurementsOf(row), settings);  // refuses a fit that misses the CT
-    }
-    std::vector<BarResult> results;
-    std::vector<ForceToLift> lift;
-    {
-      auto t = summary.timings_s.Time("fem");
-      results = session->fem().Solve(loads);
-      lift = session->fem().ForceToLiftSternum(positions);
-    }
-    std::optional<StoredResponseBasis> basis;
-    if (basis_options != nullptr) {
-      auto t = summary.timings_s.Time("response_basis");
-      session->BuildBasis(*basis_options);
-      basis = session->StoreBasis();
-    }
-    {
-      auto t = summary.timings_s.Time("write");
-      writer->AddPatient(session->ribcage(), results, lift, row.haller_index, basis ? &*basis : nullptr);
-    }
+    parts.push_back(folder.path / (std::to_string(i) + ".h5"));
+    const FemDatasetSummary part =
+        RunFemDatasetPart(generic, rows[static_cast<std::size_t>(i)], parts.back(), settings, basis_options);
+    summary.timings_s.Add(part.timings_s);
+    summary.load_cases = part.load_cases;
+    summary.surface_nodes = part.surface_nodes;
     if (progress) progress(i + 1, total);
   }
   {
-    auto t = summary.timings_s.Time("write");
-    writer->Commit();
+    auto t = summary.timings_s.Time("assemble");
+    AssembleFemDataset(parts, output);
   }
   summary.patients = total;
-  summary.load_cases = static_cast<std::int64_t>(loads.size());
   summary.results = total * summary.load_cases;
-  summary.surface_nodes = writer->num_surface_nodes();
   return summary;
 }
 
