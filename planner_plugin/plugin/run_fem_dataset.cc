@@ -1,8 +1,10 @@
 #include "planner_plugin/plugin/run_fem_dataset.h"
 
+#include <omp.h>
 #include <unistd.h>
 
 #include <cstdio>
+#include <exception>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -20,7 +22,8 @@ struct ScratchFolder {
   explicit ScratchFolder(fs::path p) : path(std::move(p)) {
     std::error_code ec;
     fs::remove_all(path, ec);
-    if (!fs::create_directories(path, ec) || ec) ThrowFailure("cannot create the folder: " + ec.message(), path.string());
+    if (!fs::create_directories(path, ec) || ec)
+      ThrowFailure("cannot create the folder: " + ec.message(), path.string());
   }
   ~ScratchFolder() {
     std::error_code ec;
@@ -31,11 +34,27 @@ struct ScratchFolder {
   fs::path path;
 };
 
+// One OpenMP thread for this thread while the object lives. A patient's FE (the assembly and CHOLMOD's
+// factorisation) does not give the same last bits on two threads as on one, nor twice on two threads; a
+// dataset's bytes must not depend on where its patients ran, so each is built on one thread (and the
+// patients are the parallelism: RunFemDataset, the task farm).
+class OneThread {
+ public:
+  OneThread() : threads_(omp_get_max_threads()) { omp_set_num_threads(1); }
+  ~OneThread() { omp_set_num_threads(threads_); }
+  OneThread(const OneThread&) = delete;
+  OneThread& operator=(const OneThread&) = delete;
+
+ private:
+  int threads_;
+};
+
 }  // namespace
 
 FemDatasetSummary RunFemDatasetPart(const GenericRibcage& generic, const PatientTableRow& row,
                                     const fs::path& part, const PlannerSettings& settings,
                                     const BarResponseBasisOptions* basis_options) {
+  const OneThread one_thread;
   FemDatasetSummary summary;
   const std::vector<BarLoad> loads = DissertationLoadCases();
   std::vector<BarLoad> positions;
@@ -88,16 +107,31 @@ FemDatasetSummary RunFemDataset(const fs::path& table, const fs::path& output, c
   // The parts beside the output (the same file system), removed afterwards.
   const ScratchFolder folder(output.parent_path() /
                              ("." + output.filename().string() + ".parts-" + std::to_string(::getpid())));
-  std::vector<fs::path> parts;
   const auto total = static_cast<std::int64_t>(rows.size());
+  std::vector<fs::path> parts;
+  for (std::int64_t i = 0; i < total; ++i) parts.push_back(folder.path / (std::to_string(i) + ".h5"));
+  // The patients in parallel, each on one thread; the first failure in table order is thrown.
+  std::vector<FemDatasetSummary> made(rows.size());
+  std::vector<std::exception_ptr> errors(rows.size());
+  std::int64_t done = 0;
+#pragma omp parallel for schedule(dynamic, 1)
   for (std::int64_t i = 0; i < total; ++i) {
-    parts.push_back(folder.path / (std::to_string(i) + ".h5"));
-    const FemDatasetSummary part =
-        RunFemDatasetPart(generic, rows[static_cast<std::size_t>(i)], parts.back(), settings, basis_options);
+    const auto k = static_cast<std::size_t>(i);
+    try {
+      made[k] = RunFemDatasetPart(generic, rows[k], parts[k], settings, basis_options);
+    } catch (...) {
+      errors[k] = std::current_exception();
+    }
+#pragma omp critical(pectus_fem_dataset_progress)
+    if (progress) progress(++done, total);
+  }
+  for (const std::exception_ptr& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
+  for (const FemDatasetSummary& part : made) {
     summary.timings_s.Add(part.timings_s);
     summary.load_cases = part.load_cases;
     summary.surface_nodes = part.surface_nodes;
-    if (progress) progress(i + 1, total);
   }
   {
     auto t = summary.timings_s.Time("assemble");

@@ -30,16 +30,18 @@ struct FemDatasetSummary {
 /// Builds, solves and writes one patient (`row` of a patient table) as a one-patient FE dataset at `part`
 /// (committed atomically: a temporary file renamed into place), on `generic` (built with
 /// settings.generic), with the patient's exact response basis if `basis_options` is given. The part holds
-/// everything the dataset keeps of the patient; AssembleFemDataset joins parts. Throws pectus::Error
-/// naming the patient.
+/// everything the dataset keeps of the patient; AssembleFemDataset joins parts. The patient is built on
+/// one OpenMP thread: its FE does not give the same last bits on several (the patients are the
+/// parallelism). Throws pectus::Error naming the patient.
 FemDatasetSummary RunFemDatasetPart(const GenericRibcage& generic, const PatientTableRow& row,
                                     const std::filesystem::path& part, const PlannerSettings& settings,
                                     const BarResponseBasisOptions* basis_options = nullptr);
 
 /// Builds, solves and writes every patient of `table` (one generic ribcage, one factorisation per
 /// patient, DissertationLoadCases()), with each patient's exact response basis if `basis_options` is
-/// given: each patient's part (RunFemDatasetPart) in a folder beside `output`, then the parts assembled in
-/// table order (AssembleFemDataset). `progress(done, total)` is called after each patient. Nothing
+/// given: each patient's part (RunFemDatasetPart, the patients on OpenMP's threads) in a folder beside
+/// `output`, then the parts assembled in table order (AssembleFemDataset). `progress(done, total)` is
+/// called after each patient (one call at a time, from any thread). Nothing
 /// appears at `output` unless every patient succeeds. Throws pectus::Error naming the patient at fault.
 FemDatasetSummary RunFemDataset(const std::filesystem::path& table, const std::filesystem::path& output,
                                 const PlannerSettings& settings,
