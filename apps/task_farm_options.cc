@@ -6,12 +6,15 @@ namespace pectus::cli {
 
 void TaskFarmOptions::Configure(CLI::App* app, const std::string& items, const std::string& default_work) {
   app->add_option("--work", work_,
-                  "Folder of the " + items + "' results, committed as each finishes, on a file system every "
-                  "rank sees (default: " + default_work + "; emptied after a complete run)");
+                  "Folder of the " + items +
+                      "' results, committed as each finishes, on a file system every "
+                      "rank sees (default: " +
+                      default_work + "; emptied after a complete run)");
   app->add_flag("--resume", resume_, "Keep the " + items + "' results of a killed run and do only the rest");
   app->add_option("--shard", shard_,
-                  "K/N: only share K of N of the " + items + " (a job array without MPI), kept in the work "
-                  "folder for --gather");
+                  "K/N: only share K of N of the " + items +
+                      " (a job array without MPI), kept in the work "
+                      "folder for --gather");
   app->add_flag("--gather", gather_,
                 "The shares' results to every output; fails naming the " + items + " no share did");
 }

@@ -144,8 +144,8 @@ class PipelineCommand : public Command {
           run);
     }
     if (farm_.share_only()) {
-      Info("pipeline: share " + farm_.shard_text() + " done; its subjects' results are in " + run.work.string() +
-           " (then: the same command with --gather)");
+      Info("pipeline: share " + farm_.shard_text() + " done; its subjects' results are in " +
+           run.work.string() + " (then: the same command with --gather)");
     }
     if (!leader) return;
     context->report.AddTimes(result.timings_s);

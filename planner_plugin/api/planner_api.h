@@ -490,8 +490,8 @@ typedef struct PectusPlannerInterface {
    *  NULL): the part's figures (1 patient) and its wall time. */
   int32_t (*write_dataset_part)(const char* table_path, int64_t row, const char* part_path,
                                 const PectusPlannerOptions* options,
-                                const struct PectusPlannerBasisOptions* basis, PectusPlannerDatasetSummary* out,
-                                PectusPlannerStatus* status);
+                                const struct PectusPlannerBasisOptions* basis,
+                                PectusPlannerDatasetSummary* out, PectusPlannerStatus* status);
   /** The dataset from `count` parts (write_dataset_part) in the order given, their data copied as stored:
    *  the bytes write_dataset writes for those patients, whatever process made each part. Written at
    *  `output_path`, replaced only when complete. BAD_INPUT naming the part that is not one, or was made

@@ -99,8 +99,9 @@ DatasetFarmResult BuildPlannerDatasetOnFarm(const PlannerPlugin& plugin, const f
   if (farm.gather && !missing.empty()) {
     std::vector<std::string> ids;
     for (int i : missing) ids.push_back(parts.id(i));
-    ThrowUsage("--gather: no share has made patient(s) " + NamesForMessage(ids) + " (their parts are not in " +
-               (farm.work / "parts").string() + "); run their shares, or the whole run with --resume");
+    ThrowUsage("--gather: no share has made patient(s) " + NamesForMessage(ids) +
+               " (their parts are not in " + (farm.work / "parts").string() +
+               "); run their shares, or the whole run with --resume");
   }
 
   // Each patient's part, in table order (their costs are alike): a failure is recorded, not thrown.
@@ -109,8 +110,8 @@ DatasetFarmResult BuildPlannerDatasetOnFarm(const PlannerPlugin& plugin, const f
     const auto start = std::chrono::steady_clock::now();
     PectusPlannerDatasetSummary summary{};
     PectusPlannerStatus status{};
-    const std::int32_t code = plugin.api().write_dataset_part(table.c_str(), i, parts.Part(i).c_str(), &options,
-                                                              basis, &summary, &status);
+    const std::int32_t code = plugin.api().write_dataset_part(table.c_str(), i, parts.Part(i).c_str(),
+                                                              &options, basis, &summary, &status);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     WriteFileAtomically(parts.Seconds(i), ExactText(seconds));  // after the part: lost if killed in between
     if (code != PECTUS_PLANNER_OK) {
@@ -132,8 +133,8 @@ DatasetFarmResult BuildPlannerDatasetOnFarm(const PlannerPlugin& plugin, const f
     if (result.patients.back().ok) paths.push_back(parts.Part(i).string());
   }
   if (paths.empty()) {
-    ThrowFailure("FE dataset: no patient of the table could be built (first: patient " + result.patients.front().id +
-                     ": " + result.patients.front().error + ")",
+    ThrowFailure("FE dataset: no patient of the table could be built (first: patient " +
+                     result.patients.front().id + ": " + result.patients.front().error + ")",
                  table.string());
   }
   std::vector<const char*> c_paths;

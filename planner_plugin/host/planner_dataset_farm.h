@@ -37,14 +37,14 @@ struct DatasetFarm {
 struct DatasetPatient {
   std::string id;
   bool ok = false;
-  std::string error;     ///< why it failed (when not ok)
-  double seconds = -1;   ///< wall time of its task (-1: not known, e.g. made by an older run)
+  std::string error;    ///< why it failed (when not ok)
+  double seconds = -1;  ///< wall time of its task (-1: not known, e.g. made by an older run)
 };
 
 /// What the farm did (on the leader; other processes get only `built`).
 struct DatasetFarmResult {
-  std::vector<DatasetPatient> patients;  ///< in table order
-  PectusPlannerDatasetSummary summary{}; ///< of the assembled dataset: its patients, load cases, nodes
+  std::vector<DatasetPatient> patients;   ///< in table order
+  PectusPlannerDatasetSummary summary{};  ///< of the assembled dataset: its patients, load cases, nodes
   double assemble_seconds = 0.0;
   int built = 0;         ///< patients built by this run (the others' parts were there: --resume, --gather)
   bool written = false;  ///< the dataset was assembled at `output`

@@ -564,8 +564,11 @@ void CopyAttributes(hid_t from, hid_t to, const Reader& r, const std::filesystem
     if (type < 0 || space < 0 || H5Tis_variable_str(type) != 0) {
       c->ok = false;
     } else {
-      std::vector<char> bytes(H5Tget_size(type) * static_cast<std::size_t>(H5Sget_simple_extent_npoints(space)));
-      const hid_t b = H5Aread(a, type, bytes.data()) < 0 ? -1 : H5Acreate2(c->to, name, type, space, H5P_DEFAULT, H5P_DEFAULT);
+      std::vector<char> bytes(H5Tget_size(type) *
+                              static_cast<std::size_t>(H5Sget_simple_extent_npoints(space)));
+      const hid_t b = H5Aread(a, type, bytes.data()) < 0
+                          ? -1
+                          : H5Acreate2(c->to, name, type, space, H5P_DEFAULT, H5P_DEFAULT);
       c->ok = b >= 0 && H5Awrite(b, type, bytes.data()) >= 0;
       if (b >= 0) H5Aclose(b);
     }
@@ -597,7 +600,8 @@ FemDatasetAssembly AssembleFemDataset(const std::vector<std::filesystem::path>& 
   std::vector<std::string>& ids = assembly.patients;
   for (const std::filesystem::path& part : parts) {
     std::error_code ec;
-    if (!std::filesystem::is_regular_file(part, ec)) ThrowBadInput(part.string(), "no such file (a dataset part)");
+    if (!std::filesystem::is_regular_file(part, ec))
+      ThrowBadInput(part.string(), "no such file (a dataset part)");
     const hid_t file = H5Fis_hdf5(part.c_str()) > 0 ? H5Fopen(part.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT) : -1;
     if (file < 0) ThrowBadInput(part.string(), "is not an HDF5 file");
     readers.push_back(std::make_unique<Reader>(file, part.string()));

@@ -254,9 +254,9 @@ std::int32_t WriteDatasetPart(const char* table_path, std::int64_t row, const ch
     const pectus::planner::PlannerSettings settings = pectus::planner::SettingsFrom(options);
     const pectus::planner::BarResponseBasisOptions basis_options = BasisOptionsFrom(basis);
     const auto generic = CachedGenericRibcage(options, settings);
-    const auto summary = pectus::planner::RunFemDatasetPart(*generic, rows[static_cast<std::size_t>(row)],
-                                                            part_path, settings,
-                                                            basis != nullptr ? &basis_options : nullptr);
+    const auto summary =
+        pectus::planner::RunFemDatasetPart(*generic, rows[static_cast<std::size_t>(row)], part_path, settings,
+                                           basis != nullptr ? &basis_options : nullptr);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (out != nullptr)
       *out = {summary.patients, summary.load_cases, summary.results, summary.surface_nodes, seconds};

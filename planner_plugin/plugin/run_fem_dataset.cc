@@ -93,7 +93,8 @@ FemDatasetSummary RunFemDatasetPart(const GenericRibcage& generic, const Patient
   return summary;
 }
 
-FemDatasetSummary RunFemDataset(const fs::path& table, const fs::path& output, const PlannerSettings& settings,
+FemDatasetSummary RunFemDataset(const fs::path& table, const fs::path& output,
+                                const PlannerSettings& settings,
                                 const std::function<void(std::int64_t, std::int64_t)>& progress,
                                 const BarResponseBasisOptions* basis_options) {
   FemDatasetSummary summary;

@@ -430,8 +430,9 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
   if (const std::vector<int> missing = registered.Missing(); run.gather && !missing.empty()) {
     std::vector<std::string> names;
     for (int i : missing) names.push_back(inputs[i].name);
-    ThrowUsage("--gather: no share has finished subject(s) " + NamesForMessage(names) + " (their results are not in " +
-               run.work.string() + "); run their shares, or the whole run with --resume");
+    ThrowUsage("--gather: no share has finished subject(s) " + NamesForMessage(names) +
+               " (their results are not in " + run.work.string() +
+               "); run their shares, or the whole run with --resume");
   }
   // The subjects handed out largest first (bytes of sweeps), so that the last to finish are small ones.
   std::vector<double> bytes(inputs.size(), 0.0);

@@ -34,7 +34,8 @@ const char* const kOptions = " --cell-mm 20 --quiet";
 // CI runs as root: Open MPI refuses that unless told, here for this command only. Under the sanitizers,
 // full stacks for LeakSanitizer (cmake/sanitizers/lsan.supp: Open MPI's own leaks).
 const char* const kMpiRoot =
-    "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 ASAN_OPTIONS=\"$ASAN_OPTIONS:fast_unwind_on_malloc=0\" ";
+    "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+    "ASAN_OPTIONS=\"$ASAN_OPTIONS:fast_unwind_on_malloc=0\" ";
 
 std::string Read(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -58,8 +59,8 @@ class SurrogateCluster : public testing_support::ScratchDirTest {
     std::string line;
     for (int k = 0; k < 5 && std::getline(all, line); ++k) four << line << "\n";  // the header and 4 rows
     four.close();
-    const CliRun run = Pectus(Build(suite_ / "serial.h5") + " --threads 1 --report " +
-                              (suite_ / "serial.json").string());
+    const CliRun run =
+        Pectus(Build(suite_ / "serial.h5") + " --threads 1 --report " + (suite_ / "serial.json").string());
     ASSERT_EQ(run.code, 0) << run.output;
     serial_ = Read(suite_ / "serial.h5");
   }
@@ -108,8 +109,8 @@ TEST_F(SurrogateCluster, ThreadsAndMpiRanksGiveTheSerialBytes) {
 #ifdef PECTUS_MPIEXEC
   for (int ranks : {1, 2, 3}) {
     const fs::path out = P("ranks" + std::to_string(ranks) + ".h5");
-    const CliRun mpi =
-        Pectus(Build(out), std::string(kMpiRoot) + PECTUS_MPIEXEC " --oversubscribe -n " + std::to_string(ranks));
+    const CliRun mpi = Pectus(
+        Build(out), std::string(kMpiRoot) + PECTUS_MPIEXEC " --oversubscribe -n " + std::to_string(ranks));
     ASSERT_EQ(mpi.code, 0) << ranks << " ranks: " << mpi.output;
     ExpectSerialBytes(out, std::to_string(ranks) + " ranks");
   }
@@ -119,7 +120,8 @@ TEST_F(SurrogateCluster, ThreadsAndMpiRanksGiveTheSerialBytes) {
   const std::string bases = "surrogate build --patient-table " + P("one.csv") + kOptions + " -o ";
   const CliRun serial = Pectus(bases + P("bases_serial.h5") + " --threads 1");
   ASSERT_EQ(serial.code, 0) << serial.output;
-  const CliRun two = Pectus(bases + P("bases_ranks.h5"), std::string(kMpiRoot) + PECTUS_MPIEXEC " --oversubscribe -n 2");
+  const CliRun two =
+      Pectus(bases + P("bases_ranks.h5"), std::string(kMpiRoot) + PECTUS_MPIEXEC " --oversubscribe -n 2");
   ASSERT_EQ(two.code, 0) << two.output;
   const std::string with_bases = Read(P("bases_serial.h5"));
   EXPECT_GT(with_bases.size(), 1000000u) << "no basis in the dataset";

@@ -248,10 +248,16 @@ TEST(FemDataset, PartsAssembledInTableOrderAreTheWholeRunsBytes) {
   other.generic.rib_cell_length_mm = 16;
   RunFemDatasetPart(BuildGenericRibcage(other.generic), rows[1], dir / "other.h5", other);
   const std::string refused = BadInputMessage(
-      [&] { AssembleFemDataset({dir / "a.h5", dir / "other.h5"}, dir / "x.h5"); }, (dir / "other.h5").string());
+      [&] {
+        AssembleFemDataset({dir / "a.h5", dir / "other.h5"}, dir / "x.h5");
+      },
+      (dir / "other.h5").string());
   EXPECT_NE(refused.find("other options"), std::string::npos) << refused;
   const std::string twice = BadInputMessage(
-      [&] { AssembleFemDataset({dir / "a.h5", dir / "a.h5"}, dir / "x.h5"); }, (dir / "a.h5").string());
+      [&] {
+        AssembleFemDataset({dir / "a.h5", dir / "a.h5"}, dir / "x.h5");
+      },
+      (dir / "a.h5").string());
   EXPECT_NE(twice.find("another part holds too"), std::string::npos) << twice;
   EXPECT_FALSE(fs::exists(dir / "x.h5"));
   if (!HasFailure()) fs::remove_all(dir);
