@@ -71,6 +71,7 @@ class SurrogateCluster : public testing_support::ScratchDirTest {
   }
 
   void SetUp() override {
+    ScratchDirTest::SetUp();  // the test's own folder
     PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
     ASSERT_GT(serial_.size(), 4u * 100000) << "the serial dataset (4 patients) was not written";
   }

@@ -226,8 +226,10 @@ TEST(FemDataset, PartsAssembledInTableOrderAreTheWholeRunsBytes) {
   std::ofstream(dir / "two.csv") << "patient,haller_index,width_mm,sternal_length_mm,depth_mm,depression_mm\n"
                                     "57,6.5,231,168,123,21\n"
                                     "3,6.3,280,165,151,40\n";
-  PlannerSettings settings = SettingsFrom(nullptr);
+  PlannerSettings settings = SettingsFrom(nullptr);  // the coarsest mesh and skin: the test is about bytes
   settings.generic.rib_cell_length_mm = 20;
+  settings.skin.rows = 8;
+  settings.skin.columns = 12;
   RunFemDataset(dir / "two.csv", dir / "whole.h5", settings, nullptr);
   const auto rows = ReadPatientTable(dir / "two.csv");
   const GenericRibcage generic = BuildGenericRibcage(settings.generic);
