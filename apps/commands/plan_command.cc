@@ -93,7 +93,10 @@ class PlanCommand : public Command {
            "      --basis bases.h5\n"
            "    (the search on the patient's stored response basis: `pectus surrogate build`)\n"
            "  pectus plan --patient-table nuss_ct_parameters.csv --dataset fem_dataset.h5 --report d.json\n"
-           "    (all patients x 3 bar positions x 8 forces, the dissertation's FE dataset; docs/planner.md)";
+           "    (all patients x 3 bar positions x 8 forces, the dissertation's FE dataset; docs/planner.md)\n"
+           "  mpirun -n 16 pectus plan --patient-table nuss_ct_parameters.csv --dataset fem_dataset.h5\n"
+           "    (the patients over 16 ranks, the same bytes; with --shard K/N then --gather, or --resume\n"
+           "     after a killed run, as `pectus surrogate build`; docs/cluster.md)";
   }
   void Configure(CLI::App* app) override {
     app->add_option("--patient-table", table_,
