@@ -19,6 +19,17 @@ each subject's stage times (s) and the run's own stages. The model of a run on P
   efficiency  T(1) / (P T(P)).
 --farm-only leaves S out: how the farm itself scales.
 
+--dataset: the report is instead that of `pectus surrogate build` (or `pectus plan --dataset`) run on one
+rank of one thread; its patients are the tasks:
+
+  T(P) = S + M(P) + A
+  M(P) the makespan of the patients' tasks (their measured times, "dataset.per_patient"), each handed in
+       table order to the first free rank;
+  S    what the run did besides the patients and the assembly (the plugin, the table, the generic
+       ribcage of rank 0 before its first patient...): the run's total minus the patients' times and A;
+  A    the assembly of the parts on rank 0 ("dataset.assemble_seconds").
+  The issue's line: T(P) within the slowest patient's time plus 10 % when P >= the patients.
+
 A cohort larger than the measured one draws its subjects' times from the measured ones (fixed seed).
 """
 import argparse
@@ -34,6 +45,24 @@ def makespan(times, ranks):
     return max(free)
 
 
+def dataset(report, ranks):
+    r = json.load(open(report))
+    d = r["dataset"]
+    times = [p["seconds"] for p in d["per_patient"] if p.get("seconds") is not None]
+    total = r["timings_s"]["total"]
+    assemble = d["assemble_seconds"]
+    serial = max(0.0, total - sum(times) - assemble)
+    slowest = max(times)
+    print(f"measured: {len(times)} patients, {sum(times):.1f} s of tasks (mean {sum(times)/len(times):.2f} s, "
+          f"slowest {slowest:.2f} s), assembly {assemble:.2f} s, the rest of the run {serial:.2f} s, "
+          f"total {total:.1f} s")
+    t1 = serial + sum(times) + assemble
+    for p in ranks:
+        tp = serial + makespan(times, p) + assemble
+        print(f"P={p:3d} T={tp:8.2f} s  speed-up {t1/tp:6.2f}  efficiency {100*t1/(p*tp):5.1f} %  "
+              f"T / slowest patient {tp/slowest:5.3f}")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("report", help="pipeline --report JSON of a one-thread run")
@@ -41,10 +70,15 @@ def main():
     ap.add_argument("--ranks", type=int, nargs="+", default=[1, 2, 8, 16, 32, 64])
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--farm-only", action="store_true", help="leave rank 0's own part out (S = 0)")
+    ap.add_argument("--dataset", action="store_true",
+                    help="the report is of `pectus surrogate build` / `plan --dataset` (see above)")
     ap.add_argument("--serial-from", metavar="REPORT",
                     help="take S(N) from this run's report instead (a run of another size, e.g. 2000 subjects: "
                          "its rank-0 stages, scaled from its N as above)")
     a = ap.parse_args()
+    if a.dataset:
+        dataset(a.report, a.ranks)
+        return
     r = json.load(open(a.report))
     subjects = [s for s in r["subjects"]]
     phase_a = [sum(s["timings_s"].get(k, 0.0) for k in ("read", "merge", "reconstruct")) for s in subjects]

@@ -2,6 +2,7 @@
 // landmarks, as `pectus synth cohort` writes them) to the average chest with its modes, model quality,
 // each subject's distance to the mean, and one HTML report (pictures and numbers).
 #include "apps/command.h"
+#include "apps/task_farm_options.h"
 #include "shape/core/atomic_file.h"
 #include "shape/core/error.h"
 #include "shape/core/log.h"
@@ -76,16 +77,7 @@ class PipelineCommand : public Command {
                     "Colour scale of the distance maps, +-mm (0: auto)")
         ->default_val(0.0);
     app->add_flag("--no-surfaces", no_surfaces_, "Do not write each subject's registered surface");
-    app->add_option("--work", work_,
-                    "Folder of the subjects' results, committed as each finishes, on a file system every "
-                    "rank sees (default: OUT/.pectus-work; emptied after a complete run)");
-    app->add_flag("--resume", resume_, "Keep the subjects' results of a killed run and do only the rest");
-    app->add_option("--shard", shard_,
-                    "K/N: only share K of N of the subjects (a job array without MPI), kept in the work "
-                    "folder for --gather");
-    app->add_flag(
-        "--gather", gather_,
-        "The shares' results to the model and every output; fails naming the subjects no share did");
+    farm_.Configure(app, "subjects", "OUT/.pectus-work");
   }
   std::vector<fs::path> Inputs() const override {
     std::vector<fs::path> in;
@@ -105,16 +97,12 @@ class PipelineCommand : public Command {
     if (!options_.IsValid(&why)) ThrowUsage(why);
     const fs::path out(out_);
     subjects_ = FindCohortSubjects(cohort_, sweep_pattern_, landmarks_name_);
-    const TaskShare share = shard_.empty() ? TaskShare{} : ParseTaskShare(shard_);
-    if (!share.whole() && (gather_ || context->runner->Processes() > 1))
-      ThrowUsage("--shard runs one share on its own: not with --gather, nor under mpirun");
-    SerialTaskRunner share_runner(share);
     PipelineRun run;
-    run.runner = share.whole() ? context->runner : &share_runner;
-    run.work = work_.empty() ? out / ".pectus-work" : fs::path(work_);
-    run.resume = resume_ || gather_ || !share.whole();
-    run.subjects_only = !share.whole();
-    run.gather = gather_;
+    run.runner = farm_.Runner(context->runner);
+    run.work = farm_.Work(out / ".pectus-work");
+    run.resume = farm_.resume();
+    run.subjects_only = farm_.share_only();
+    run.gather = farm_.gather();
     // 8-9. Each subject's files on the farm too (after the model): its meshes, then its distance picture
     // on the cohort's colour scale; the leader moves them into the outputs.
     run.subject_files = [](const SubjectOutcome& s, const fs::path& folder) {
@@ -132,7 +120,7 @@ class PipelineCommand : public Command {
       fs::create_directories((folder / picture.path).parent_path());
       WriteFileAtomically(folder / picture.path, picture.bytes);
     };
-    const bool leader = context->runner->IsLeader() && share.whole();
+    const bool leader = farm_.Leader(*context->runner);
     fs::path html;
     if (leader) html = StageOutput(context, *this, out / "report.html");  // refuses an input early
     Info("pipeline: " + std::to_string(subjects_.size()) + " subjects in " + cohort_ + " (" +
@@ -155,9 +143,9 @@ class PipelineCommand : public Command {
           },
           run);
     }
-    if (!share.whole()) {
-      Info("pipeline: share " + shard_ + " done; its subjects' results are in " + run.work.string() +
-           " (then: the same command with --gather)");
+    if (farm_.share_only()) {
+      Info("pipeline: share " + farm_.shard_text() + " done; its subjects' results are in " +
+           run.work.string() + " (then: the same command with --gather)");
     }
     if (!leader) return;
     context->report.AddTimes(result.timings_s);
@@ -193,8 +181,8 @@ class PipelineCommand : public Command {
 
  private:
   std::string cohort_, out_, sweep_pattern_, landmarks_name_, grid_, fit_;
-  std::string work_, shard_;
-  bool no_quality_ = false, no_surfaces_ = false, resume_ = false, gather_ = false;
+  TaskFarmOptions farm_;
+  bool no_quality_ = false, no_surfaces_ = false;
   PipelineOptions options_;
   PipelineReportOptions report_;
   std::vector<CohortSubject> subjects_;

@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "apps/command.h"
+#include "apps/commands/plan_dataset.h"
 #include "planner_plugin/host/average_chest.h"
 #include "planner_plugin/host/nuss_plan.h"
 #include "planner_plugin/host/planner_client.h"
@@ -92,7 +93,10 @@ class PlanCommand : public Command {
            "      --basis bases.h5\n"
            "    (the search on the patient's stored response basis: `pectus surrogate build`)\n"
            "  pectus plan --patient-table nuss_ct_parameters.csv --dataset fem_dataset.h5 --report d.json\n"
-           "    (all patients x 3 bar positions x 8 forces, the dissertation's FE dataset; docs/planner.md)";
+           "    (all patients x 3 bar positions x 8 forces, the dissertation's FE dataset; docs/planner.md)\n"
+           "  mpirun -n 16 pectus plan --patient-table nuss_ct_parameters.csv --dataset fem_dataset.h5\n"
+           "    (the patients over 16 ranks, the same bytes; with --shard K/N then --gather, or --resume\n"
+           "     after a killed run, as `pectus surrogate build`; docs/cluster.md)";
   }
   void Configure(CLI::App* app) override {
     app->add_option("--patient-table", table_,
@@ -149,6 +153,7 @@ class PlanCommand : public Command {
     app->add_option("--soft-tissue-mm", soft_tissue_mm_,
                     "Skin: soft-tissue thickness over the bones, mm (default 15)");
     app->add_option("--dataset", dataset_, "Write the FE dataset of every patient of the table (HDF5)");
+    farm_.Configure(app, "patients", ".DATASET.pectus-work beside the dataset; with --dataset");
     app->add_option("--plugin", plugin_path_,
                     "The planner plugin (default: beside pectus, or PECTUS_PLANNER_PLUGIN)");
   }
@@ -181,20 +186,7 @@ class PlanCommand : public Command {
  private:
   void Dataset(const PlannerPlugin& plugin, Context* context) {
     auto t = context->report.Stage("dataset");
-    const fs::path staged = StageOutput(context, *this, dataset_);
-    std::unique_ptr<Progress> progress;
-    const PectusPlannerDatasetSummary s =
-        WritePlannerDataset(plugin, table_, staged, options_, [&](std::int64_t done, std::int64_t total) {
-          if (!progress) progress = std::make_unique<Progress>("FE dataset (patients)", total);
-          progress->Advance();
-          (void)done;
-        });
-    progress.reset();
-    context->report["dataset"] = {
-        {"path", dataset_},     {"patients", s.patients},           {"load_cases", s.load_cases},
-        {"results", s.results}, {"surface_nodes", s.surface_nodes}, {"seconds", s.seconds}};
-    Info("FE dataset: " + std::to_string(s.patients) + " patients x " + std::to_string(s.load_cases) +
-         " load cases = " + std::to_string(s.results) + " results in " + dataset_);
+    WriteDatasetOnFarm(context, *this, &farm_, plugin, table_, dataset_, options_, nullptr, "FE dataset");
   }
 
   void Plan(const PlannerPlugin& plugin, Context* context);
@@ -208,6 +200,7 @@ class PlanCommand : public Command {
   bool search_direct_ = false;
   std::string basis_;
   PectusPlannerOptions options_{};
+  TaskFarmOptions farm_;
 };
 
 void PlanCommand::Plan(const PlannerPlugin& plugin, Context* context) {

@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "apps/command.h"
+#include "apps/commands/plan_dataset.h"
 #include "planner_plugin/host/planner_client.h"
 #include "planner_plugin/host/planner_plugin_loader.h"
 #include "shape/core/error.h"
@@ -65,6 +66,12 @@ class SurrogateCommand : public Command {
     return "  pectus surrogate build --patient-table nuss_ct_parameters.csv -o bases.h5\n"
            "    (every patient's FE dataset and exact response basis, about 8 MB and 10 s each; then\n"
            "     pectus plan ... --basis bases.h5 takes the patient's basis instead of building it)\n"
+           "  mpirun -n 16 pectus surrogate build --patient-table nuss_ct_parameters.csv -o bases.h5\n"
+           "    (the patients shared out over 16 ranks, one thread each: the same bytes; docs/cluster.md)\n"
+           "  pectus surrogate build ... -o bases.h5 --shard 2/8   (share 2 of 8 of a job array; then:)\n"
+           "  pectus surrogate build ... -o bases.h5 --gather      (the shares' patients into bases.h5)\n"
+           "  pectus surrogate build ... -o bases.h5 --resume      (after a killed run: only what is "
+           "missing)\n"
            "  pectus surrogate check --patient-table nuss_ct_parameters.csv --patients 57,1,10,30,45 \\\n"
            "      --random 1000 --report check.json\n"
            "    (per patient: the basis against 24 + 1000 direct FE solves, its rank, size, build time and\n"
@@ -93,6 +100,7 @@ class SurrogateCommand : public Command {
         ->check(CLI::PositiveNumber);
     build_->add_option("--cell-mm", cell_mm_, "Mesh: cell length along the ribs, 2 to 20 mm (default 6)");
     build_->add_option("--plugin", plugin_path_, "The planner plugin (default: beside pectus)");
+    farm_.Configure(build_, "patients", ".OUTPUT.pectus-work beside the output");
     build_->fallthrough();
     check_ =
         app->add_subcommand("check", "The exact response basis against the direct FE solve, per patient");
@@ -196,24 +204,9 @@ class SurrogateCommand : public Command {
  private:
   void Build(const PlannerPlugin& plugin, const PectusPlannerOptions& options, Context* context) {
     auto t = context->report.Stage("build");
-    const fs::path staged = StageOutput(context, *this, output_);
     const PectusPlannerBasisOptions basis{tolerance_mm_, 2000.0};
-    std::unique_ptr<Progress> progress;
-    const PectusPlannerDatasetSummary s = WritePlannerDataset(
-        plugin, table_, staged, options,
-        [&](std::int64_t, std::int64_t total) {
-          if (!progress) progress = std::make_unique<Progress>("FE dataset and bases (patients)", total);
-          progress->Advance();
-        },
-        &basis);
-    progress.reset();
-    std::error_code error;
-    const auto bytes = fs::file_size(staged, error);
-    context->report["dataset"] = {
-        {"path", output_},      {"patients", s.patients}, {"load_cases", s.load_cases},
-        {"results", s.results}, {"seconds", s.seconds},   {"megabytes", error ? 0.0 : bytes / 1e6}};
-    Info("FE dataset with response bases: " + std::to_string(s.patients) + " patients in " + output_ +
-         " (for `pectus plan --basis`)");
+    WriteDatasetOnFarm(context, *this, &farm_, plugin, table_, output_, options, &basis,
+                       "FE dataset with response bases");
   }
 
   static nlohmann::json Json(const PectusPlannerEmulatorFigures& f,
@@ -392,6 +385,7 @@ class SurrogateCommand : public Command {
             {"lift_force_median_us", Median(lift_us)}};
   }
 
+  TaskFarmOptions farm_;
   CLI::App* build_ = nullptr;
   CLI::App* check_ = nullptr;
   CLI::App* evaluate_ = nullptr;

@@ -26,6 +26,9 @@
  * Version 5 added the Nuss trainer (docs/trainer.md): a patient's trainer scene (bones, pericardium, lungs,
  * the planned tunnel), its sessions ticked by the host's haptic device (one tick at a time, or on the
  * plugin's own 1 kHz servo thread), their scores and records, and the thoracoscope's view.
+ * Version 6 added the FE dataset one patient at a time, for a task farm (docs/cluster.md): one patient's
+ * part file (write_dataset_part), in any order on any process, and the dataset assembled from the parts
+ * (assemble_dataset), the same bytes as write_dataset's.
  */
 #ifndef PECTUS_PLANNER_API_H_
 #define PECTUS_PLANNER_API_H_
@@ -38,7 +41,7 @@ extern "C" {
 #endif
 
 /** The interface version this header describes. Any change to a struct or function below bumps it. */
-#define PECTUS_PLANNER_INTERFACE_VERSION 5u
+#define PECTUS_PLANNER_INTERFACE_VERSION 6u
 /** The name of the one exported symbol (for dlsym). */
 #define PECTUS_PLANNER_ENTRY_POINT "pectus_planner_interface"
 
@@ -477,6 +480,24 @@ typedef struct PectusPlannerInterface {
   int32_t (*trainer_scope_view)(const PectusPlannerTrainer* trainer, const double* orientation_wxyz,
                                 const double* target_mm, double insertion_mm, PectusPlannerScopeView* out,
                                 PectusPlannerStatus* status);
+
+  /* ---- version 6: the FE dataset one patient at a time, for a task farm ---- */
+
+  /** One patient of write_dataset's dataset: row `row` (0-based, in the table's order) of `table_path`,
+   *  its 24 load cases, force to lift and, with `basis` (NULL: none), its exact response basis, written
+   *  as a one-patient dataset at `part_path`, committed atomically (a temporary file renamed into place).
+   *  Calls are independent: the parts of a table may be made in any order, in any process. `out` (may be
+   *  NULL): the part's figures (1 patient) and its wall time. */
+  int32_t (*write_dataset_part)(const char* table_path, int64_t row, const char* part_path,
+                                const PectusPlannerOptions* options,
+                                const struct PectusPlannerBasisOptions* basis,
+                                PectusPlannerDatasetSummary* out, PectusPlannerStatus* status);
+  /** The dataset from `count` parts (write_dataset_part) in the order given, their data copied as stored:
+   *  the bytes write_dataset writes for those patients, whatever process made each part. Written at
+   *  `output_path`, replaced only when complete. BAD_INPUT naming the part that is not one, or was made
+   *  with other options than the first. `out` may be NULL. */
+  int32_t (*assemble_dataset)(const char* const* part_paths, int64_t count, const char* output_path,
+                              PectusPlannerDatasetSummary* out, PectusPlannerStatus* status);
 } PectusPlannerInterface;
 
 /** The one exported symbol: the plugin's function table (static storage; never NULL). */

@@ -25,6 +25,7 @@ void WriteDataset(hid_t parent, const std::string& name, hid_t file_type, hid_t 
   const hid_t space =
       Check(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), path, name);
   const hid_t properties = H5Pcreate(H5P_DATASET_CREATE);
+  H5Pset_obj_track_times(properties, false);  // no modification times: the same data, the same bytes
   if (compress) {
     std::vector<hsize_t> chunk = dims;
     chunk[0] = 1;  // one load case per chunk
@@ -63,7 +64,23 @@ void WriteAttribute(hid_t object, const std::string& name, const std::string& va
 }
 
 hid_t Group(hid_t parent, const std::string& name, const std::filesystem::path& path) {
-  return Check(H5Gcreate2(parent, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), path, name);
+  const hid_t properties = H5Pcreate(H5P_GROUP_CREATE);
+  H5Pset_obj_track_times(properties, false);
+  const hid_t group = H5Gcreate2(parent, name.c_str(), H5P_DEFAULT, properties, H5P_DEFAULT);
+  H5Pclose(properties);
+  return Check(group, path, name);
+}
+
+// Creates `path` (truncating) so that the same objects written in the same order give the same bytes: no
+// object modification times, and a fixed range of HDF5 file format versions (not the library's newest).
+hid_t CreateReproducibleFile(const std::filesystem::path& path, const std::filesystem::path& named) {
+  const hid_t creation = H5Pcreate(H5P_FILE_CREATE), access = H5Pcreate(H5P_FILE_ACCESS);
+  H5Pset_obj_track_times(creation, false);  // the root group's
+  H5Pset_libver_bounds(access, H5F_LIBVER_V18, H5F_LIBVER_V18);
+  const hid_t file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, creation, access);
+  H5Pclose(creation);
+  H5Pclose(access);
+  return Check(file, named, "the file");
 }
 
 }  // namespace
@@ -82,7 +99,7 @@ FemDatasetWriter::FemDatasetWriter(const std::filesystem::path& path, const Gene
     : file_(std::make_unique<File>()), path_(path), loads_(std::move(loads)) {
   temp_ = output_.Stage(path_);  // HDF5 writes to a file name: staged, renamed into place by Commit()
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported through pectus::Error
-  file_->id = Check(H5Fcreate(temp_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), path_, "the file");
+  file_->id = CreateReproducibleFile(temp_, path_);
   const hid_t root = file_->id;
   WriteAttribute(
       root, "description",
@@ -512,6 +529,125 @@ StoredResponseBasis ReadStoredResponseBasis(const std::filesystem::path& path, c
   if (!r.Exists("patients/" + patient + "/response_basis"))
     r.Bad("has no response basis for patient " + patient + " (write the dataset with `pectus surrogate build`)");
   return ReadResponseBasis(r, "patients/" + patient + "/", path.string());
+}
+
+namespace {
+
+// The bytes of dataset `name` of an open file, as stored (its own type): to compare two files' headers.
+std::vector<char> StoredBytes(const Reader& r, hid_t file, const std::string& name) {
+  if (!r.Exists(name)) r.Bad("has no dataset /" + name);
+  const hid_t set = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
+  const hid_t type = set < 0 ? -1 : H5Dget_type(set), space = set < 0 ? -1 : H5Dget_space(set);
+  std::vector<char> bytes;
+  bool ok = set >= 0 && type >= 0 && space >= 0;
+  if (ok) {
+    bytes.resize(H5Tget_size(type) * static_cast<std::size_t>(H5Sget_simple_extent_npoints(space)));
+    ok = bytes.empty() || H5Dread(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, bytes.data()) >= 0;
+  }
+  if (space >= 0) H5Sclose(space);
+  if (type >= 0) H5Tclose(type);
+  if (set >= 0) H5Dclose(set);
+  if (!ok) r.Bad("/" + name + " cannot be read");
+  return bytes;
+}
+
+// Copies every attribute of `from` onto `to` (fixed-size types, as the writer makes them), in name order.
+void CopyAttributes(hid_t from, hid_t to, const Reader& r, const std::filesystem::path& path) {
+  struct Copy {
+    hid_t to;
+    bool ok = true;
+  } copy{to};
+  const auto one = [](hid_t object, const char* name, const H5A_info_t*, void* data) -> herr_t {
+    auto* c = static_cast<Copy*>(data);
+    const hid_t a = H5Aopen(object, name, H5P_DEFAULT);
+    const hid_t type = a < 0 ? -1 : H5Aget_type(a), space = a < 0 ? -1 : H5Aget_space(a);
+    if (type < 0 || space < 0 || H5Tis_variable_str(type) != 0) {
+      c->ok = false;
+    } else {
+      std::vector<char> bytes(H5Tget_size(type) *
+                              static_cast<std::size_t>(H5Sget_simple_extent_npoints(space)));
+      const hid_t b = H5Aread(a, type, bytes.data()) < 0
+                          ? -1
+                          : H5Acreate2(c->to, name, type, space, H5P_DEFAULT, H5P_DEFAULT);
+      c->ok = b >= 0 && H5Awrite(b, type, bytes.data()) >= 0;
+      if (b >= 0) H5Aclose(b);
+    }
+    if (space >= 0) H5Sclose(space);
+    if (type >= 0) H5Tclose(type);
+    if (a >= 0) H5Aclose(a);
+    return c->ok ? 0 : -1;
+  };
+  if (H5Aiterate2(from, H5_INDEX_NAME, H5_ITER_INC, nullptr, one, &copy) < 0 || !copy.ok)
+    r.Bad("its attributes cannot be copied into " + path.string());
+}
+
+// Copies object `name` of `from` to `to_parent`/`to_name` as stored (chunks not decompressed).
+void CopyObject(hid_t from, const std::string& name, hid_t to_parent, const std::string& to_name,
+                const Reader& r, const std::filesystem::path& path) {
+  if (H5Ocopy(from, name.c_str(), to_parent, to_name.c_str(), H5P_DEFAULT, H5P_DEFAULT) < 0)
+    r.Bad("/" + name + " cannot be copied into " + path.string());
+}
+
+}  // namespace
+
+FemDatasetAssembly AssembleFemDataset(const std::vector<std::filesystem::path>& parts,
+                                      const std::filesystem::path& path) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  if (parts.empty()) ThrowUsage("FE dataset: no patient to assemble into " + path.string());
+  std::vector<std::unique_ptr<Reader>> readers;
+  std::vector<hid_t> files;
+  FemDatasetAssembly assembly;
+  std::vector<std::string>& ids = assembly.patients;
+  for (const std::filesystem::path& part : parts) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(part, ec))
+      ThrowBadInput(part.string(), "no such file (a dataset part)");
+    const hid_t file = H5Fis_hdf5(part.c_str()) > 0 ? H5Fopen(part.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT) : -1;
+    if (file < 0) ThrowBadInput(part.string(), "is not an HDF5 file");
+    readers.push_back(std::make_unique<Reader>(file, part.string()));
+    files.push_back(file);
+    const Reader& r = *readers.back();
+    const std::vector<std::string> members = r.Members("patients");
+    if (members.size() != 1) r.Bad("holds " + std::to_string(members.size()) + " patients; a part holds one");
+    if (std::find(ids.begin(), ids.end(), members[0]) != ids.end())
+      r.Bad("holds patient " + members[0] + ", whom another part holds too");
+    ids.push_back(members[0]);
+    // Every part was made with the first's load cases and generic ribcage (the same options).
+    if (readers.size() == 1) {
+      assembly.load_cases = static_cast<std::int64_t>(r.Numbers("load_cases/position", {0}).size());
+      std::vector<hsize_t> shape;
+      r.Numbers("patients/" + members[0] + "/nodes", {0, 3}, &shape);
+      assembly.surface_nodes = static_cast<std::int64_t>(shape[0]);
+    } else {
+      for (const char* shared : {"load_cases/position", "load_cases/force_n", "topology/faces"}) {
+        if (StoredBytes(r, file, shared) != StoredBytes(*readers.front(), files.front(), shared))
+          r.Bad(std::string("/") + shared + " differs from that of " + parts.front().string() +
+                ": the parts were made with other options");
+      }
+    }
+  }
+  OutputTransaction output;
+  const std::filesystem::path temp = output.Stage(path);
+  {
+    struct Closer {
+      hid_t file = -1, patients = -1;
+      ~Closer() {
+        if (patients >= 0) H5Gclose(patients);
+        if (file >= 0) H5Fclose(file);
+      }
+    } out;
+    out.file = CreateReproducibleFile(temp, path);
+    // The header (attributes, load cases, topology) from the first part, then each part's patient.
+    CopyAttributes(files.front(), out.file, *readers.front(), path);
+    CopyObject(files.front(), "load_cases", out.file, "load_cases", *readers.front(), path);
+    CopyObject(files.front(), "topology", out.file, "topology", *readers.front(), path);
+    out.patients = Group(out.file, "patients", path);
+    for (std::size_t k = 0; k < parts.size(); ++k)
+      CopyObject(files[k], "patients/" + ids[k], out.patients, ids[k], *readers[k], path);
+  }
+  readers.clear();
+  output.CommitAll();
+  return assembly;
 }
 
 FemDataset ParseFemDataset(std::string_view bytes, const std::string& name) {

@@ -82,6 +82,22 @@ FemDataset ParseFemDataset(std::string_view bytes, const std::string& name);
 /// Error(kBadInput) naming the file if it has no such patient or no basis for it, or the basis is broken.
 StoredResponseBasis ReadStoredResponseBasis(const std::filesystem::path& path, const std::string& patient);
 
+/// What AssembleFemDataset joined.
+struct FemDatasetAssembly {
+  std::vector<std::string> patients;  ///< the parts' patients, in order
+  std::int64_t load_cases = 0, surface_nodes = 0;
+};
+
+/// Assembles an FE dataset from parts: one-patient datasets written by FemDatasetWriter (a task farm's
+/// results, one per patient). The first part's attributes, load cases and topology, then every part's
+/// patient group in the order of `parts`, copied as stored (H5Ocopy: no recompression). The file has no
+/// object times and a fixed format version, so the same parts give the same bytes. Nothing appears at
+/// `path` unless it is complete. Throws Error(kBadInput) naming the
+/// part at fault: not a dataset, not one patient, a patient twice, load cases or topology unlike the
+/// first part's (made with other options).
+FemDatasetAssembly AssembleFemDataset(const std::vector<std::filesystem::path>& parts,
+                                      const std::filesystem::path& path);
+
 /// Writes the dataset patient by patient; nothing is visible at `path` until Commit().
 class FemDatasetWriter {
  public:

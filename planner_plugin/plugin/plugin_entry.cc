@@ -7,6 +7,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <map>
+#include <memory>
+#include <mutex>
 #include <new>
 #include <string>
 
@@ -206,6 +209,74 @@ std::int32_t WriteDataset(const char* table_path, const char* output_path,
       *out = {summary.patients, summary.load_cases, summary.results, summary.surface_nodes,
               summary.timings_s.Total()};
     }
+  });
+}
+
+// ---- version 6: the FE dataset one patient at a time -----------------------------------------------------
+
+// The generic ribcage of `settings`, built once per process and options (a farm's rank makes many parts).
+std::shared_ptr<const pectus::planner::GenericRibcage> CachedGenericRibcage(
+    const PectusPlannerOptions* options, const pectus::planner::PlannerSettings& settings) {
+  PectusPlannerOptions o{};
+  if (options != nullptr) {
+    o = *options;
+  } else {
+    pectus::planner::DefaultPlannerOptions(&o);
+  }
+  char key[512];
+  std::snprintf(key, sizeof(key), "%a %a %a %a %a %a %a %a %d %a %d %d", o.sternum_youngs_modulus_mpa,
+                o.sternum_poisson_ratio, o.rib_youngs_modulus_mpa, o.rib_poisson_ratio,
+                o.cartilage_youngs_modulus_mpa, o.cartilage_poisson_ratio, o.contact_width_mm,
+                o.rib_cell_length_mm, o.sternum_cells_along, o.soft_tissue_mm, o.skin_rows, o.skin_columns);
+  static std::mutex mutex;
+  static std::map<std::string, std::shared_ptr<const pectus::planner::GenericRibcage>> cache;
+  const std::lock_guard<std::mutex> lock(mutex);  // the others wait: they need the same ribcage
+  auto& generic = cache[key];
+  if (!generic) {
+    generic = std::make_shared<const pectus::planner::GenericRibcage>(
+        pectus::planner::BuildGenericRibcage(settings.generic));
+  }
+  return generic;
+}
+
+std::int32_t WriteDatasetPart(const char* table_path, std::int64_t row, const char* part_path,
+                              const PectusPlannerOptions* options, const PectusPlannerBasisOptions* basis,
+                              PectusPlannerDatasetSummary* out, PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(table_path, "table_path");
+    Require(part_path, "part_path");
+    const auto start = std::chrono::steady_clock::now();
+    const auto rows = pectus::ReadPatientTable(table_path);
+    if (row < 0 || row >= static_cast<std::int64_t>(rows.size())) {
+      pectus::ThrowUsage("planner: row " + std::to_string(row) + " is not a row of " + table_path + " (" +
+                         std::to_string(rows.size()) + " patients)");
+    }
+    const pectus::planner::PlannerSettings settings = pectus::planner::SettingsFrom(options);
+    const pectus::planner::BarResponseBasisOptions basis_options = BasisOptionsFrom(basis);
+    const auto generic = CachedGenericRibcage(options, settings);
+    const auto summary =
+        pectus::planner::RunFemDatasetPart(*generic, rows[static_cast<std::size_t>(row)], part_path, settings,
+                                           basis != nullptr ? &basis_options : nullptr);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (out != nullptr)
+      *out = {summary.patients, summary.load_cases, summary.results, summary.surface_nodes, seconds};
+  });
+}
+
+std::int32_t AssembleDataset(const char* const* part_paths, std::int64_t count, const char* output_path,
+                             PectusPlannerDatasetSummary* out, PectusPlannerStatus* status) {
+  return Guard(status, [&] {
+    Require(output_path, "output_path");
+    if (count > 0) Require(part_paths, "part_paths");
+    const auto start = std::chrono::steady_clock::now();
+    std::vector<std::filesystem::path> parts;
+    for (std::int64_t i = 0; i < count; ++i) {
+      Require(part_paths[i], "a part path");
+      parts.emplace_back(part_paths[i]);
+    }
+    const auto a = pectus::planner::AssembleFemDataset(parts, output_path);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (out != nullptr) *out = {count, a.load_cases, count * a.load_cases, a.surface_nodes, seconds};
   });
 }
 
@@ -680,6 +751,8 @@ const PectusPlannerInterface kInterface = {
     TrainerWriteRecord,
     TrainerReplay,
     TrainerScopeView,
+    WriteDatasetPart,
+    AssembleDataset,
 };
 
 }  // namespace

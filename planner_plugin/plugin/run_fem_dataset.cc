@@ -1,16 +1,99 @@
 #include "planner_plugin/plugin/run_fem_dataset.h"
 
+#include <omp.h>
+#include <unistd.h>
+
 #include <cstdio>
+#include <exception>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "planner_plugin/io/fem_dataset_h5.h"
 #include "shape/core/error.h"
-#include "shape/io/patient_table_io.h"
 
 namespace pectus::planner {
+namespace {
 
-FemDatasetSummary RunFemDataset(const std::filesystem::path& table, const std::filesystem::path& output,
+namespace fs = std::filesystem;
+
+// A folder removed with everything in it when the object goes.
+struct ScratchFolder {
+  explicit ScratchFolder(fs::path p) : path(std::move(p)) {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+    if (!fs::create_directories(path, ec) || ec)
+      ThrowFailure("cannot create the folder: " + ec.message(), path.string());
+  }
+  ~ScratchFolder() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+  ScratchFolder(const ScratchFolder&) = delete;
+  ScratchFolder& operator=(const ScratchFolder&) = delete;
+  fs::path path;
+};
+
+// One OpenMP thread for this thread while the object lives. A patient's FE (the assembly and CHOLMOD's
+// factorisation) does not give the same last bits on two threads as on one, nor twice on two threads; a
+// dataset's bytes must not depend on where its patients ran, so each is built on one thread (and the
+// patients are the parallelism: RunFemDataset, the task farm).
+class OneThread {
+ public:
+  OneThread() : threads_(omp_get_max_threads()) { omp_set_num_threads(1); }
+  ~OneThread() { omp_set_num_threads(threads_); }
+  OneThread(const OneThread&) = delete;
+  OneThread& operator=(const OneThread&) = delete;
+
+ private:
+  int threads_;
+};
+
+}  // namespace
+
+FemDatasetSummary RunFemDatasetPart(const GenericRibcage& generic, const PatientTableRow& row,
+                                    const fs::path& part, const PlannerSettings& settings,
+                                    const BarResponseBasisOptions* basis_options) {
+  const OneThread one_thread;
+  FemDatasetSummary summary;
+  const std::vector<BarLoad> loads = DissertationLoadCases();
+  std::vector<BarLoad> positions;
+  for (const BarLoad& load : loads) {
+    if (positions.empty() || positions.back().position != load.position)
+      positions.push_back({load.position, false, 1.0});
+  }
+  std::optional<PlannerSession> session;
+  {
+    auto t = summary.timings_s.Time("patient_ribcages");
+    session.emplace(generic, MeasurementsOf(row), settings);  // refuses a fit that misses the CT
+  }
+  std::vector<BarResult> results;
+  std::vector<ForceToLift> lift;
+  {
+    auto t = summary.timings_s.Time("fem");
+    results = session->fem().Solve(loads);
+    lift = session->fem().ForceToLiftSternum(positions);
+  }
+  std::optional<StoredResponseBasis> basis;
+  if (basis_options != nullptr) {
+    auto t = summary.timings_s.Time("response_basis");
+    session->BuildBasis(*basis_options);
+    basis = session->StoreBasis();
+  }
+  {
+    auto t = summary.timings_s.Time("write");
+    FemDatasetWriter writer(part, generic, loads, settings.fem.materials);
+    writer.AddPatient(session->ribcage(), results, lift, row.haller_index, basis ? &*basis : nullptr);
+    writer.Commit();
+    summary.surface_nodes = writer.num_surface_nodes();
+  }
+  summary.patients = 1;
+  summary.load_cases = static_cast<std::int64_t>(loads.size());
+  summary.results = summary.load_cases;
+  return summary;
+}
+
+FemDatasetSummary RunFemDataset(const fs::path& table, const fs::path& output,
                                 const PlannerSettings& settings,
                                 const std::function<void(std::int64_t, std::int64_t)>& progress,
                                 const BarResponseBasisOptions* basis_options) {
@@ -22,52 +105,41 @@ FemDatasetSummary RunFemDataset(const std::filesystem::path& table, const std::f
     rows = ReadPatientTable(table);
     generic = BuildGenericRibcage(settings.generic);
   }
-  const std::vector<BarLoad> loads = DissertationLoadCases();
-  std::vector<BarLoad> positions;
-  for (const BarLoad& load : loads) {
-    if (positions.empty() || positions.back().position != load.position)
-      positions.push_back({load.position, false, 1.0});
-  }
-  std::optional<FemDatasetWriter> writer;
-  {
-    auto t = summary.timings_s.Time("write");
-    writer.emplace(output, generic, loads, settings.fem.materials);
-  }
+  // The parts beside the output (the same file system), removed afterwards.
+  const ScratchFolder folder(output.parent_path() /
+                             ("." + output.filename().string() + ".parts-" + std::to_string(::getpid())));
   const auto total = static_cast<std::int64_t>(rows.size());
+  std::vector<fs::path> parts;
+  for (std::int64_t i = 0; i < total; ++i) parts.push_back(folder.path / (std::to_string(i) + ".h5"));
+  // The patients in parallel, each on one thread; the first failure in table order is thrown.
+  std::vector<FemDatasetSummary> made(rows.size());
+  std::vector<std::exception_ptr> errors(rows.size());
+  std::int64_t done = 0;
+#pragma omp parallel for schedule(dynamic, 1)
   for (std::int64_t i = 0; i < total; ++i) {
-    const PatientTableRow& row = rows[static_cast<std::size_t>(i)];
-    std::optional<PlannerSession> session;
-    {
-      auto t = summary.timings_s.Time("patient_ribcages");
-      session.emplace(generic, MeasurementsOf(row), settings);  // refuses a fit that misses the CT
+    const auto k = static_cast<std::size_t>(i);
+    try {
+      made[k] = RunFemDatasetPart(generic, rows[k], parts[k], settings, basis_options);
+    } catch (...) {
+      errors[k] = std::current_exception();
     }
-    std::vector<BarResult> results;
-    std::vector<ForceToLift> lift;
-    {
-      auto t = summary.timings_s.Time("fem");
-      results = session->fem().Solve(loads);
-      lift = session->fem().ForceToLiftSternum(positions);
-    }
-    std::optional<StoredResponseBasis> basis;
-    if (basis_options != nullptr) {
-      auto t = summary.timings_s.Time("response_basis");
-      session->BuildBasis(*basis_options);
-      basis = session->StoreBasis();
-    }
-    {
-      auto t = summary.timings_s.Time("write");
-      writer->AddPatient(session->ribcage(), results, lift, row.haller_index, basis ? &*basis : nullptr);
-    }
-    if (progress) progress(i + 1, total);
+#pragma omp critical(pectus_fem_dataset_progress)
+    if (progress) progress(++done, total);
+  }
+  for (const std::exception_ptr& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
+  for (const FemDatasetSummary& part : made) {
+    summary.timings_s.Add(part.timings_s);
+    summary.load_cases = part.load_cases;
+    summary.surface_nodes = part.surface_nodes;
   }
   {
-    auto t = summary.timings_s.Time("write");
-    writer->Commit();
+    auto t = summary.timings_s.Time("assemble");
+    AssembleFemDataset(parts, output);
   }
   summary.patients = total;
-  summary.load_cases = static_cast<std::int64_t>(loads.size());
   summary.results = total * summary.load_cases;
-  summary.surface_nodes = writer->num_surface_nodes();
   return summary;
 }
 

@@ -34,14 +34,26 @@ void SerialTaskRunner::Run(const std::vector<int>& order, const std::function<vo
   }
   std::string first_error;
   const auto n = static_cast<int>(mine.size());
-#pragma omp parallel for schedule(dynamic, 1)
-  for (int k = 0; k < n; ++k) {
+  auto run = [&](int k) {
     try {
       task(mine[static_cast<std::size_t>(k)]);
     } catch (const std::exception& e) {
 #pragma omp critical(pectus_task_runner_error)
       if (first_error.empty()) first_error = e.what();
     }
+  };
+  if (n <= 1 || omp_get_max_threads() == 1) {
+    // One thread: the tasks at the top level, so that their own parallel loops (CHOLMOD's in the planner
+    // plugin) run on OpenMP's pooled team. Inside a parallel region, even of one thread, each of them
+    // would start and end a team of its own (threads made, spinning, unmade: 4x the time of a patient).
+    for (int k = 0; k < n; ++k) run(k);
+  } else {
+    // Several threads: the tasks are the parallelism; their own loops run in the task's thread.
+    const int levels = omp_get_max_active_levels();
+    omp_set_max_active_levels(1);
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int k = 0; k < n; ++k) run(k);
+    omp_set_max_active_levels(levels);
   }
   if (!first_error.empty()) ThrowFailure(first_error);
 }
@@ -52,6 +64,13 @@ std::string SerialTaskRunner::Describe() const {
   std::string s = "one process, " + std::to_string(omp_get_max_threads()) + " thread(s)";
   if (!share_.whole()) s += ", share " + std::to_string(share_.index) + "/" + std::to_string(share_.count);
   return s;
+}
+
+std::string NamesForMessage(const std::vector<std::string>& names, std::size_t shown) {
+  std::string text;
+  for (std::size_t k = 0; k < std::min(names.size(), shown); ++k) text += (k == 0 ? "" : ", ") + names[k];
+  if (names.size() > shown) text += " and " + std::to_string(names.size() - shown) + " more";
+  return text;
 }
 
 std::vector<int> LargestFirst(const std::vector<double>& sizes) {

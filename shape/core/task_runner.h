@@ -59,6 +59,9 @@ class SerialTaskRunner : public TaskRunner {
   TaskShare share_;
 };
 
+/// Names for a message about tasks not done: the first `shown` joined by ", ", then " and K more".
+std::string NamesForMessage(const std::vector<std::string>& names, std::size_t shown = 10);
+
 /// Task indices 0..sizes.size()-1, largest size first (ties by index), so that the longest tasks start
 /// first and the last to finish are short.
 std::vector<int> LargestFirst(const std::vector<double>& sizes);

@@ -428,12 +428,11 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
   SubjectStore surfaces(run.work, "surface", inputs), registered(run.work, "registered", inputs);
   SubjectStore grids(run.work, "grids", inputs);
   if (const std::vector<int> missing = registered.Missing(); run.gather && !missing.empty()) {
-    std::string names;
-    for (std::size_t k = 0; k < std::min<std::size_t>(missing.size(), 10); ++k)
-      names += (k == 0 ? "" : ", ") + inputs[missing[k]].name;
-    if (missing.size() > 10) names += " and " + std::to_string(missing.size() - 10) + " more";
-    ThrowUsage("--gather: no share has finished subject(s) " + names + " (their results are not in " +
-               run.work.string() + "); run their shares, or the whole run with --resume");
+    std::vector<std::string> names;
+    for (int i : missing) names.push_back(inputs[i].name);
+    ThrowUsage("--gather: no share has finished subject(s) " + NamesForMessage(names) +
+               " (their results are not in " + run.work.string() +
+               "); run their shares, or the whole run with --resume");
   }
   // The subjects handed out largest first (bytes of sweeps), so that the last to finish are small ones.
   std::vector<double> bytes(inputs.size(), 0.0);

@@ -37,7 +37,8 @@ void pectus_planner_api_layout_from_c(size_t* out, int capacity) {
                            sizeof(PectusPlannerTunnel),
                            sizeof(PectusPlannerTrainerScore),
                            sizeof(PectusPlannerScopeView),
-                           offsetof(PectusPlannerInterface, trainer_scope_view)};
+                           offsetof(PectusPlannerInterface, trainer_scope_view),
+                           offsetof(PectusPlannerInterface, assemble_dataset)};
   int i;
   for (i = 0; i < capacity && i < (int)(sizeof(values) / sizeof(values[0])); ++i) out[i] = values[i];
 }

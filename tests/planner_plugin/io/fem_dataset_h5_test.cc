@@ -208,3 +208,62 @@ TEST(FemDataset, MalformedFilesAreBadInputNamingTheDataset) {
 
 }  // namespace
 }  // namespace pectus::planner
+
+namespace pectus::planner {
+namespace {
+
+std::string Bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// The dataset by parts (a task farm's way, docs/cluster.md): parts made in any order and assembled in
+// table order are RunFemDataset's bytes, and assembling again gives them again (no times in the file); a
+// part made with other options, or the same patient twice, is refused naming the part.
+TEST(FemDataset, PartsAssembledInTableOrderAreTheWholeRunsBytes) {
+  const fs::path dir = fs::temp_directory_path() / ("pectus_fem_parts_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "two.csv") << "patient,haller_index,width_mm,sternal_length_mm,depth_mm,depression_mm\n"
+                                    "57,6.5,231,168,123,21\n"
+                                    "3,6.3,280,165,151,40\n";
+  PlannerSettings settings = SettingsFrom(nullptr);  // the coarsest mesh and skin: the test is about bytes
+  settings.generic.rib_cell_length_mm = 20;
+  settings.skin.rows = 8;
+  settings.skin.columns = 12;
+  RunFemDataset(dir / "two.csv", dir / "whole.h5", settings, nullptr);
+  const auto rows = ReadPatientTable(dir / "two.csv");
+  const GenericRibcage generic = BuildGenericRibcage(settings.generic);
+  RunFemDatasetPart(generic, rows[1], dir / "b.h5", settings);  // the second patient first
+  RunFemDatasetPart(generic, rows[0], dir / "a.h5", settings);
+  const FemDatasetAssembly a = AssembleFemDataset({dir / "a.h5", dir / "b.h5"}, dir / "farm.h5");
+  EXPECT_EQ(a.patients, (std::vector<std::string>{"57", "3"}));
+  EXPECT_EQ(a.load_cases, 24);
+  EXPECT_GT(a.surface_nodes, 100);
+  const std::string whole = Bytes(dir / "whole.h5");
+  ASSERT_GT(whole.size(), 10000u);
+  EXPECT_TRUE(Bytes(dir / "farm.h5") == whole) << "the parts assembled differ from the whole run's dataset";
+  AssembleFemDataset({dir / "a.h5", dir / "b.h5"}, dir / "again.h5");
+  EXPECT_TRUE(Bytes(dir / "again.h5") == whole) << "a second assembly differs";
+  EXPECT_EQ(ReadFemDataset(dir / "farm.h5").patients.size(), 2u);
+
+  PlannerSettings other = settings;
+  other.generic.rib_cell_length_mm = 16;
+  RunFemDatasetPart(BuildGenericRibcage(other.generic), rows[1], dir / "other.h5", other);
+  const std::string refused = BadInputMessage(
+      [&] {
+        AssembleFemDataset({dir / "a.h5", dir / "other.h5"}, dir / "x.h5");
+      },
+      (dir / "other.h5").string());
+  EXPECT_NE(refused.find("other options"), std::string::npos) << refused;
+  const std::string twice = BadInputMessage(
+      [&] {
+        AssembleFemDataset({dir / "a.h5", dir / "a.h5"}, dir / "x.h5");
+      },
+      (dir / "a.h5").string());
+  EXPECT_NE(twice.find("another part holds too"), std::string::npos) << twice;
+  EXPECT_FALSE(fs::exists(dir / "x.h5"));
+  if (!HasFailure()) fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace pectus::planner

@@ -34,7 +34,7 @@ TEST_F(PluginEntry, ExportsOneVersionedTableThatCAndCppLayOutAlike) {
   EXPECT_EQ(api_->version, PECTUS_PLANNER_INTERFACE_VERSION);
   EXPECT_EQ(api_->struct_size, sizeof(PectusPlannerInterface));
   EXPECT_NE(std::string(api_->description).find("pectus planner"), std::string::npos);
-  constexpr int kItems = 32;
+  constexpr int kItems = 33;
   size_t c[kItems] = {};
   pectus_planner_api_layout_from_c(c, kItems);
   const size_t cpp[kItems] = {sizeof(PectusPlannerStatus),
@@ -68,7 +68,8 @@ TEST_F(PluginEntry, ExportsOneVersionedTableThatCAndCppLayOutAlike) {
                           sizeof(PectusPlannerTunnel),
                           sizeof(PectusPlannerTrainerScore),
                           sizeof(PectusPlannerScopeView),
-                          offsetof(PectusPlannerInterface, trainer_scope_view)};
+                          offsetof(PectusPlannerInterface, trainer_scope_view),
+                          offsetof(PectusPlannerInterface, assemble_dataset)};
   for (int i = 0; i < kItems; ++i) EXPECT_EQ(c[i], cpp[i]) << "layout item " << i;
   // Nothing but the entry point is visible: not even the engine's functions (which this test binary
   // links itself, so the name below is the real one).
