@@ -6,19 +6,15 @@
 // second; with its basis in 3 s, so the bases are farmed on one patient only). Two tests, so that the
 // serial run is made twice, not once per case.
 #include <gtest/gtest.h>
-#include <signal.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
-#include <thread>
 
 #include "tests/support/cli_run.h"
+#include "tests/support/cluster_run.h"
 #include "tests/support/require_shared_data.h"
 #include "tests/support/scratch_dir.h"
 
@@ -31,18 +27,7 @@ using testing_support::Pectus;
 
 // The coarsest mesh.
 const char* const kOptions = " --cell-mm 20 --quiet";
-// CI runs as root: Open MPI refuses that unless told, here for this command only. Under the sanitizers,
-// full stacks for LeakSanitizer (cmake/sanitizers/lsan.supp: Open MPI's own leaks).
-const char* const kMpiRoot =
-    "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
-    "ASAN_OPTIONS=\"$ASAN_OPTIONS:fast_unwind_on_malloc=0\" ";
-
-std::string Read(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  return bytes.str();
-}
+using testing_support::ReadBytes;
 
 class SurrogateCluster : public testing_support::ScratchDirTest {
  protected:
@@ -62,7 +47,7 @@ class SurrogateCluster : public testing_support::ScratchDirTest {
     const CliRun run =
         Pectus(Build(suite_ / "serial.h5") + " --threads 1 --report " + (suite_ / "serial.json").string());
     ASSERT_EQ(run.code, 0) << run.output;
-    serial_ = Read(suite_ / "serial.h5");
+    serial_ = ReadBytes(suite_ / "serial.h5");
   }
   static void TearDownTestSuite() { fs::remove_all(suite_); }
   static std::string Table() { return (suite_ / "four.csv").string(); }
@@ -79,7 +64,7 @@ class SurrogateCluster : public testing_support::ScratchDirTest {
   // The dataset at `output` is the serial run's, byte for byte, and no part is left.
   static void ExpectSerialBytes(const fs::path& output, const std::string& what) {
     ASSERT_TRUE(fs::exists(output)) << what << ": no dataset";
-    EXPECT_TRUE(Read(output) == serial_) << what << ": the dataset differs from the serial run's";
+    EXPECT_TRUE(ReadBytes(output) == serial_) << what << ": the dataset differs from the serial run's";
     const fs::path work = output.parent_path() / ("." + output.filename().string() + ".pectus-work");
     EXPECT_FALSE(fs::exists(work)) << what << ": the patients' parts were kept";
   }
@@ -110,8 +95,7 @@ TEST_F(SurrogateCluster, ThreadsAndMpiRanksGiveTheSerialBytes) {
 #ifdef PECTUS_MPIEXEC
   for (int ranks : {1, 2, 3}) {
     const fs::path out = P("ranks" + std::to_string(ranks) + ".h5");
-    const CliRun mpi = Pectus(
-        Build(out), std::string(kMpiRoot) + PECTUS_MPIEXEC " --oversubscribe -n " + std::to_string(ranks));
+    const CliRun mpi = Pectus(Build(out), testing_support::MpiLauncher(ranks));
     ASSERT_EQ(mpi.code, 0) << ranks << " ranks: " << mpi.output;
     ExpectSerialBytes(out, std::to_string(ranks) + " ranks");
   }
@@ -121,12 +105,11 @@ TEST_F(SurrogateCluster, ThreadsAndMpiRanksGiveTheSerialBytes) {
   const std::string bases = "surrogate build --patient-table " + P("one.csv") + kOptions + " -o ";
   const CliRun serial = Pectus(bases + P("bases_serial.h5") + " --threads 1");
   ASSERT_EQ(serial.code, 0) << serial.output;
-  const CliRun two =
-      Pectus(bases + P("bases_ranks.h5"), std::string(kMpiRoot) + PECTUS_MPIEXEC " --oversubscribe -n 2");
+  const CliRun two = Pectus(bases + P("bases_ranks.h5"), testing_support::MpiLauncher(2));
   ASSERT_EQ(two.code, 0) << two.output;
-  const std::string with_bases = Read(P("bases_serial.h5"));
+  const std::string with_bases = ReadBytes(P("bases_serial.h5"));
   EXPECT_GT(with_bases.size(), 1000000u) << "no basis in the dataset";
-  EXPECT_TRUE(Read(P("bases_ranks.h5")) == with_bases) << "the dataset with bases differs on 2 ranks";
+  EXPECT_TRUE(ReadBytes(P("bases_ranks.h5")) == with_bases) << "the dataset with bases differs on 2 ranks";
 #else
   GTEST_SKIP() << "pectus was built without MPI (CMake found none): the mpirun runs are not tested";
 #endif
@@ -158,33 +141,11 @@ void SurrogateCluster::KillHalfWayAndResume() {
   const fs::path parts = fs::path(P(".killed.h5.pectus-work")) / "parts";
   // One thread, so that patients finish one by one; killed (SIGKILL: no clean-up) once 2 of the 4 have
   // their part committed.
-  const std::string command = "exec " PECTUS_EXECUTABLE " " + Build(out) + " --threads 1 > /dev/null 2>&1";
-  const pid_t pid = fork();
-  ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  auto count = [&] {
-    std::error_code ec;
-    std::size_t n = 0;
-    for (fs::directory_iterator it(parts, ec), end; !ec && it != end; it.increment(ec)) {
-      const std::string name = it->path().filename().string();
-      if (it->path().extension() == ".h5" && name[0] != '.') ++n;  // committed, not a temporary file
-    }
-    return n;
-  };
-  int status = 0;
-  bool exited = false;
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(5);
-  while (count() < 2 && !exited && std::chrono::steady_clock::now() < deadline) {
-    exited = waitpid(pid, &status, WNOHANG) == pid;
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
-  ASSERT_FALSE(exited) << "the run finished before it could be killed half way";
-  kill(pid, SIGKILL);
-  ASSERT_EQ(waitpid(pid, &status, 0), pid);
-  ASSERT_TRUE(WIFSIGNALED(status));
+  auto count = [&] { return testing_support::CountFiles(parts, ".h5"); };
+  const testing_support::Killed killed =
+      testing_support::KillWhen(Build(out) + " --threads 1", [&] { return count() >= 2; });
+  ASSERT_FALSE(killed.finished_first) << "the run finished before it could be killed half way";
+  ASSERT_TRUE(killed.killed);
   EXPECT_FALSE(fs::exists(out));
   const std::size_t done = count();
   EXPECT_GE(done, 2u);

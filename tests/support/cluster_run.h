@@ -94,12 +94,13 @@ inline Killed KillWhen(const std::string& args, const std::function<bool()>& rea
   return out;
 }
 
-/// Files with extension `ext` directly in `folder` (0 if it does not exist).
+/// Committed files with extension `ext` directly in `folder`: hidden ones (an atomic write's temporary
+/// file) left out; 0 if the folder does not exist.
 inline std::size_t CountFiles(const std::filesystem::path& folder, const std::string& ext) {
   std::error_code ec;
   std::size_t n = 0;
   for (std::filesystem::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
-    if (it->path().extension() == ext) ++n;
+    if (it->path().extension() == ext && it->path().filename().string()[0] != '.') ++n;
   }
   return n;
 }
