@@ -2,6 +2,7 @@
 // and distance maps.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <nanoflann.hpp>
@@ -61,6 +62,22 @@ class KdTree3 {
     for (int k = 0; k < result.count; ++k) {
       indices[k] = result.index[k];
       squared_distances[k] = result.dist[k];
+    }
+    return result.count;
+  }
+
+  /// The k <= kMaxBounded nearest points within `max_distance` (mm) of `query`, closest first: rows into
+  /// `indices`, squared distances (mm^2) into `squared_distances` (arrays of at least k entries). Returns
+  /// how many were found (< k when fewer lie within reach). No allocation.
+  static constexpr int kMaxBounded = 8;
+  int NearestWithin(const Eigen::Vector3d& query, double max_distance, int k, std::uint32_t* indices,
+                    double* squared_distances) const {
+    if (size() == 0 || k <= 0) return 0;
+    BoundedKNearest result(max_distance * max_distance, std::min(k, kMaxBounded));
+    index_->findNeighbors(result, query.data(), nanoflann::SearchParams(32, 0.0f, false));
+    for (int j = 0; j < result.count; ++j) {
+      indices[j] = result.index[j];
+      squared_distances[j] = result.dist[j];
     }
     return result.count;
   }
@@ -155,6 +172,31 @@ class KdTree3 {
     double bound;
     double dist[2] = {0.0, 0.0};
     std::uint32_t index[2] = {0, 0};
+    int count = 0;
+  };
+  // A nanoflann result set keeping the k <= kMaxBounded nearest points under a squared-distance bound,
+  // closest first (insertion into a short sorted array).
+  struct BoundedKNearest {
+    using DistanceType = double;
+    using IndexType = std::uint32_t;
+    BoundedKNearest(double bound, int capacity) : bound(bound), capacity(capacity) {}
+    bool full() const { return true; }
+    bool addPoint(double d, std::uint32_t i) {
+      if (d >= worstDist()) return true;
+      int at = count < capacity ? count++ : capacity - 1;
+      for (; at > 0 && dist[at - 1] > d; --at) {
+        dist[at] = dist[at - 1];
+        index[at] = index[at - 1];
+      }
+      dist[at] = d;
+      index[at] = i;
+      return true;
+    }
+    double worstDist() const { return count < capacity ? bound : dist[capacity - 1]; }
+    double bound;
+    int capacity;
+    double dist[kMaxBounded] = {};
+    std::uint32_t index[kMaxBounded] = {};
     int count = 0;
   };
   using Index = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Adaptor>, Adaptor, 3,

@@ -34,7 +34,8 @@ nlohmann::json IcpJson(const IcpResult& r) {
                       {"source_points", l.source_points},
                       {"iterations", l.iterations},
                       {"converged", l.converged},
-                      {"rms_mm", l.rms_mm}});
+                      {"rms_mm", l.rms_mm},
+                      {"searches", l.searches}});
   }
   return {{"rms_mm", r.rms_mm},
           {"inlier_fraction", r.inlier_fraction},

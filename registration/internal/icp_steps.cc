@@ -13,9 +13,9 @@ namespace pectus::icp_detail {
 namespace {
 
 // The nearest target row of `p` (kNoMatch if none within the cache's radius), from the certificate when it
-// still holds, else from the tree (updating the certificate). Returns true if it searched the tree.
-bool Nearest(const KdTree3& tree, const Eigen::Vector3d& p, double gate, std::size_t s, NearestCache* cache,
-             std::uint32_t* j) {
+// still holds, else from the tree (renewing the certificate). Returns true if it searched the tree.
+bool Nearest(const KdTree3& tree, const Points3& target, const Eigen::Vector3d& p, double gate, std::size_t s,
+             NearestCache* cache, std::uint32_t* j) {
   if (cache == nullptr) {
     double d2 = 0.0;
     if (!tree.NearestWithin(p, gate, j, &d2)) *j = kNoMatch;
@@ -23,22 +23,43 @@ bool Nearest(const KdTree3& tree, const Eigen::Vector3d& p, double gate, std::si
   }
   if (cache->valid[s]) {
     const double moved = (p - cache->at[s]).norm();
-    // With no match, d1 holds the radius the certificate was searched with.
-    if (cache->nearest[s] == kNoMatch ? moved <= cache->d1[s] - gate
-                                      : 2.0 * moved < cache->d2[s] - cache->d1[s]) {
-      *j = cache->nearest[s];
-      return false;
+    const int count = cache->count[s];
+    if (count == 0) {
+      // No target point within `reach` of where it was: none within the gate while it has moved less
+      // than reach - gate.
+      if (moved <= cache->reach[s] - gate) {
+        *j = kNoMatch;
+        return false;
+      }
+    } else {
+      const auto& c = cache->candidates[s];
+      int best = 0;
+      double best2 = (target.row(c[0]).transpose() - p).squaredNorm();
+      for (int k = 1; k < count; ++k) {
+        const double d2 = (target.row(c[static_cast<std::size_t>(k)]).transpose() - p).squaredNorm();
+        if (d2 < best2) {
+          best2 = d2;
+          best = k;
+        }
+      }
+      // Any other target point is at least reach - moved away (triangle inequality).
+      const double others = cache->reach[s] - moved;
+      if (others > 0.0 && best2 < others * others) {
+        *j = c[static_cast<std::size_t>(best)];
+        return false;
+      }
     }
   }
-  std::uint32_t idx[2] = {kNoMatch, kNoMatch};
-  double d2[2] = {0.0, 0.0};
-  const int found = tree.NearestTwoWithin(p, cache->radius, idx, d2);
+  constexpr int K = NearestCache::kCandidates;
+  std::uint32_t idx[K + 1];
+  double d2[K + 1];
+  const int found = tree.NearestWithin(p, cache->radius, K + 1, idx, d2);
   cache->valid[s] = 1;
   cache->at[s] = p;
-  cache->nearest[s] = found > 0 ? idx[0] : kNoMatch;
-  cache->d1[s] = found > 0 ? std::sqrt(d2[0]) : cache->radius;
-  cache->d2[s] = found > 1 ? std::sqrt(d2[1]) : cache->radius;
-  *j = cache->nearest[s];
+  cache->count[s] = static_cast<std::uint8_t>(std::min(found, K));
+  for (int k = 0; k < std::min(found, K); ++k) cache->candidates[s][static_cast<std::size_t>(k)] = idx[k];
+  cache->reach[s] = found > K ? std::sqrt(d2[K]) : cache->radius;
+  *j = found > 0 ? idx[0] : kNoMatch;
   return true;
 }
 
@@ -70,7 +91,7 @@ std::int64_t FindPairs(const Problem& pb, const std::vector<std::uint32_t>& samp
     const std::uint32_t i = sample[s];
     const Eigen::Vector3d p = R * (pb.source->row(i).transpose() - pb.source_origin) + t;
     std::uint32_t j = kNoMatch;
-    searches += Nearest(pb.target->tree(), p, gate, s, cache, &j) ? 1 : 0;
+    searches += Nearest(pb.target->tree(), tp, p, gate, s, cache, &j) ? 1 : 0;
     pairs->target[s] = kNoMatch;
     if (j == kNoMatch) continue;
     const Eigen::Vector3d q = tp.row(j).transpose();

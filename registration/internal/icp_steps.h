@@ -4,6 +4,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -69,27 +70,31 @@ struct Problem {
   double max_tangential2;       // squared tangential reach (mm^2); infinity when off
 };
 
-// The correspondence certificates of one level: per sample point, where it was when last searched, its
-// nearest target row there (kNoMatch: none within `radius`) and the distances to the nearest and second
-// nearest target points (mm; `radius` when missing). A point that has since moved by less than half the
-// gap between them provably keeps the same nearest point, so step 1 searches the tree only for the points
-// whose certificate has expired: exact nearest neighbours at a fraction of the searches.
+// The correspondence certificates of one level: per sample point, where it was when last searched (`at`),
+// the kCandidates nearest target rows from there, closest first (`count` of them; fewer when fewer lie
+// within `radius`), and `reach`, the distance from `at` to the next nearest target point (`radius` when
+// there is none within it). Every target point but the candidates lies at least `reach` from `at`, so at
+// least reach - |p - at| from the point's current position p: while the closest candidate is nearer than
+// that, it is the exact nearest target point (docs/registration.md, ICP-2), and step 1 searches the tree
+// only for the points whose certificate has expired.
 struct NearestCache {
+  static constexpr int kCandidates = 4;
   double radius = 0.0;  // search radius (mm), above the gate
   std::vector<Eigen::Vector3d> at;
-  std::vector<std::uint32_t> nearest;
-  std::vector<double> d1, d2;
+  std::vector<std::array<std::uint32_t, kCandidates>> candidates;
+  std::vector<std::uint8_t> count;
+  std::vector<double> reach;
   std::vector<std::uint8_t> valid;
   /// Certificates for `m` points searched within `search_radius`, keeping those of the first `kept`
   /// points (a coarser level's sample that is a prefix of this one): a certificate stays exact whatever
-  /// the radius it was made with, since a missing point records that radius as its distance.
+  /// the radius it was made with, since its reach is at most that radius.
   void Reset(std::size_t m, double search_radius, std::size_t kept = 0) {
     radius = search_radius;
     kept = std::min(kept, valid.size());
     at.resize(m);
-    nearest.resize(m);
-    d1.resize(m);
-    d2.resize(m);
+    candidates.resize(m);
+    count.resize(m);
+    reach.resize(m);
     valid.resize(m);
     std::fill(valid.begin() + static_cast<std::ptrdiff_t>(std::min(kept, m)), valid.end(), 0);
   }

@@ -136,8 +136,8 @@ json RunProcesses(const fs::path& dir, const ProcessCase& c, const std::string& 
 }
 
 json Process(int chest_pairs, bool bunny, const std::string& pectus_before) {
-  // PECTUS_PROCESS_DIR keeps the last chest pair's files there, without the bunny's (to profile a process
-  // by hand).
+  // PECTUS_PROCESS_DIR keeps each pair's files there (DIR/seed1000, ..., DIR/bun000_bun045, ...; each with
+  // truth.json), to profile a process or try an option by hand.
   const char* keep = std::getenv("PECTUS_PROCESS_DIR");
   const fs::path dir = keep
                            ? fs::path(keep)
@@ -155,17 +155,20 @@ json Process(int chest_pairs, bool bunny, const std::string& pectus_before) {
     ProcessCase c;
     c.name = "chest seed " + std::to_string(seed);
     c.truth = Similarity3::FromRigid(p.T_true);
-    WriteScans(dir, p.fixed.positions, p.moving.positions, &c);
-    WriteLandmarks(dir / "fixed.csv", lf);
-    WriteLandmarks(dir / "moving.csv", lm);
-    WriteTransformJson(dir / "init.json", AlignLandmarks(lm, lf).T_target_source);
-    rows.push_back(RunProcesses(dir, c,
-                                "--moving-landmarks " + (dir / "moving.csv").string() +
-                                    " --fixed-landmarks " + (dir / "fixed.csv").string(),
+    const fs::path at = keep ? dir / ("seed" + std::to_string(seed)) : dir;
+    fs::create_directories(at);
+    WriteScans(at, p.fixed.positions, p.moving.positions, &c);
+    WriteLandmarks(at / "fixed.csv", lf);
+    WriteLandmarks(at / "moving.csv", lm);
+    WriteTransformJson(at / "init.json", AlignLandmarks(lm, lf).T_target_source);
+    WriteTransformJson(at / "truth.json", c.truth);
+    rows.push_back(RunProcesses(at, c,
+                                "--moving-landmarks " + (at / "moving.csv").string() + " --fixed-landmarks " +
+                                    (at / "fixed.csv").string(),
                                 pectus_before));
     std::cerr << "process: " << c.name << "\n";
   }
-  if (bunny && !keep) {
+  if (bunny) {
     const fs::path data = testing_support::BunnyDirectory();
     ReadOptions metres;
     metres.input_units = LengthUnit::kMetre;
@@ -185,9 +188,12 @@ json Process(int chest_pairs, bool bunny, const std::string& pectus_before) {
       ProcessCase c;
       c.name = fixed_name.substr(0, 6) + " <- " + moving_name.substr(0, 6);
       c.truth = Similarity3::FromRigid(published);
-      WriteScans(dir, fixed.positions, moving.positions, &c);
-      WriteTransformJson(dir / "init.json", Similarity3::FromRigid(start));
-      rows.push_back(RunProcesses(dir, c, "--initial " + (dir / "init.json").string(), pectus_before));
+      const fs::path at = keep ? dir / (fixed_name.substr(0, 6) + "_" + moving_name.substr(0, 6)) : dir;
+      fs::create_directories(at);
+      WriteScans(at, fixed.positions, moving.positions, &c);
+      WriteTransformJson(at / "init.json", Similarity3::FromRigid(start));
+      WriteTransformJson(at / "truth.json", c.truth);
+      rows.push_back(RunProcesses(at, c, "--initial " + (at / "init.json").string(), pectus_before));
       std::cerr << "process: bunny " << c.name << "\n";
     }
   }
