@@ -143,6 +143,9 @@ int Main(int argc, char** argv) {
   const int all_cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   context.threads = threads > 0 ? threads : under_mpi ? 1 : all_cores;
   omp_set_num_threads(context.threads);
+  // One thread means one: libraries that ask for their own team size (CHOLMOD's supernodal factorisation
+  // asks for 4) run on this thread too, instead of waking threads that share its core.
+  if (context.threads == 1) omp_set_max_active_levels(0);
   // Eigen's own threads stay off: it splits a large product by the thread count, and so its sums' order
   // (a 200-subject model's Gram matrix differed in the last bits between 1 and 2 threads). Pectus's loops
   // run in parallel instead, each item computed alone, so the bytes of every output do not depend on
