@@ -3,9 +3,11 @@
 #include <mpi.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <exception>
+#include <limits>
 #include <thread>
 
 #include "shape/core/error.h"
@@ -111,6 +113,76 @@ void MpiTaskRunner::Run(const std::vector<int>& order, const std::function<void(
 }
 
 void MpiTaskRunner::Barrier() { MPI_Barrier(MPI_COMM_WORLD); }
+
+void MpiTaskRunner::ComputeBlocks(const std::vector<std::int64_t>& offsets,
+                                  const std::function<void(int, double*)>& compute, double* table,
+                                  bool leader_only) {
+  const auto blocks = static_cast<int>(offsets.size()) - 1;
+  if (offsets.back() > std::numeric_limits<int>::max()) {
+    ThrowFailure("a shared table of " + std::to_string(offsets.back()) +
+                 " numbers is beyond what one MPI collective moves (2^31 - 1)");
+  }
+  // Rank r's run: blocks [first(r), first(r + 1)).
+  auto first = [&](int r) { return static_cast<int>(static_cast<std::int64_t>(blocks) * r / size_); };
+  std::string error;
+  const int mine_begin = first(rank_), mine_end = first(rank_ + 1);
+  std::vector<std::int64_t> mine(offsets.begin() + mine_begin, offsets.begin() + mine_end + 1);
+  for (std::int64_t& o : mine) o -= offsets[static_cast<std::size_t>(mine_begin)];
+  // A rank other than the leader keeps its run to itself when only the leader gathers the table.
+  std::vector<double> own;
+  if (leader_only && rank_ != 0) own.resize(static_cast<std::size_t>(mine.back()));
+  double* const run = own.empty() && !(leader_only && rank_ != 0)
+                          ? table + offsets[static_cast<std::size_t>(mine_begin)]
+                          : own.data();
+  try {
+    TaskRunner::ComputeBlocks(mine, [&](int b, double* out) { compute(mine_begin + b, out); }, run);
+  } catch (const std::exception& e) {
+    error = e.what();
+    if (error.empty()) error = "a block of a shared table failed";
+  }
+  // The first failed rank tells every rank its error.
+  int failed = error.empty() ? size_ : rank_;
+  MPI_Allreduce(MPI_IN_PLACE, &failed, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  if (failed < size_) {
+    int length = static_cast<int>(error.size());
+    MPI_Bcast(&length, 1, MPI_INT, failed, MPI_COMM_WORLD);
+    error.resize(static_cast<std::size_t>(length));
+    MPI_Bcast(error.data(), length, MPI_CHAR, failed, MPI_COMM_WORLD);
+    ThrowFailure(error);
+  }
+  std::vector<int> counts(static_cast<std::size_t>(size_)), displacements(static_cast<std::size_t>(size_));
+  for (int r = 0; r < size_; ++r) {
+    displacements[r] = static_cast<int>(offsets[static_cast<std::size_t>(first(r))]);
+    counts[r] = static_cast<int>(offsets[static_cast<std::size_t>(first(r + 1))]) - displacements[r];
+  }
+  if (!leader_only) {
+    MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, table, counts.data(), displacements.data(), MPI_DOUBLE,
+                   MPI_COMM_WORLD);
+  } else if (rank_ == 0) {
+    MPI_Gatherv(MPI_IN_PLACE, counts[0], MPI_DOUBLE, table, counts.data(), displacements.data(), MPI_DOUBLE, 0,
+                MPI_COMM_WORLD);
+  } else {
+    MPI_Gatherv(run, counts[rank_], MPI_DOUBLE, nullptr, nullptr, nullptr, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+  }
+}
+
+void MpiTaskRunner::Broadcast(void* data, std::int64_t bytes) {
+  // In pieces a collective's int count can hold.
+  constexpr std::int64_t kPiece = std::int64_t{1} << 30;
+  auto* p = static_cast<char*>(data);
+  for (std::int64_t done = 0; done < bytes; done += kPiece) {
+    // Waiting without spinning: the leader may work alone for a while before it sends (the model's
+    // alignment, its eigen decomposition), and a waiting rank should leave its core to it.
+    MPI_Request request;
+    MPI_Ibcast(p + done, static_cast<int>(std::min(kPiece, bytes - done)), MPI_BYTE, 0, MPI_COMM_WORLD,
+               &request);
+    int finished = 0;
+    for (MPI_Test(&request, &finished, MPI_STATUS_IGNORE); !finished;
+         MPI_Test(&request, &finished, MPI_STATUS_IGNORE)) {
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+  }
+}
 
 int MpiTaskRunner::SerialThreads() const { return omp_get_max_threads() * node_ranks_; }
 

@@ -72,6 +72,11 @@ class PipelineCommand : public Command {
                     "Length (mm) over which a filled region is joined to the seen vertices about it; 0: "
                     "the others' prediction alone")
         ->default_val(options_.imputation.local_scale_mm);
+    app->add_option("--impute-others", options_.imputation.max_others,
+                    "The model a subject is filled from: at most this many other subjects (the cohort's "
+                    "first; only their fills are iterated, each subject beyond them is filled once)")
+        ->check(CLI::Range(2, 1 << 20))
+        ->default_val(options_.imputation.max_others);
     app->add_flag("--no-quality", no_quality_, "Skip compactness, generalization and specificity");
     app->add_option("--distance-range", report_.distance_range_mm,
                     "Colour scale of the distance maps, +-mm (0: auto)")

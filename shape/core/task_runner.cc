@@ -60,6 +60,41 @@ void SerialTaskRunner::Run(const std::vector<int>& order, const std::function<vo
 
 int TaskRunner::SerialThreads() const { return omp_get_max_threads(); }
 
+void TaskRunner::ComputeBlocks(const std::vector<std::int64_t>& offsets,
+                               const std::function<void(int, double*)>& compute, double* table, bool) {
+  const auto blocks = static_cast<int>(offsets.size()) - 1;
+  std::string first_error;
+#pragma omp parallel for schedule(dynamic, 1) if (blocks > 1)
+  for (int b = 0; b < blocks; ++b) {
+    try {
+      compute(b, table + offsets[static_cast<std::size_t>(b)]);
+    } catch (const std::exception& e) {
+#pragma omp critical(pectus_task_runner_error)
+      if (first_error.empty()) first_error = e.what();
+    }
+  }
+  if (!first_error.empty()) ThrowFailure(first_error);
+}
+
+bool TaskRunner::BroadcastOutcome(bool ok, std::string* why) {
+  std::int64_t header[2] = {ok ? 1 : 0, static_cast<std::int64_t>(why->size())};
+  Broadcast(header, sizeof header);
+  if (header[0] == 1) return true;
+  why->resize(static_cast<std::size_t>(header[1]));
+  Broadcast(why->data(), header[1]);
+  return false;
+}
+
+std::int64_t BlockRows(std::int64_t rows, std::int64_t most) {
+  return std::clamp<std::int64_t>((rows + 7) / 8, 1, std::max<std::int64_t>(1, most));
+}
+
+std::vector<std::int64_t> BlockOffsets(std::int64_t rows, std::int64_t block, std::int64_t width) {
+  std::vector<std::int64_t> offsets{0};
+  for (std::int64_t r = 0; r < rows; r += block) offsets.push_back(std::min(rows, r + block) * width);
+  return offsets;
+}
+
 std::string SerialTaskRunner::Describe() const {
   std::string s = "one process, " + std::to_string(omp_get_max_threads()) + " thread(s)";
   if (!share_.whole()) s += ", share " + std::to_string(share_.index) + "/" + std::to_string(share_.count);

@@ -6,6 +6,7 @@
 // are the same bytes for any runner.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -31,7 +32,31 @@ class TaskRunner {
   virtual int SerialThreads() const;
   /// One line for logs and reports: "serial, 2 threads", "MPI, 3 ranks", "shard 2/3".
   virtual std::string Describe() const = 0;
+
+  /// A table of numbers computed by every process together (a collective: every process calls it, with
+  /// the same arguments). Block b is rows `offsets[b]` to `offsets[b + 1]` of the table (numbers, not
+  /// rows, in `table`'s layout); compute(b, table + offsets[b]) fills it on exactly one process, in that
+  /// process's threads, from inputs every process holds alike. The blocks are dealt in contiguous runs, one
+  /// run per process, and then every process holds the whole table (only the leader if `leader_only`:
+  /// then `table` may be null on the others).
+  /// A block's numbers depend only on `compute`, so the table is the same whatever the processes. A block
+  /// that throws: Error(kFailure) with its message, on every process.
+  virtual void ComputeBlocks(const std::vector<std::int64_t>& offsets,
+                             const std::function<void(int, double*)>& compute, double* table,
+                             bool leader_only = false);
+  /// The leader's `bytes` bytes at `data` to every process (a collective; a no-op on one process).
+  virtual void Broadcast(void* /*data*/, std::int64_t /*bytes*/) {}
+  /// The leader's `ok` (and, when false, its `why`) to every process: a process that worked alone tells
+  /// the others whether to go on. Returns `ok` as the leader had it; the others get its `why`.
+  bool BroadcastOutcome(bool ok, std::string* why);
 };
+
+/// Rows per block of a shared table of `rows` rows: an eighth of them (so that a small table is shared
+/// among processes too), at least 1 and at most `most`. It depends on the table, never on the processes.
+std::int64_t BlockRows(std::int64_t rows, std::int64_t most);
+
+/// Offsets of the blocks of `block` rows of `width` numbers (the last may be shorter) over `rows`.
+std::vector<std::int64_t> BlockOffsets(std::int64_t rows, std::int64_t block, std::int64_t width);
 
 /// One share of the tasks: share `index` (1-based) of `count`.
 struct TaskShare {

@@ -4,11 +4,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <sstream>
 #include <utility>
 
 #include "shape/core/error.h"
+#include "shape/core/task_runner.h"
 
 namespace pectus {
 
@@ -61,10 +63,10 @@ struct Posterior {
   }
 };
 
-// G holds X_S X' (S: the first max_others + 1 rows; every row for a cohort that small), so G(a, b) for a
-// in S and any b.
-Posterior PosteriorFromOthers(const Eigen::MatrixXd& X, const Eigen::MatrixXd& G, Eigen::Index n,
-                              const std::vector<Eigen::Index>& unseen, double noise_variance,
+// G = X_S X_S' is the core's Gram matrix (S: the first max_others + 1 rows; every row for a cohort that
+// small) and g = X_S x_n, subject n's column of X_S X'.
+Posterior PosteriorFromOthers(const Eigen::MatrixXd& X, const Eigen::MatrixXd& G, const Eigen::VectorXd& g,
+                              Eigen::Index n, const std::vector<Eigen::Index>& unseen, double noise_variance,
                               int max_others) {
   Posterior post;
   for (Eigen::Index k = 0; k < G.rows() && static_cast<int>(post.others.size()) < max_others; ++k)
@@ -76,7 +78,7 @@ Posterior PosteriorFromOthers(const Eigen::MatrixXd& X, const Eigen::MatrixXd& G
   Eigen::MatrixXd Goo(others, others);
   Eigen::VectorXd gon(others);  // X_o x_n
   for (Eigen::Index a = 0; a < others; ++a) {
-    gon[a] = G(idx[a], n);
+    gon[a] = g[idx[a]];
     for (Eigen::Index b = 0; b < others; ++b) Goo(a, b) = G(idx[a], idx[b]);
   }
   const Eigen::VectorXd row_mean = Goo.rowwise().sum() * inv;  // X_o mu
@@ -109,10 +111,10 @@ Posterior PosteriorFromOthers(const Eigen::MatrixXd& X, const Eigen::MatrixXd& G
 }
 
 // The fill of subject n's unseen coordinates: the posterior mean of the others' model.
-Eigen::VectorXd FillFromOthers(const Eigen::MatrixXd& X, const Eigen::MatrixXd& G, Eigen::Index n,
-                               const std::vector<Eigen::Index>& unseen, double noise_variance,
+Eigen::VectorXd FillFromOthers(const Eigen::MatrixXd& X, const Eigen::MatrixXd& G, const Eigen::VectorXd& g,
+                               Eigen::Index n, const std::vector<Eigen::Index>& unseen, double noise_variance,
                                int max_others) {
-  const Posterior post = PosteriorFromOthers(X, G, n, unseen, noise_variance, max_others);
+  const Posterior post = PosteriorFromOthers(X, G, g, n, unseen, noise_variance, max_others);
   Eigen::VectorXd fill(static_cast<Eigen::Index>(unseen.size()));
   for (std::size_t j = 0; j < unseen.size(); ++j)
     fill[static_cast<Eigen::Index>(j)] = post.Mean(X, unseen[j]);
@@ -125,8 +127,8 @@ Eigen::VectorXd FillFromOthers(const Eigen::MatrixXd& X, const Eigen::MatrixXd& 
 // vertex positions, plus the noise variance on the diagonal.
 constexpr Eigen::Index kMaxRim = 1200;
 
-void AddLocalCorrection(const Eigen::MatrixXd& X, const Eigen::MatrixXd& G, Eigen::Index n,
-                        const std::vector<Eigen::Index>& unseen,
+void AddLocalCorrection(const Eigen::MatrixXd& X, const Eigen::MatrixXd& G, const Eigen::VectorXd& g,
+                        Eigen::Index n, const std::vector<Eigen::Index>& unseen,
                         const Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic>& seen,
                         const ImputationOptions& o, Eigen::VectorXd* fill) {
   const double l = o.local_scale_mm;
@@ -151,7 +153,7 @@ void AddLocalCorrection(const Eigen::MatrixXd& X, const Eigen::MatrixXd& G, Eige
   std::vector<Eigen::Index> rim_coordinates;
   for (const auto& r : rim)
     rim_coordinates.insert(rim_coordinates.end(), {3 * r.second, 3 * r.second + 1, 3 * r.second + 2});
-  const Posterior post = PosteriorFromOthers(X, G, n, unseen, o.noise_mm * o.noise_mm, o.max_others);
+  const Posterior post = PosteriorFromOthers(X, G, g, n, unseen, o.noise_mm * o.noise_mm, o.max_others);
   const auto b = static_cast<Eigen::Index>(rim.size());
   Eigen::MatrixXd residual(b, 3);
   for (Eigen::Index i = 0; i < b; ++i)
@@ -181,21 +183,64 @@ void AddLocalCorrection(const Eigen::MatrixXd& X, const Eigen::MatrixXd& G, Eige
   }
 }
 
-// G = X_S X' with S the first max_others + 1 rows: X X' (N x N, from the lower triangle) for a cohort
-// that small, else (max_others + 1) x N.
-Eigen::MatrixXd GramMatrix(const Eigen::MatrixXd& X, int max_others) {
-  const Eigen::Index s = static_cast<Eigen::Index>(max_others) + 1;
-  if (X.rows() > s) return X.topRows(s) * X.transpose();
-  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(X.rows(), X.rows());
-  G.selfadjointView<Eigen::Lower>().rankUpdate(X);
-  return G.selfadjointView<Eigen::Lower>();
+// The core's Gram matrix X_S X_S' (K = S's rows), blocks of rows computed on the runner's processes;
+// its lower triangle mirrored, so that it is symmetric to the bit.
+Eigen::MatrixXd CoreGram(const Eigen::MatrixXd& X, Eigen::Index K, TaskRunner& runner) {
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  const Eigen::Index kGramRows = BlockRows(K, 32);
+  RowMajor table(K, K);
+  runner.ComputeBlocks(BlockOffsets(K, kGramRows, K), [&](int b, double* out) {
+    const Eigen::Index first = b * kGramRows, rows = std::min(kGramRows, K - first);
+    Eigen::Map<RowMajor>(out, rows, K).noalias() = X.middleRows(first, rows) * X.topRows(K).transpose();
+  }, table.data());
+  Eigen::MatrixXd G = table;
+  G.triangularView<Eigen::StrictlyUpper>() = G.transpose();
+  return G;
+}
+
+// Work on subjects `rows` in blocks (BlockRows: up to 8 subjects), one block per task: block b holds, for each of its
+// subjects in turn, that subject's unseen coordinates (their new values); fill(n, g, out) writes subject
+// n's, given g = X_S x_n if `with_g` (the block's columns of X_S X', one product for the block).
+std::vector<Eigen::VectorXd> PerSubject(
+    const Eigen::MatrixXd& X, Eigen::Index K, const std::vector<Eigen::Index>& rows,
+    const std::vector<std::vector<Eigen::Index>>& unseen, bool with_g, TaskRunner& runner,
+    const std::function<void(Eigen::Index, const Eigen::VectorXd&, double*)>& fill) {
+  const auto kSubjects = static_cast<std::size_t>(BlockRows(static_cast<std::int64_t>(rows.size()), 8));
+  std::vector<std::int64_t> offsets{0}, starts;
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    starts.push_back(k == 0 ? 0 : starts.back() + static_cast<std::int64_t>(unseen[rows[k - 1]].size()));
+    if ((k + 1) % kSubjects == 0 || k + 1 == rows.size())
+      offsets.push_back(starts.back() + static_cast<std::int64_t>(unseen[rows[k]].size()));
+  }
+  std::vector<double> table(static_cast<std::size_t>(offsets.back()));
+  runner.ComputeBlocks(offsets, [&](int b, double* out) {
+    const std::size_t first = static_cast<std::size_t>(b) * kSubjects;
+    const std::size_t count = std::min(kSubjects, rows.size() - first);
+    Eigen::MatrixXd g;
+    if (with_g) {
+      Eigen::MatrixXd block(static_cast<Eigen::Index>(count), X.cols());
+      for (std::size_t j = 0; j < count; ++j) block.row(static_cast<Eigen::Index>(j)) = X.row(rows[first + j]);
+      g = X.topRows(K) * block.transpose();
+    }
+    for (std::size_t j = 0; j < count; ++j) {
+      fill(rows[first + j], with_g ? Eigen::VectorXd(g.col(static_cast<Eigen::Index>(j))) : Eigen::VectorXd(),
+           out + (starts[first + j] - starts[first]));
+    }
+  }, table.data());
+  std::vector<Eigen::VectorXd> values(rows.size());
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    values[k] = Eigen::Map<const Eigen::VectorXd>(table.data() + starts[k],
+                                                  static_cast<Eigen::Index>(unseen[rows[k]].size()));
+  }
+  return values;
 }
 
 }  // namespace
 
 ImputationResult ImputeMissingVertices(const Eigen::MatrixXd& shapes,
                                        const Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic>& seen,
-                                       const ImputationOptions& options, const std::string& what) {
+                                       const ImputationOptions& options, const std::string& what,
+                                       TaskRunner* runner) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage(why);
   const Eigen::Index N = shapes.rows();
@@ -234,54 +279,56 @@ ImputationResult ImputeMissingVertices(const Eigen::MatrixXd& shapes,
   const Eigen::Index core = std::min<Eigen::Index>(N, static_cast<Eigen::Index>(options.max_others) + 1);
   std::vector<Eigen::Index> core_fill, late_fill;
   for (Eigen::Index n : to_fill) (n < core ? core_fill : late_fill).push_back(n);
+  SerialTaskRunner serial;
+  TaskRunner& farm = runner != nullptr ? *runner : serial;
   Eigen::MatrixXd X = shapes;
-  // Fills subjects `rows` (all in the core, or all beyond it) from the others' current fills (Jacobi);
-  // returns the largest move of a filled coordinate.
-  auto sweep = [&](const std::vector<Eigen::Index>& rows, const Eigen::MatrixXd& G) {
-    std::vector<Eigen::VectorXd> fills(rows.size());
-#pragma omp parallel for schedule(dynamic)
-    for (std::int64_t k = 0; k < static_cast<std::int64_t>(rows.size()); ++k) {
-      const Eigen::Index n = rows[static_cast<std::size_t>(k)];
-      fills[static_cast<std::size_t>(k)] =
-          FillFromOthers(X, G, n, unseen[static_cast<std::size_t>(n)], noise_variance, options.max_others);
-    }
+  auto as_size = [](Eigen::Index n) { return static_cast<std::size_t>(n); };
+  // Sets the new values of subjects `rows`; returns the largest move of a coordinate.
+  auto update = [&](const std::vector<Eigen::Index>& rows, const std::vector<Eigen::VectorXd>& values) {
     double change = 0.0;
     for (std::size_t k = 0; k < rows.size(); ++k) {
-      const Eigen::Index n = rows[k];
-      const std::vector<Eigen::Index>& c = unseen[static_cast<std::size_t>(n)];
+      const std::vector<Eigen::Index>& c = unseen[as_size(rows[k])];
       for (std::size_t j = 0; j < c.size(); ++j) {
-        change = std::max(change, std::abs(fills[k][static_cast<Eigen::Index>(j)] - X(n, c[j])));
-        X(n, c[j]) = fills[k][static_cast<Eigen::Index>(j)];
+        const double v = values[k][static_cast<Eigen::Index>(j)];
+        change = std::max(change, std::abs(v - X(rows[k], c[j])));
+        X(rows[k], c[j]) = v;
       }
     }
     return change;
   };
+  // Each subject of `rows` filled from the others' current fills (Jacobi: all from the same X).
+  auto fill_from_others = [&](const std::vector<Eigen::Index>& rows, const Eigen::MatrixXd& G) {
+    const bool late = rows.front() >= core;  // all beyond the core, or all in it
+    return PerSubject(X, core, rows, unseen, late, farm, [&](Eigen::Index n, const Eigen::VectorXd& g, double* out) {
+      const Eigen::VectorXd f =
+          FillFromOthers(X, G, n < core ? Eigen::VectorXd(G.col(n)) : g, n, unseen[as_size(n)],
+                         noise_variance, options.max_others);
+      std::copy(f.data(), f.data() + f.size(), out);
+    });
+  };
   for (int it = 0; it < options.max_iterations && !core_fill.empty(); ++it) {
     result.iterations = it + 1;
-    result.last_change_mm = sweep(core_fill, GramMatrix(X.topRows(core), options.max_others));
+    result.last_change_mm = update(core_fill, fill_from_others(core_fill, CoreGram(X, core, farm)));
     if (result.last_change_mm <= options.tolerance_mm) {
       result.converged = true;
       break;
     }
   }
   if (core_fill.empty()) result.converged = true;
-  if (!late_fill.empty()) sweep(late_fill, GramMatrix(X, options.max_others));
-  if (options.local_scale_mm > 0.0 && !to_fill.empty()) {
-    // The local correction of every fill, once the fills have converged.
-    const Eigen::MatrixXd G = GramMatrix(X, options.max_others);
-    std::vector<Eigen::VectorXd> fills(to_fill.size());
-#pragma omp parallel for schedule(dynamic)
-    for (std::int64_t k = 0; k < static_cast<std::int64_t>(to_fill.size()); ++k) {
-      const Eigen::Index n = to_fill[static_cast<std::size_t>(k)];
-      const std::vector<Eigen::Index>& c = unseen[static_cast<std::size_t>(n)];
-      Eigen::VectorXd fill(static_cast<Eigen::Index>(c.size()));
-      for (std::size_t j = 0; j < c.size(); ++j) fill[static_cast<Eigen::Index>(j)] = X(n, c[j]);
-      AddLocalCorrection(X, G, n, c, seen, options, &fill);
-      fills[static_cast<std::size_t>(k)] = std::move(fill);
-    }
-    for (std::size_t k = 0; k < to_fill.size(); ++k) {
-      const std::vector<Eigen::Index>& c = unseen[static_cast<std::size_t>(to_fill[k])];
-      for (std::size_t j = 0; j < c.size(); ++j) X(to_fill[k], c[j]) = fills[k][static_cast<Eigen::Index>(j)];
+  if (!late_fill.empty() || (options.local_scale_mm > 0.0 && !to_fill.empty())) {
+    const Eigen::MatrixXd G = CoreGram(X, core, farm);  // of the converged core
+    if (!late_fill.empty()) update(late_fill, fill_from_others(late_fill, G));
+    if (options.local_scale_mm > 0.0 && !to_fill.empty()) {
+      // The local correction of every fill, once the fills have converged.
+      update(to_fill, PerSubject(X, core, to_fill, unseen, true, farm,
+                                 [&](Eigen::Index n, const Eigen::VectorXd& g, double* out) {
+                                   const std::vector<Eigen::Index>& c = unseen[as_size(n)];
+                                   Eigen::VectorXd fill(static_cast<Eigen::Index>(c.size()));
+                                   for (std::size_t j = 0; j < c.size(); ++j)
+                                     fill[static_cast<Eigen::Index>(j)] = X(n, c[j]);
+                                   AddLocalCorrection(X, G, g, n, c, seen, options, &fill);
+                                   std::copy(fill.data(), fill.data() + fill.size(), out);
+                                 }));
     }
   }
   for (Eigen::Index n : to_fill) {

@@ -69,15 +69,20 @@ struct ImputationResult {
   std::string message;                    ///< one line: subjects and vertices filled, iterations
 };
 
+class TaskRunner;
+
 /// Fills the unseen vertices of every subject from the others.
 /// @param[in] shapes  N by 3m shape vectors (x1, y1, z1, x2, ...), mm, in one frame; N >= 3. The unseen
 ///                    entries are the starting values of the fill (e.g. the resampler's).
 /// @param[in] seen    N by m: true where the vertex was seen (its value is data), false where it is filled
 /// Throws Error(kBadInput) naming `what` for mismatched sizes, fewer than 3 subjects or a non-finite value,
 /// Error(kUsage) for invalid options. Subjects with every vertex seen are returned unchanged.
+/// With a `runner` of several processes (MPI ranks: docs/cluster.md) it is a collective: every process
+/// calls it with the same shapes and options, each fills its share of the subjects at each step, and every
+/// process returns the same result, the bytes of a run on one process.
 ImputationResult ImputeMissingVertices(const Eigen::MatrixXd& shapes,
                                        const Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic>& seen,
                                        const ImputationOptions& options = {},
-                                       const std::string& what = "shapes");
+                                       const std::string& what = "shapes", TaskRunner* runner = nullptr);
 
 }  // namespace pectus

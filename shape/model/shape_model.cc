@@ -3,9 +3,11 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 
 #include "shape/core/error.h"
+#include "shape/core/task_runner.h"
 #include "shape/model/shape_grid.h"
 
 namespace pectus {
@@ -92,7 +94,7 @@ void ShapeModel::Validate(const std::string& what) const {
 }
 
 ShapeModel BuildShapeModel(const Eigen::MatrixXd& shapes, const ShapeModelOptions& options,
-                           const std::string& what) {
+                           const std::string& what, TaskRunner* runner) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage(why);
   const Eigen::Index n = shapes.rows(), d = shapes.cols();
@@ -101,43 +103,84 @@ ShapeModel BuildShapeModel(const Eigen::MatrixXd& shapes, const ShapeModelOption
     ThrowBadInput(what, "shape vectors have " + std::to_string(d) + " numbers, not 3m > 0");
   if (!shapes.allFinite()) ThrowBadInput(what, "a shape vector holds a non-finite number");
 
+  SerialTaskRunner serial;
+  TaskRunner& farm = runner != nullptr ? *runner : serial;
   ShapeModel model;
   model.noise_variance = options.noise_variance;
   // Mean shape (Eq. 14's a_sh) and centred data X (N by 3m).
   model.mean = shapes.colwise().mean().transpose();
   const Eigen::MatrixXd X = shapes.rowwise() - model.mean.transpose();
 
-  // Gram matrix G = X X' (N by N; its lower half, a symmetric rank-3m update at half the cost of the
-  // product) and its eigen decomposition G = V S^2 V', which reads only the lower half.
-  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(n, n);
-  G.selfadjointView<Eigen::Lower>().rankUpdate(X);
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(G);
-  if (eig.info() != Eigen::Success)
-    ThrowFailure("the eigen decomposition of the Gram matrix failed for " + what);
-  // Eigenvalues ascending: reverse to descending.
-  const Eigen::VectorXd s2 = eig.eigenvalues().reverse();
-  const Eigen::MatrixXd V = eig.eigenvectors().rowwise().reverse();
+  // Gram matrix G = X X' (N by N): blocks of rows of its lower half (up to the block's diagonal), each a
+  // product on one process, then mirrored.
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  const Eigen::Index kRows = BlockRows(n, 32);
+  RowMajor lower(n, n);
+  farm.ComputeBlocks(BlockOffsets(n, kRows, n), [&](int b, double* out) {
+    const Eigen::Index first = b * kRows, rows = std::min(kRows, n - first);
+    Eigen::Map<RowMajor> block(out, rows, n);
+    block.setZero();
+    block.leftCols(first + rows).noalias() = X.middleRows(first, rows) * X.topRows(first + rows).transpose();
+  }, lower.data());
+  Eigen::MatrixXd G = lower;
+  G.triangularView<Eigen::StrictlyUpper>() = G.transpose();
   model.total_variance = std::max(0.0, G.trace()) / static_cast<double>(n - 1);
 
+  // Its eigen decomposition G = V S^2 V' on the leader (descending), to every process.
+  Eigen::VectorXd s2(n);
+  Eigen::MatrixXd V(n, n);
+  std::string failure;
+  bool ok = true;
+  if (farm.IsLeader()) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(G);
+    ok = eig.info() == Eigen::Success;
+    if (ok) {
+      s2 = eig.eigenvalues().reverse();
+      V = eig.eigenvectors().rowwise().reverse();
+    } else {
+      failure = "the eigen decomposition of the Gram matrix failed for " + what;
+    }
+  }
+  if (!farm.BroadcastOutcome(ok, &failure)) ThrowFailure(failure);
+  farm.Broadcast(s2.data(), n * static_cast<std::int64_t>(sizeof(double)));
   Eigen::Index k = 0;
   const double largest = std::max(s2[0], 0.0);
   while (k < n - 1 && s2[k] > options.relative_tolerance * largest && s2[k] > 0.0) ++k;
   if (options.max_modes > 0) k = std::min<Eigen::Index>(k, options.max_modes);
+  farm.Broadcast(V.data(), n * k * static_cast<std::int64_t>(sizeof(double)));  // its first k columns
 
-  // Eigenvectors of the covariance: e_c = X' v_c / s_c; eigenvalues lambda_c = s_c^2 / (N - 1).
-  model.basis.noalias() = X.transpose() * V.leftCols(k);
+  // Eigenvectors of the covariance: e_c = X' v_c / s_c, in blocks of modes (on the leader); eigenvalues
+  // lambda_c = s_c^2 / (N - 1).
+  const Eigen::Index kModes = BlockRows(k, 64);
+  if (farm.IsLeader()) model.basis.resize(d, k);
+  farm.ComputeBlocks(BlockOffsets(k, kModes, d), [&](int b, double* out) {
+    const Eigen::Index first = b * kModes, modes = std::min(kModes, k - first);
+    Eigen::Map<Eigen::MatrixXd>(out, d, modes).noalias() = X.transpose() * V.middleCols(first, modes);
+  }, model.basis.data(), /*leader_only=*/true);
   model.variances.resize(k);
+  // Scores of the training shapes (Eq. 14's z_n): basis' (x_n - mean) = G v_c / |X' v_c|, signed as e_c.
+  Eigen::VectorXd factor(k);
   for (Eigen::Index c = 0; c < k; ++c) {
+    model.variances[c] = s2[c] / static_cast<double>(n - 1);
+    if (!farm.IsLeader()) continue;
     const double s = std::sqrt(s2[c]);
     model.basis.col(c) /= s;
+    const double norm = model.basis.col(c).norm();
     model.basis.col(c).normalize();  // removes the rounding of 1 / s
-    model.variances[c] = s2[c] / static_cast<double>(n - 1);
     Eigen::Index largest_row;
     model.basis.col(c).cwiseAbs().maxCoeff(&largest_row);
-    if (model.basis(largest_row, c) < 0.0) model.basis.col(c) *= -1.0;
+    const double sign = model.basis(largest_row, c) < 0.0 ? -1.0 : 1.0;
+    model.basis.col(c) *= sign;
+    factor[c] = sign / (s * norm);
   }
-  // Scores of the training shapes (Eq. 14's z_n): basis' (x_n - mean).
-  model.scores.noalias() = X * model.basis;
+  farm.Broadcast(factor.data(), k * static_cast<std::int64_t>(sizeof(double)));
+  if (farm.IsLeader()) model.scores.resize(n, k);
+  farm.ComputeBlocks(BlockOffsets(k, kModes, n), [&](int b, double* out) {
+    const Eigen::Index first = b * kModes, modes = std::min(kModes, k - first);
+    Eigen::Map<Eigen::MatrixXd> block(out, n, modes);
+    block.noalias() = G * V.middleCols(first, modes);
+    block *= factor.segment(first, modes).asDiagonal();
+  }, model.scores.data(), /*leader_only=*/true);
   return model;
 }
 

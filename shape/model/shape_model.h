@@ -10,6 +10,8 @@
 
 namespace pectus {
 
+class TaskRunner;
+
 /// How the model is built.
 struct ShapeModelOptions {
   /// Keep at most this many modes (0: every mode with variance above `relative_tolerance`, at most N-1).
@@ -57,8 +59,12 @@ struct ShapeModel {
 /// so that each basis vector's largest component is positive.
 /// Throws Error(kBadInput) naming `what` for fewer than 2 shapes, a width not a multiple of 3, or a
 /// non-finite number; Error(kUsage) for invalid options.
+/// With a `runner` of several processes (MPI ranks: docs/cluster.md) it is a collective: every process
+/// calls it with the same shapes; the Gram matrix, the basis and the scores are computed in blocks shared
+/// among them, the eigen decomposition on the leader; the leader's model is the bytes of a run on one
+/// process, and the others' has no basis and no scores.
 ShapeModel BuildShapeModel(const Eigen::MatrixXd& shapes, const ShapeModelOptions& options = {},
-                           const std::string& what = "shapes");
+                           const std::string& what = "shapes", TaskRunner* runner = nullptr);
 
 /// A shape expressed in the model.
 struct ShapeProjection {

@@ -148,18 +148,20 @@ void AlignGridsToTheirMean(const std::vector<int>& good, int iterations,
   for (std::size_t k = 0; k < good.size(); ++k) MoveSubject(gpa.T_mean_shape[k], &result->subjects[good[k]]);
 }
 
-// Each subject's unseen grid vertices filled from the other subjects (ImputeMissingVertices); the grids
-// take the fills and mark them ("filled_from_cohort": 1). Returns the shapes, N by 3m.
-Eigen::MatrixXd FillUnseenVertices(const std::vector<int>& good,
-                                   const Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic>& seen,
-                                   const PipelineOptions& options, PipelineResult* result) {
+// The good subjects' grids as shapes, N by 3m.
+Eigen::MatrixXd ShapesOf(const std::vector<int>& good, const PipelineResult& result) {
   Eigen::MatrixXd shapes(static_cast<Eigen::Index>(good.size()),
-                         result->subjects[good[0]].grid.shape_vector.size());
+                         result.subjects[good[0]].grid.shape_vector.size());
   for (std::size_t k = 0; k < good.size(); ++k) {
-    shapes.row(static_cast<Eigen::Index>(k)) = result->subjects[good[k]].grid.shape_vector.transpose();
+    shapes.row(static_cast<Eigen::Index>(k)) = result.subjects[good[k]].grid.shape_vector.transpose();
   }
-  if (seen.all()) return shapes;
-  ImputationResult filled = ImputeMissingVertices(shapes, seen, options.imputation, "resampled subjects");
+  return shapes;
+}
+
+// Each subject's unseen grid vertices as filled from the other subjects (`filled`: ImputeMissingVertices);
+// the grids take the fills and mark them ("filled_from_cohort": 1).
+void TakeFills(const std::vector<int>& good, const Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic>& seen,
+               const ImputationResult& filled, PipelineResult* result) {
   for (std::size_t k = 0; k < good.size(); ++k) {
     SubjectOutcome& s = result->subjects[good[k]];
     const auto row = static_cast<Eigen::Index>(k);
@@ -175,28 +177,61 @@ Eigen::MatrixXd FillUnseenVertices(const std::vector<int>& good,
     s.largest_fill_change_mm = filled.largest_change_mm[k];
   }
   result->imputation_message = filled.message;
-  return std::move(filled.shapes);
 }
 
 // 7. The model of the subjects in `result` that made it: their grids aligned to their mean (Procrustes),
 // unseen vertices filled, PCA, quality; their scores; the mean's measures (on the mean landmark ROI).
-void BuildModelOnLeader(const PipelineOptions& options, PipelineResult* result) {
+// A collective (every process calls it): the leader, which holds the subjects' grids, aligns them and
+// hands their shapes to the others; all of them fill and model the shapes together (ImputeMissingVertices,
+// BuildShapeModel); the leader keeps the model. `ready`: the leader's subjects are read back (false: its
+// error is in `why` on every process, and nothing is modelled).
+void BuildModel(const PipelineOptions& options, TaskRunner& runner, bool ready, std::string* why,
+                PipelineResult* result) {
+  const bool leader = runner.IsLeader();
   std::vector<int> good;
-  for (int i = 0; i < static_cast<int>(result->subjects.size()); ++i) {
-    if (result->subjects[i].ok) good.push_back(i);
-  }
-  result->succeeded = static_cast<int>(good.size());
-  if (good.size() < 2) return;
+  Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> seen;
+  Eigen::MatrixXd shapes;
   Clock::time_point start = Clock::now();
-  const bool impute = static_cast<int>(good.size()) >= options.impute_min_subjects;
-  const auto seen = SeenVertices(good, impute ? options.impute_gap_mm : 0.0, *result);
-  AlignGridsToTheirMean(good, options.procrustes_iterations, seen, result);
-  const Eigen::MatrixXd shapes = FillUnseenVertices(good, seen, options, result);
-  ShapeModel& model = result->model.emplace(BuildShapeModel(shapes, options.model, "resampled subjects"));
-  for (int i : good) model.names.push_back(result->subjects[i].name);
-  model.faces = GridFaces(options.resample.grid);
+  if (leader && ready) {
+    try {
+      for (int i = 0; i < static_cast<int>(result->subjects.size()); ++i) {
+        if (result->subjects[i].ok) good.push_back(i);
+      }
+      result->succeeded = static_cast<int>(good.size());
+      if (good.size() >= 2) {
+        const bool impute = static_cast<int>(good.size()) >= options.impute_min_subjects;
+        seen = SeenVertices(good, impute ? options.impute_gap_mm : 0.0, *result);
+        AlignGridsToTheirMean(good, options.procrustes_iterations, seen, result);
+        shapes = ShapesOf(good, *result);
+      }
+    } catch (const std::exception& e) {
+      ready = false;
+      *why = e.what();
+    }
+  }
+  if (!runner.BroadcastOutcome(ready, why)) ThrowFailure(*why);
+  std::int64_t size[3] = {shapes.rows(), shapes.cols(), seen.cols()};
+  runner.Broadcast(size, sizeof size);
+  if (size[0] < 2) return;
+  if (!leader) {
+    shapes.resize(size[0], size[1]);
+    seen.resize(size[0], size[2]);
+  }
+  runner.Broadcast(shapes.data(), shapes.size() * static_cast<std::int64_t>(sizeof(double)));
+  runner.Broadcast(seen.data(), seen.size() * static_cast<std::int64_t>(sizeof(bool)));
+  if (!seen.all()) {
+    ImputationResult filled =
+        ImputeMissingVertices(shapes, seen, options.imputation, "resampled subjects", &runner);
+    if (leader) TakeFills(good, seen, filled, result);
+    shapes = std::move(filled.shapes);
+  }
+  ShapeModel model = BuildShapeModel(shapes, options.model, "resampled subjects", &runner);
+  if (!leader) return;
+  result->model.emplace(std::move(model));
+  for (int i : good) result->model->names.push_back(result->subjects[i].name);
+  result->model->faces = GridFaces(options.resample.grid);
   for (std::size_t k = 0; k < good.size(); ++k) {
-    result->subjects[good[k]].scores = model.scores.row(static_cast<Eigen::Index>(k)).transpose();
+    result->subjects[good[k]].scores = result->model->scores.row(static_cast<Eigen::Index>(k)).transpose();
   }
   result->timings_s.Add("model", Since(start));
   if (options.quality && good.size() >= 3) {
@@ -520,17 +555,36 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
   // subject's part of it (alignment, fills, scores) is committed for the third task, with the mean.
   SubjectStore modelled(run.work, "model", inputs), finished(run.work, "outputs", inputs);
   std::exception_ptr model_error;
-  if (runner.IsLeader()) {
-    // The other processes wait meanwhile: the leader takes their cores (the bytes do not depend on it).
+  {
+    // The leader reads the grids back while the other processes wait: it takes their cores meanwhile (the
+    // bytes do not depend on it); then they model together (BuildModel).
+    const int threads = omp_get_max_threads();
+    bool ready = true;
+    std::string not_ready;
+    if (runner.IsLeader()) {
+      omp_set_num_threads(runner.SerialThreads());
+      try {
+        const Clock::time_point start = Clock::now();
+        result.subjects.reserve(inputs.size());
+        for (int i = 0; i < n; ++i) result.subjects.push_back(in_memory ? registered.Take(i) : grids.Get(i));
+        result.timings_s.Add("read back", Since(start));
+      } catch (const std::exception& e) {
+        ready = false;
+        not_ready = e.what();
+      }
+      omp_set_num_threads(threads);
+    }
+    try {
+      BuildModel(options, runner, ready, &not_ready, &result);
+    } catch (...) {
+      if (runner.IsLeader()) model_error = std::current_exception();  // the leader reports it, below
+    }
+  }
+  if (runner.IsLeader() && !model_error) {
     const int threads = omp_get_max_threads();
     omp_set_num_threads(runner.SerialThreads());
     try {
       Clock::time_point start = Clock::now();
-      result.subjects.reserve(inputs.size());
-      for (int i = 0; i < n; ++i) result.subjects.push_back(in_memory ? registered.Take(i) : grids.Get(i));
-      result.timings_s.Add("read back", Since(start));
-      BuildModelOnLeader(options, &result);
-      start = Clock::now();
       if (!in_memory) {
         std::error_code ec;
         fs::remove_all(run.work / "model", ec);

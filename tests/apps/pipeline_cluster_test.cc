@@ -8,7 +8,9 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -25,7 +27,11 @@ using testing_support::CliRun;
 using testing_support::Pectus;
 
 // Coarse enough to take seconds under the sanitizers, fine enough to reconstruct (pipeline_command_test).
-const char* const kOptions = " --grid 21x41 --surface-spacing 3 --merge-spacing 0 --no-quality --quiet";
+// --impute-others 3: the imputation's core is 4 subjects, and the other 2 are filled from it, so that the
+// model's collective steps (the core's sweeps, the fills beyond it, the local corrections, the Gram
+// matrix, the basis and the scores: BuildModel) are each shared among the ranks.
+const char* const kOptions =
+    " --grid 21x41 --surface-spacing 3 --merge-spacing 0 --no-quality --impute-others 3 --quiet";
 
 // report.html without its run facts, the summed stage times and each subject's time (the last cell of a
 // subject's row): the only parts that depend on the run rather than on the cohort.
@@ -64,9 +70,17 @@ class PipelineCluster : public testing_support::ScratchDirTest {
     CliRun run = Pectus("synth cohort --subjects 6 --seed 3 --sweeps 3 --spacing 3 --no-sweep-truth -o " +
                         Cohort() + " --quiet");
     ASSERT_EQ(run.code, 0) << run.output;
-    run = Pectus("pipeline " + Cohort() + " --out " + (suite_ / "serial").string() + kOptions);
+    run = Pectus("pipeline " + Cohort() + " --out " + (suite_ / "serial").string() + kOptions +
+                 " --report " + (suite_ / "serial.json").string());
     ASSERT_EQ(run.code, 0) << run.output;
     serial_ = Outputs(suite_ / "serial");
+    // Subjects beyond the imputation's core had vertices to fill (else its shared steps went untested).
+    std::ifstream in(suite_ / "serial.json");
+    const nlohmann::json r = nlohmann::json::parse(in);
+    int late = 0;
+    for (std::size_t k = 4; k < r["subjects"].size(); ++k)
+      late += r["subjects"][k]["resample"].value("vertices_filled_from_cohort", 0) > 0 ? 1 : 0;
+    ASSERT_GE(late, 1) << "no subject beyond the core was filled: " << r["imputation"].dump();
   }
   static void TearDownTestSuite() { fs::remove_all(suite_); }
   static std::string Cohort() { return (suite_ / "cohort").string(); }

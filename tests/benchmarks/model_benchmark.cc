@@ -3,6 +3,9 @@
 //   model_benchmark pca [SUBJECTS=1000]          PCA time (Gram route) against Eigen's SVD and numpy's SVD
 //                                                and Gram route, as ratios
 //   model_benchmark impute [SUBJECTS=2000]       the imputation of unseen vertices: time and fill error
+//   model_benchmark model [SUBJECTS=2000]        the pipeline's model step (imputation, PCA) as collectives:
+//                                                under mpirun shared among the ranks; times, and a digest
+//                                                of the result, the same for any number of ranks
 //   model_benchmark holefill COHORT OUT [PNG]    hole filling and the profile-fit choice, on the surfaces
 //                                                that `pectus pipeline COHORT --out OUT` made
 //   model_benchmark cohort COHORT OUT            the pipeline's mean and modes against the generator's truth
@@ -25,6 +28,7 @@ int main() {
 #include <omp.h>
 #include <sys/resource.h>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <chrono>
@@ -61,7 +65,12 @@ namespace fs = std::filesystem;
 // radius, at a random place), started 5 mm off the truth there; the time of ImputeMissingVertices with the
 // pipeline's options (a model of the first 256 others, the core iterated, the rest filled once), and the
 // fills against the truth.
-nlohmann::json Impute(int n) {
+struct HoledCohort {
+  Eigen::MatrixXd truth, start;
+  Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> seen;
+  int holed = 0;
+};
+HoledCohort MakeHoledCohort(int n) {
   const datasets::PopulationModel population = datasets::PopulationModel::Default();
   const datasets::ShapeGrid grid;
   Eigen::MatrixXd truth(n, 3 * grid.size());
@@ -88,6 +97,16 @@ nlohmann::json Impute(int n) {
           start(i, 3 * v + 2) += 5.0;
         }
   }
+  return {std::move(truth), std::move(start), std::move(seen), holed};
+}
+
+nlohmann::json Impute(int n) {
+  const datasets::ShapeGrid grid;
+  const HoledCohort cohort = MakeHoledCohort(n);
+  const Eigen::MatrixXd& truth = cohort.truth;
+  const Eigen::MatrixXd& start = cohort.start;
+  const auto& seen = cohort.seen;
+  const int holed = cohort.holed;
   // Without the local correction first (its share of the time), then as the pipeline runs it.
   ImputationOptions options = PipelineOptions().imputation;
   options.local_scale_mm = 0.0;
@@ -117,6 +136,51 @@ nlohmann::json Impute(int n) {
           {"message", r.message},
           {"fill_to_truth_rms_mm", std::sqrt(sum / std::max(1, count))},
           {"fill_to_truth_max_mm", worst}};
+}
+
+// The pipeline's model step on N subjects (the `impute` cohort): the imputation, then the PCA, as
+// collectives on the runner (under mpirun, every rank; BuildModel in cohort_pipeline.cc); each step's
+// wall time on the leader, the leader's eigen decomposition alone, and a digest of the result's bytes
+// (filled shapes, mean, basis, variances, scores), the same for any number of ranks.
+nlohmann::json ModelSteps(int n, TaskRunner& runner) {
+  const HoledCohort cohort = MakeHoledCohort(n);
+  double t = Now();
+  const ImputationResult filled =
+      ImputeMissingVertices(cohort.start, cohort.seen, PipelineOptions().imputation, "population", &runner);
+  const double impute_s = Now() - t;
+  t = Now();
+  const ShapeModel model = BuildShapeModel(filled.shapes, ShapeModelOptions(), "population", &runner);
+  const double pca_s = Now() - t;
+  if (!runner.IsLeader()) return {};
+  // The leader's part alone: the eigen decomposition of the Gram matrix.
+  const Eigen::MatrixXd X = filled.shapes.rowwise() - model.mean.transpose();
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(n, n);
+  G.selfadjointView<Eigen::Lower>().rankUpdate(X);
+  t = Now();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(G);
+  const double eig_s = Now() - t;
+  std::uint64_t digest = 1469598103934665603ull;  // FNV-1a of every double
+  auto add = [&](const double* p, Eigen::Index count) {
+    const auto* b = reinterpret_cast<const unsigned char*>(p);
+    for (Eigen::Index k = 0; k < count * 8; ++k) digest = (digest ^ b[k]) * 1099511628211ull;
+  };
+  add(filled.shapes.data(), filled.shapes.size());
+  add(model.mean.data(), model.mean.size());
+  add(model.basis.data(), model.basis.size());
+  add(model.variances.data(), model.variances.size());
+  add(model.scores.data(), model.scores.size());
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(digest));
+  return {{"subjects", n},
+          {"processes", runner.Processes()},
+          {"threads", omp_get_max_threads()},
+          {"impute_seconds", impute_s},
+          {"imputation", filled.message},
+          {"pca_seconds", pca_s},
+          {"modes", model.num_modes()},
+          {"leader_eigen_decomposition_seconds", eig_s},
+          {"eigen_decomposition_of", eig.eigenvalues().size()},
+          {"digest", hex}};
 }
 
 // 1. PCA of N subjects of the generator's population sampled on a 51 x 101 grid (15453 numbers each), by
@@ -327,6 +391,16 @@ int main(int argc, char** argv) {
     nlohmann::json result;
     if (what == "impute") {
       result = Impute(argc > 2 ? std::atoi(argv[2]) : 2000);
+    } else if (what == "model") {
+      Eigen::setNbThreads(1);  // the bytes must not depend on the thread count (cluster.md)
+      pectus::SerialTaskRunner threads;
+      pectus::TaskRunner* runner = &threads;
+#ifdef PECTUS_HAVE_MPI
+      std::optional<pectus::cli::MpiTaskRunner> ranks;
+      if (mpi) runner = &ranks.emplace(*mpi);
+#endif
+      result = ModelSteps(argc > 2 ? std::atoi(argv[2]) : 2000, *runner);
+      if (!runner->IsLeader()) return 0;
     } else if (what == "pca") {
       result = Pca(argc > 2 ? std::atoi(argv[2]) : 1000);
     } else if (what == "holefill" && argc >= 4) {
@@ -356,7 +430,7 @@ int main(int argc, char** argv) {
       result = CompareWithTruth(argv[2], argv[3], nlohmann::json::parse(in), reference);
     } else {
       std::cerr
-          << "usage: model_benchmark pca [N] | impute [N] | holefill COHORT OUT [PNG] | cohort COHORT OUT | "
+          << "usage: model_benchmark pca [N] | impute [N] | model [N] | holefill COHORT OUT [PNG] | cohort COHORT OUT | "
              "population COHORT OUT FILE [--work DIR] | all [WORK] [PECTUS]\n"
              "  [--population M=2000] [--pool P=1000]: the population reference's subjects, and the\n"
              "  independent pool from which cohorts of N are drawn for the sampling spread (0: none)\n"
