@@ -284,14 +284,16 @@ ImputationResult ImputeMissingVertices(const Eigen::MatrixXd& shapes,
   Eigen::MatrixXd X = shapes;
   auto as_size = [](Eigen::Index n) { return static_cast<std::size_t>(n); };
   // Sets the new values of subjects `rows`; returns the largest move of a coordinate.
-  auto update = [&](const std::vector<Eigen::Index>& rows, const std::vector<Eigen::VectorXd>& values) {
+  // Moves subjects `rows` by `step` of the way to their new values; returns the largest distance to them.
+  auto update = [&](const std::vector<Eigen::Index>& rows, const std::vector<Eigen::VectorXd>& values,
+                    double step = 1.0) {
     double change = 0.0;
     for (std::size_t k = 0; k < rows.size(); ++k) {
       const std::vector<Eigen::Index>& c = unseen[as_size(rows[k])];
       for (std::size_t j = 0; j < c.size(); ++j) {
         const double v = values[k][static_cast<Eigen::Index>(j)];
         change = std::max(change, std::abs(v - X(rows[k], c[j])));
-        X(rows[k], c[j]) = v;
+        X(rows[k], c[j]) += step * (v - X(rows[k], c[j]));
       }
     }
     return change;
@@ -306,9 +308,23 @@ ImputationResult ImputeMissingVertices(const Eigen::MatrixXd& shapes,
       std::copy(f.data(), f.data() + f.size(), out);
     });
   };
+  // The sweeps move every fill at once (Jacobi), which overshoots where the subjects' fills lean on each
+  // other strongly (large holes in a small cohort: 60 subjects with 60 % holed diverged to 386 mm): a sweep
+  // whose fills would move farther than the last one's halves the step (under-relaxation), down to 1/64.
+  // Convergence is judged on the full distance to the new fills, not on the damped move.
+  double step = 1.0, previous = std::numeric_limits<double>::infinity();
   for (int it = 0; it < options.max_iterations && !core_fill.empty(); ++it) {
     result.iterations = it + 1;
-    result.last_change_mm = update(core_fill, fill_from_others(core_fill, CoreGram(X, core, farm)));
+    const std::vector<Eigen::VectorXd> fills = fill_from_others(core_fill, CoreGram(X, core, farm));
+    double distance = 0.0;
+    for (std::size_t k = 0; k < core_fill.size(); ++k) {
+      const std::vector<Eigen::Index>& c = unseen[as_size(core_fill[k])];
+      for (std::size_t j = 0; j < c.size(); ++j)
+        distance = std::max(distance, std::abs(fills[k][static_cast<Eigen::Index>(j)] - X(core_fill[k], c[j])));
+    }
+    if (distance > previous) step = std::max(step / 2.0, 1.0 / 64.0);
+    previous = distance;
+    result.last_change_mm = update(core_fill, fills, step);
     if (result.last_change_mm <= options.tolerance_mm) {
       result.converged = true;
       break;
