@@ -1,8 +1,6 @@
 #include "planner_plugin/host/planner_dataset_farm.h"
 
 #include <chrono>
-#include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <mutex>
 #include <sstream>
@@ -10,6 +8,7 @@
 #include "planner_plugin/host/planner_client.h"
 #include "shape/core/atomic_file.h"
 #include "shape/core/error.h"
+#include "shape/core/number_format.h"
 #include "shape/io/patient_table_io.h"
 
 namespace pectus::planner {
@@ -22,13 +21,6 @@ std::string ReadText(const fs::path& path) {
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();
-}
-
-// A double as text that reads back to the same bits.
-std::string ExactText(double value) {
-  char text[64];
-  std::snprintf(text, sizeof text, "%a", value);
-  return text;
 }
 
 // The parts of one table in `work/parts`: ID.h5 once made, ID.failed (the reason) if it failed, and
@@ -60,7 +52,7 @@ class PartStore {
     std::error_code ec;
     p.ok = fs::exists(Part(i), ec);
     if (!p.ok) p.error = ReadText(Failure(i));
-    if (fs::exists(Seconds(i), ec)) p.seconds = std::strtod(ReadText(Seconds(i)).c_str(), nullptr);
+    if (fs::exists(Seconds(i), ec)) p.seconds = ReadExactText(Seconds(i).string());
     return p;
   }
 

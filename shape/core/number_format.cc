@@ -3,6 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
+
+#include "shape/core/error.h"
 
 namespace pectus {
 
@@ -28,5 +32,21 @@ std::string FormatSignificant(double value, int digits) {
 }
 
 std::string FormatMm(double mm) { return FormatSignificant(mm) + " mm"; }
+
+std::string ExactText(double value) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%a", value);
+  return text;
+}
+
+double ReadExactText(const std::string& path) {
+  std::ifstream in(path);
+  std::string text;
+  in >> text;
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0') ThrowBadInput(path, "does not hold a number");
+  return value;
+}
 
 }  // namespace pectus

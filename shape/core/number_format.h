@@ -14,4 +14,12 @@ std::string FormatSignificant(double value, int digits = 3);
 /// A length for a summary line: FormatSignificant(mm) followed by " mm".
 std::string FormatMm(double mm);
 
+/// `value` as text that reads back to the same bits (hexadecimal floating point, "%a"): for numbers one
+/// process writes and another reads (the task farm's work files).
+std::string ExactText(double value);
+
+/// The number ExactText wrote (any text strtod reads) in the file at `path`; throws Error(kBadInput)
+/// naming the file if it holds no number.
+double ReadExactText(const std::string& path);
+
 }  // namespace pectus

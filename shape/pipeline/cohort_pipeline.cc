@@ -16,6 +16,7 @@
 #include "registration/kdtree.h"
 #include "shape/core/atomic_file.h"
 #include "shape/core/error.h"
+#include "shape/core/number_format.h"
 #include "shape/io/landmark_io.h"
 #include "shape/io/mesh_io.h"
 #include "shape/model/shape_grid.h"
@@ -270,23 +271,6 @@ std::optional<TriangleMesh> ReadMeanRecord(const fs::path& work) {
   std::error_code ec;
   if (!fs::exists(work / "mean.rec", ec)) return std::nullopt;
   return std::move(internal::ReadSubjectRecord(work / "mean.rec").surface);
-}
-
-// A double as text that reads back to the same bits (hexadecimal floating point).
-std::string ExactText(double value) {
-  char text[64];
-  std::snprintf(text, sizeof text, "%a", value);
-  return text;
-}
-
-double ReadExactText(const fs::path& path) {
-  std::ifstream in(path);
-  std::string text;
-  in >> text;
-  char* end = nullptr;
-  const double value = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0') ThrowBadInput(path.string(), "does not hold a number");
-  return value;
 }
 
 // The subjects' results of one phase ("surface": stages 1-3; "registered": 4-6): in memory, or one record
@@ -672,7 +656,7 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
     double seconds = 0.0;  // this process's part
     runner.Run(model_error ? no_tasks : largest_first, [&](int i) {
       const Clock::time_point start = Clock::now();
-      std::call_once(scale_once, [&] { scale = ReadExactText(scale_path); });
+      std::call_once(scale_once, [&] { scale = ReadExactText(scale_path.string()); });
       const SubjectOutcome s = in_memory ? result.subjects[i] : finished.Get(i);
       run.subject_pictures(s, scale, SubjectFilesFolder(run.work, s.name));
       const std::lock_guard<std::mutex> lock(seconds_mutex);
