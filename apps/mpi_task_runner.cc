@@ -18,6 +18,14 @@ namespace {
 constexpr int kRequestTag = 17;  // worker -> rank 0: the previous task's error (empty: none), give me one
 constexpr int kTaskTag = 18;     // rank 0 -> worker: a task index, or -1: no more
 
+// Waits for `request` without spinning: a rank that is early for a collective (the others still computing
+// their blocks, or rank 0 working alone) leaves its core to them, which matters whenever ranks share cores.
+void WaitGently(MPI_Request* request) {
+  int finished = 0;
+  for (MPI_Test(request, &finished, MPI_STATUS_IGNORE); !finished; MPI_Test(request, &finished, MPI_STATUS_IGNORE))
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+}
+
 }  // namespace
 
 bool LaunchedByMpi() {
@@ -142,7 +150,9 @@ void MpiTaskRunner::ComputeBlocks(const std::vector<std::int64_t>& offsets,
   }
   // The first failed rank tells every rank its error.
   int failed = error.empty() ? size_ : rank_;
-  MPI_Allreduce(MPI_IN_PLACE, &failed, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  MPI_Request request;
+  MPI_Iallreduce(MPI_IN_PLACE, &failed, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD, &request);
+  WaitGently(&request);
   if (failed < size_) {
     int length = static_cast<int>(error.size());
     MPI_Bcast(&length, 1, MPI_INT, failed, MPI_COMM_WORLD);
@@ -156,14 +166,16 @@ void MpiTaskRunner::ComputeBlocks(const std::vector<std::int64_t>& offsets,
     counts[r] = static_cast<int>(offsets[static_cast<std::size_t>(first(r + 1))]) - displacements[r];
   }
   if (!leader_only) {
-    MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, table, counts.data(), displacements.data(), MPI_DOUBLE,
-                   MPI_COMM_WORLD);
+    MPI_Iallgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, table, counts.data(), displacements.data(), MPI_DOUBLE,
+                    MPI_COMM_WORLD, &request);
   } else if (rank_ == 0) {
-    MPI_Gatherv(MPI_IN_PLACE, counts[0], MPI_DOUBLE, table, counts.data(), displacements.data(), MPI_DOUBLE, 0,
-                MPI_COMM_WORLD);
+    MPI_Igatherv(MPI_IN_PLACE, counts[0], MPI_DOUBLE, table, counts.data(), displacements.data(), MPI_DOUBLE, 0,
+                 MPI_COMM_WORLD, &request);
   } else {
-    MPI_Gatherv(run, counts[rank_], MPI_DOUBLE, nullptr, nullptr, nullptr, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+    MPI_Igatherv(run, counts[rank_], MPI_DOUBLE, nullptr, nullptr, nullptr, MPI_DOUBLE, 0, MPI_COMM_WORLD,
+                 &request);
   }
+  WaitGently(&request);
 }
 
 void MpiTaskRunner::Broadcast(void* data, std::int64_t bytes) {
@@ -176,11 +188,7 @@ void MpiTaskRunner::Broadcast(void* data, std::int64_t bytes) {
     MPI_Request request;
     MPI_Ibcast(p + done, static_cast<int>(std::min(kPiece, bytes - done)), MPI_BYTE, 0, MPI_COMM_WORLD,
                &request);
-    int finished = 0;
-    for (MPI_Test(&request, &finished, MPI_STATUS_IGNORE); !finished;
-         MPI_Test(&request, &finished, MPI_STATUS_IGNORE)) {
-      std::this_thread::sleep_for(std::chrono::microseconds(200));
-    }
+    WaitGently(&request);
   }
 }
 

@@ -16,6 +16,10 @@ each subject's stage times (s) and the run's own stages. The model of a run on P
               per-subject records, the mean's measures, the outputs ("read back", "model records",
               "mean measures", "write"), measured on this run. Before the outputs were farmed, the report
               had "distance" on rank 0 and the subjects' files in "write": those count in S as they ran.
+              A report with the model's steps ("model align", "model impute", "model pca": the model as a
+              collective, docs/cluster.md) splits the model: the alignment and the eigen decomposition
+              (--eig N:SECONDS, measured by `model_benchmark model N`, scaled as N^3) stay on rank 0; the
+              imputation (scaled as N) and the rest of the PCA (N^2) are shared: divided by P.
   efficiency  T(1) / (P T(P)).
 --farm-only leaves S out: how the farm itself scales.
 
@@ -75,6 +79,9 @@ def main():
     ap.add_argument("--serial-from", metavar="REPORT",
                     help="take S(N) from this run's report instead (a run of another size, e.g. 2000 subjects: "
                          "its rank-0 stages, scaled from its N as above)")
+    ap.add_argument("--eig", metavar="N:SECONDS",
+                    help="the eigen decomposition of an N x N Gram matrix took SECONDS on rank 0 (model_benchmark "
+                         "model N); with a report of the model's steps, the part of the PCA rank 0 does alone")
     a = ap.parse_args()
     if a.dataset:
         dataset(a.report, a.ranks)
@@ -87,7 +94,10 @@ def main():
     n0 = len(subjects)
     total = r["timings_s"]
     phase_d = [total.get("pictures", 0.0) / n0] * n0
+    steps = "model align" in total  # the model as a collective
     model = sum(total.get(k, 0.0) for k in ("model", "quality"))
+    align, impute, pca = (total.get(k, 0.0) for k in ("model align", "model impute", "model pca"))
+    eig_n, eig_s = (int(a.eig.split(":")[0]), float(a.eig.split(":")[1])) if a.eig else (1, 0.0)
     linear = sum(total.get(k, 0.0) for k in ("read back", "model records", "mean measures", "write"))
     if not any(phase_c):  # a run from before the outputs were farmed: its distances ran on rank 0
         linear += total.get("distance", 0.0)
@@ -109,13 +119,25 @@ def main():
         else:
             draw = [rng.randrange(n0) for _ in range(n)]
             ta, tb, tc, td = ([t[i] for i in draw] for t in (phase_a, phase_b, phase_c, phase_d))
-        serial = 0.0 if a.farm_only else model * (n / n_serial) ** 2 + linear * (n / n_serial)
-        t1 = sum(ta) + sum(tb) + sum(tc) + sum(td) + serial
+        shared = 0.0
+        if a.farm_only:
+            serial = 0.0
+        elif steps and not a.serial_from:
+            # the model's collective steps: rank 0 aligns and decomposes, the rest is shared (see above)
+            eig = eig_s * (n / eig_n) ** 3 if a.eig else 0.0
+            eig_here = eig_s * (n0 / eig_n) ** 3 if a.eig else 0.0
+            quality = total.get("quality", 0.0) * (n / n0) ** 2
+            serial = (align + linear) * (n / n0) + eig + quality
+            shared = impute * (n / n0) + max(0.0, pca - eig_here) * (n / n0) ** 2
+        else:
+            serial = model * (n / n_serial) ** 2 + linear * (n / n_serial)
+        t1 = sum(ta) + sum(tb) + sum(tc) + sum(td) + serial + shared
         for p in a.ranks:
             for largest, name in ((True, "largest first"), (False, "subject order")):
-                tp = serial + sum(makespan(sorted(t, reverse=True) if largest else t, p) for t in (ta, tb, tc, td))
+                tp = serial + shared / p + sum(makespan(sorted(t, reverse=True) if largest else t, p)
+                                               for t in (ta, tb, tc, td))
                 print(f"N={n:5d} P={p:3d} {name:14s} T={tp:9.1f} s  speed-up {t1/tp:6.2f}  "
-                      f"efficiency {100*t1/(p*tp):5.1f} %  (rank 0 alone {serial:.1f} s)")
+                      f"efficiency {100*t1/(p*tp):5.1f} %  (rank 0 alone {serial:.1f} s, shared {shared/p:.1f} s)")
 
 
 if __name__ == "__main__":

@@ -204,6 +204,7 @@ void BuildModel(const PipelineOptions& options, TaskRunner& runner, bool ready, 
         seen = SeenVertices(good, impute ? options.impute_gap_mm : 0.0, *result);
         AlignGridsToTheirMean(good, options.procrustes_iterations, seen, result);
         shapes = ShapesOf(good, *result);
+        result->timings_s.Add("model align", Since(start));
       }
     } catch (const std::exception& e) {
       ready = false;
@@ -220,14 +221,18 @@ void BuildModel(const PipelineOptions& options, TaskRunner& runner, bool ready, 
   }
   runner.Broadcast(shapes.data(), shapes.size() * static_cast<std::int64_t>(sizeof(double)));
   runner.Broadcast(seen.data(), seen.size() * static_cast<std::int64_t>(sizeof(bool)));
+  Clock::time_point step = Clock::now();
   if (!seen.all()) {
     ImputationResult filled =
         ImputeMissingVertices(shapes, seen, options.imputation, "resampled subjects", &runner);
     if (leader) TakeFills(good, seen, filled, result);
     shapes = std::move(filled.shapes);
   }
+  if (leader) result->timings_s.Add("model impute", Since(step));
+  step = Clock::now();
   ShapeModel model = BuildShapeModel(shapes, options.model, "resampled subjects", &runner);
   if (!leader) return;
+  result->timings_s.Add("model pca", Since(step));
   result->model.emplace(std::move(model));
   for (int i : good) result->model->names.push_back(result->subjects[i].name);
   result->model->faces = GridFaces(options.resample.grid);
