@@ -1,16 +1,41 @@
 #include "shape/model/shape_model.h"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <vector>
 
 #include "shape/core/error.h"
 #include "shape/core/task_runner.h"
 #include "shape/model/shape_grid.h"
 
+// LAPACK: the eigenvalues (ascending) and eigenvectors of a symmetric matrix by divide and conquer.
+extern "C" void dsyevd_(const char* jobz, const char* uplo, const int* n, double* a, const int* lda, double* w,
+                        double* work, const int* lwork, int* iwork, const int* liwork, int* info);
+
 namespace pectus {
+namespace {
+
+// The eigen decomposition of the symmetric G (its lower half read): eigenvalues ascending in `values`, their
+// unit eigenvectors the columns of `vectors`. False if LAPACK reports a failure.
+bool SymmetricEigen(const Eigen::MatrixXd& G, Eigen::VectorXd* values, Eigen::MatrixXd* vectors) {
+  const int n = static_cast<int>(G.rows());
+  *vectors = G;
+  values->resize(n);
+  int lwork = -1, liwork = -1, info = 0, iwork_size = 0;
+  double work_size = 0.0;
+  dsyevd_("V", "L", &n, vectors->data(), &n, values->data(), &work_size, &lwork, &iwork_size, &liwork, &info);
+  if (info != 0) return false;
+  lwork = static_cast<int>(work_size);
+  liwork = iwork_size;
+  std::vector<double> work(static_cast<std::size_t>(std::max(1, lwork)));
+  std::vector<int> iwork(static_cast<std::size_t>(std::max(1, liwork)));
+  dsyevd_("V", "L", &n, vectors->data(), &n, values->data(), work.data(), &lwork, iwork.data(), &liwork, &info);
+  return info == 0;
+}
+
+}  // namespace
 
 bool ShapeModelOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& m) {
@@ -132,11 +157,12 @@ ShapeModel BuildShapeModel(const Eigen::MatrixXd& shapes, const ShapeModelOption
   std::string failure;
   bool ok = true;
   if (farm.IsLeader()) {
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(G);
-    ok = eig.info() == Eigen::Success;
+    Eigen::VectorXd values;
+    Eigen::MatrixXd vectors;
+    ok = SymmetricEigen(G, &values, &vectors);
     if (ok) {
-      s2 = eig.eigenvalues().reverse();
-      V = eig.eigenvectors().rowwise().reverse();
+      s2 = values.reverse();
+      V = vectors.rowwise().reverse();
     } else {
       failure = "the eigen decomposition of the Gram matrix failed for " + what;
     }
