@@ -15,10 +15,7 @@ extern "C" void dsyevd_(const char* jobz, const char* uplo, const int* n, double
                         double* work, const int* lwork, int* iwork, const int* liwork, int* info);
 
 namespace pectus {
-namespace {
 
-// The eigen decomposition of the symmetric G (its lower half read): eigenvalues ascending in `values`, their
-// unit eigenvectors the columns of `vectors`. False if LAPACK reports a failure.
 bool SymmetricEigen(const Eigen::MatrixXd& G, Eigen::VectorXd* values, Eigen::MatrixXd* vectors) {
   const int n = static_cast<int>(G.rows());
   *vectors = G;
@@ -34,8 +31,6 @@ bool SymmetricEigen(const Eigen::MatrixXd& G, Eigen::VectorXd* values, Eigen::Ma
   dsyevd_("V", "L", &n, vectors->data(), &n, values->data(), work.data(), &lwork, iwork.data(), &liwork, &info);
   return info == 0;
 }
-
-}  // namespace
 
 bool ShapeModelOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& m) {

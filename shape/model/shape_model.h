@@ -59,6 +59,11 @@ struct ShapeModel {
 /// so that each basis vector's largest component is positive.
 /// Throws Error(kBadInput) naming `what` for fewer than 2 shapes, a width not a multiple of 3, or a
 /// non-finite number; Error(kUsage) for invalid options.
+/// The eigen decomposition of the symmetric `G` (its lower half is read) by LAPACK's divide and conquer
+/// (dsyevd): eigenvalues ascending in `values`, their unit eigenvectors the columns of `vectors`. False if
+/// LAPACK reports a failure.
+bool SymmetricEigen(const Eigen::MatrixXd& G, Eigen::VectorXd* values, Eigen::MatrixXd* vectors);
+
 /// With a `runner` of several processes (MPI ranks: docs/cluster.md) it is a collective: every process
 /// calls it with the same shapes; the Gram matrix, the basis and the scores are computed in blocks shared
 /// among them, the eigen decomposition on the leader; the leader's model is the bytes of a run on one
