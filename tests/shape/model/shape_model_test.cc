@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/QR>
 #include <Eigen/SVD>
+#include <algorithm>
 #include <random>
 
 #include "shape/core/error.h"
@@ -56,6 +58,28 @@ TEST(ShapeModel, GramRouteEqualsTheSvdOfTheCentredData) {
     EXPECT_LT(p.max_error_mm, 1e-9);
     EXPECT_TRUE(p.scores.isApprox(m.scores.row(r).transpose(), 1e-9));
   }
+}
+
+// LAPACK's decomposition of a symmetric matrix built from known eigenvalues (1..n, one repeated) and a
+// random orthonormal basis: the values ascending, and G v = lambda v, V'V = I to rounding.
+TEST(ShapeModel, SymmetricEigenRecoversKnownEigenvalues) {
+  const int n = 40;
+  std::mt19937 rng(9);
+  std::normal_distribution<double> g(0.0, 1.0);
+  Eigen::MatrixXd A(n, n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) A(i, j) = g(rng);
+  const Eigen::MatrixXd Q = Eigen::HouseholderQR<Eigen::MatrixXd>(A).householderQ();
+  Eigen::VectorXd lambda = Eigen::VectorXd::LinSpaced(n, 1.0, n);
+  lambda[1] = lambda[0];  // a repeated eigenvalue
+  const Eigen::MatrixXd G = Q * lambda.asDiagonal() * Q.transpose();
+  Eigen::VectorXd values;
+  Eigen::MatrixXd vectors;
+  ASSERT_TRUE(SymmetricEigen(G, &values, &vectors));
+  std::sort(lambda.data(), lambda.data() + n);
+  EXPECT_LT((values - lambda).cwiseAbs().maxCoeff(), 1e-12 * n);
+  EXPECT_LT((G * vectors - vectors * values.asDiagonal()).cwiseAbs().maxCoeff(), 1e-12 * n);
+  EXPECT_LT((vectors.transpose() * vectors - Eigen::MatrixXd::Identity(n, n)).cwiseAbs().maxCoeff(), 1e-12);
 }
 
 TEST(ShapeModel, ProjectionOfANewShapeReportsTheResidual) {
