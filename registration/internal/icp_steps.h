@@ -78,7 +78,7 @@ struct Problem {
 // that, it is the exact nearest target point (docs/registration.md, ICP-2), and step 1 searches the tree
 // only for the points whose certificate has expired.
 struct NearestCache {
-  static constexpr int kCandidates = 4;
+  static constexpr int kCandidates = 2;
   double radius = 0.0;  // search radius (mm), above the gate
   std::vector<Eigen::Vector3d> at;
   std::vector<std::array<std::uint32_t, kCandidates>> candidates;
