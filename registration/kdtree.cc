@@ -32,7 +32,7 @@ KdTree3::KdTree3(const Points3& points, int leaf_size, bool halves) : points_(&p
   for (Eigen::Index i = 0; i < n; ++i) ordered_.row(i) = points.row(rows_[static_cast<std::size_t>(i)]);
   parts_.push_back(std::make_unique<Part>(&ordered_, 0, below, leaf_size, false));
   parts_.push_back(std::make_unique<Part>(&ordered_, below, n - below, leaf_size, false));
-#pragma omp parallel for num_threads(2) schedule(static, 1)
+#pragma omp parallel for num_threads(2) schedule(dynamic, 1)
   for (int k = 0; k < 2; ++k) {
     Part& part = *parts_[static_cast<std::size_t>(k)];
     if (part.adaptor.count > 0) part.index->buildIndex();  // none below the cut: every point alike
