@@ -28,10 +28,10 @@ KdTree3::KdTree3(const Points3& points, int leaf_size, bool halves) : points_(&p
   const auto below = static_cast<Eigen::Index>(rows_.size());
   for (Eigen::Index i = 0; i < n; ++i)
     if (!(points(i, axis_) < cut_)) rows_.push_back(static_cast<std::uint32_t>(i));
-  ordered_.resize(n, 3);
-  for (Eigen::Index i = 0; i < n; ++i) ordered_.row(i) = points.row(rows_[static_cast<std::size_t>(i)]);
-  parts_.push_back(std::make_unique<Part>(&ordered_, 0, below, leaf_size, false));
-  parts_.push_back(std::make_unique<Part>(&ordered_, below, n - below, leaf_size, false));
+  ordered_ = std::make_unique<Points3>(n, 3);
+  for (Eigen::Index i = 0; i < n; ++i) ordered_->row(i) = points.row(rows_[static_cast<std::size_t>(i)]);
+  parts_.push_back(std::make_unique<Part>(ordered_.get(), 0, below, leaf_size, false));
+  parts_.push_back(std::make_unique<Part>(ordered_.get(), below, n - below, leaf_size, false));
 #pragma omp parallel for num_threads(2) schedule(dynamic, 1)
   for (int k = 0; k < 2; ++k) {
     Part& part = *parts_[static_cast<std::size_t>(k)];
@@ -40,5 +40,7 @@ KdTree3::KdTree3(const Points3& points, int leaf_size, bool halves) : points_(&p
 }
 
 KdTree3::~KdTree3() = default;
+KdTree3::KdTree3(KdTree3&&) noexcept = default;
+KdTree3& KdTree3::operator=(KdTree3&&) noexcept = default;
 
 }  // namespace pectus

@@ -34,6 +34,9 @@ class KdTree3 {
   ~KdTree3();
   KdTree3(const KdTree3&) = delete;
   KdTree3& operator=(const KdTree3&) = delete;
+  /// Movable: every nanoflann index lives on the heap with the point set it refers to.
+  KdTree3(KdTree3&&) noexcept;
+  KdTree3& operator=(KdTree3&&) noexcept;
 
   Eigen::Index size() const { return points_->rows(); }
 
@@ -264,7 +267,7 @@ class KdTree3 {
   const Points3* points_;
   std::vector<std::unique_ptr<Part>> parts_;
   // Two halves: their points in order (`ordered_`), the row of `points_` of each (`rows_`), and the cut.
-  Points3 ordered_;
+  std::unique_ptr<Points3> ordered_;
   std::vector<std::uint32_t> rows_;
   Eigen::Index axis_ = 0;
   double cut_ = 0.0;

@@ -50,7 +50,11 @@ TEST(KdTree3, TwoHalvesAnswerAsOneTree) {
   std::uniform_real_distribution<double> x(0.0, 100.0), y(0.0, 30.0), z(0.0, 10.0);
   Points3 points(2 * KdTree3::kMinHalfPoints + 101, 3);
   for (Eigen::Index i = 0; i < points.rows(); ++i) points.row(i) << x(rng), y(rng), z(rng);
-  const KdTree3 whole(points), halves(points, 12, /*halves=*/true);
+  const KdTree3 whole(points);
+  std::vector<KdTree3> moved;  // a tree moves with its halves' nanoflann indices and copied points
+  moved.emplace_back(points, 12, /*halves=*/true);
+  moved.reserve(moved.capacity() + 1);
+  const KdTree3& halves = moved.front();
   ASSERT_EQ(halves.size(), points.rows());
   // Queries anywhere, and within a millimetre of the median along x, where the cut lies.
   std::normal_distribution<double> near_cut(50.0, 0.5);
