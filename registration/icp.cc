@@ -90,7 +90,8 @@ std::vector<std::vector<std::uint32_t>> LevelSamples(const Points3& source,
   std::sort(ends.begin(), ends.end());
   for (std::size_t k = 1; k < ends.size(); ++k) {
     SortDistinctRows(shuffled.begin() + static_cast<std::ptrdiff_t>(ends[k - 1]),
-                     shuffled.begin() + static_cast<std::ptrdiff_t>(ends[k]), static_cast<std::size_t>(source.rows()));
+                     shuffled.begin() + static_cast<std::ptrdiff_t>(ends[k]),
+                     static_cast<std::size_t>(source.rows()));
   }
   std::vector<std::vector<std::uint32_t>> samples(levels.size());
   for (std::size_t l = levels.size(); l-- > 0;) {

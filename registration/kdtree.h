@@ -151,7 +151,9 @@ class KdTree3 {
       return (*points)(begin + static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(dim));
     }
     template <class BBox>
-    bool kdtree_get_bbox(BBox&) const { return false; }
+    bool kdtree_get_bbox(BBox&) const {
+      return false;
+    }
   };
   using Index = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Adaptor>, Adaptor, 3,
                                                     std::uint32_t>;

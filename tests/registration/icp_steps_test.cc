@@ -21,7 +21,12 @@ TEST(FindPairs, CertifiedReuseEqualsSearchingEveryTime) {
   IcpOptions options;
   const Eigen::Vector3d origin = source.positions.colwise().mean().transpose();
   const Points3 no_normals;
-  const Problem pb{&prepared, &source.positions, &no_normals, origin, &options, -1.0,
+  const Problem pb{&prepared,
+                   &source.positions,
+                   &no_normals,
+                   origin,
+                   &options,
+                   -1.0,
                    std::pow(3.0 * prepared.spacing_mm(), 2)};
   std::vector<std::uint32_t> sample(static_cast<std::size_t>(source.size()));
   for (std::size_t k = 0; k < sample.size(); ++k) sample[k] = static_cast<std::uint32_t>(k);
