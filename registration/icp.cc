@@ -50,6 +50,25 @@ std::vector<std::uint32_t> PatchRows(const Points3& source, const IcpOptions& o)
   return rows;
 }
 
+// Sorts distinct rows (each below `row_count`) into ascending order. A large run is sorted by marking its
+// rows and collecting them in one pass over all rows, O(row_count), instead of O(k log k): the last level's
+// growth sorts tens of thousands of rows. The result is the same either way.
+void SortDistinctRows(std::vector<std::uint32_t>::iterator first, std::vector<std::uint32_t>::iterator last,
+                      std::size_t row_count) {
+  const auto k = static_cast<std::size_t>(last - first);
+  if (k < 2) return;
+  if (static_cast<double>(k) * std::log2(static_cast<double>(k)) < static_cast<double>(row_count)) {
+    std::sort(first, last);
+    return;
+  }
+  std::vector<std::uint8_t> marked(row_count, 0);
+  for (auto it = first; it != last; ++it) marked[*it] = 1;
+  auto out = first;
+  for (std::size_t row = 0; row < row_count && out != last; ++row) {
+    if (marked[row] != 0) *out++ = static_cast<std::uint32_t>(row);
+  }
+}
+
 // The source sample of every level, finest last. Random levels are prefixes of one shuffle (nested);
 // voxel levels subsample the next finer level's sample. With `rest`, the rows of the shuffle beyond the
 // largest random sample, in random order: the last level grows from them.
@@ -70,8 +89,9 @@ std::vector<std::vector<std::uint32_t>> LevelSamples(const Points3& source,
   for (const IcpLevel& l : levels) ends.push_back(std::min(used, static_cast<std::size_t>(l.points)));
   std::sort(ends.begin(), ends.end());
   for (std::size_t k = 1; k < ends.size(); ++k) {
-    std::sort(shuffled.begin() + static_cast<std::ptrdiff_t>(ends[k - 1]),
-              shuffled.begin() + static_cast<std::ptrdiff_t>(ends[k]));
+    SortDistinctRows(shuffled.begin() + static_cast<std::ptrdiff_t>(ends[k - 1]),
+                     shuffled.begin() + static_cast<std::ptrdiff_t>(ends[k]),
+                     static_cast<std::size_t>(source.rows()));
   }
   std::vector<std::vector<std::uint32_t>> samples(levels.size());
   for (std::size_t l = levels.size(); l-- > 0;) {
@@ -322,7 +342,8 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
       const auto from = rest.begin() + static_cast<std::ptrdiff_t>(rest_used);
       rest_used += next - grown.size();
       grown.insert(grown.end(), from, rest.begin() + static_cast<std::ptrdiff_t>(rest_used));
-      std::sort(grown.begin() + static_cast<std::ptrdiff_t>(kept), grown.end());  // row order, as above
+      SortDistinctRows(grown.begin() + static_cast<std::ptrdiff_t>(kept), grown.end(),
+                       static_cast<std::size_t>(source_positions.rows()));  // row order, as above
       sample = &grown;
     }
   }

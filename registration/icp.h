@@ -147,6 +147,8 @@ class IcpTarget {
   /// @param[in] name       names the target in error messages
   /// Throws Error(kBadInput) naming `name` for mismatched sizes, too few points or non-finite values.
   IcpTarget(const Points3& positions, const Points3& normals, const std::string& name = "target");
+  /// The same, taking over both arrays instead of copying them (the positions are centred in place).
+  IcpTarget(Points3&& positions, Points3&& normals, const std::string& name = "target");
   /// The same, estimating the normals with EstimateNormals on the target's own k-d tree (their sign is
   /// irrelevant to ICP). timings_s() says what that cost.
   IcpTarget(const Points3& positions, const NormalOptions& normal_options,
@@ -174,7 +176,8 @@ class IcpTarget {
   std::unique_ptr<KdTree3> tree_;
   double spacing_mm_ = 0.0;
   Timings timings_s_;
-  void Prepare(const Points3& positions, const std::string& name);
+  void Prepare(Points3 positions, const std::string& name);
+  void SetNormals(Points3 normals, Eigen::Index positions, const std::string& name);
 };
 
 /// The levels AlignIcp runs for these options, source and target (options.levels if given).

@@ -75,8 +75,9 @@ PairRegistrationResult RegisterPair(const IcpTarget& fixed, const PointCloud& mo
   }
 
   // Fine step: rigid ICP of the (scaled) moving surface, optionally on patches around its landmarks.
-  Points3 source = moving.positions;
-  if (T.scale != 1.0) source *= T.scale;
+  Points3 scaled;  // the moving scan's points scaled by the landmarks' similarity, when it has a scale
+  if (T.scale != 1.0) scaled = T.scale * moving.positions;
+  const Points3& source = T.scale != 1.0 ? scaled : moving.positions;
   Points3 source_normals;
   const bool need_normals =
       options.icp.method == IcpMethod::kSymmetric || options.icp.max_normal_angle_deg > 0.0;
@@ -173,14 +174,19 @@ std::string PairRegistrationResult::BriefReport() const {
   return s.str();
 }
 
+std::unique_ptr<IcpTarget> PrepareTarget(PointCloud fixed, const PairRegistrationOptions& options,
+                                         const std::string& name) {
+  if (!fixed.has_normals()) return std::make_unique<IcpTarget>(fixed.positions, options.normals, name);
+  return std::make_unique<IcpTarget>(std::move(fixed.positions), std::move(fixed.normals), name);
+}
+
 PairRegistrationResult RegisterPair(const PointCloud& fixed, const PointCloud& moving,
                                     const LandmarkSet* fixed_landmarks, const LandmarkSet* moving_landmarks,
                                     const Similarity3& initial, const PairRegistrationOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage("registration: " + why);
-  const IcpTarget target = fixed.has_normals() ? IcpTarget(fixed.positions, fixed.normals, "fixed scan")
-                                               : IcpTarget(fixed.positions, options.normals, "fixed scan");
-  return RegisterPair(target, moving, fixed_landmarks, moving_landmarks, initial, options);
+  const std::unique_ptr<IcpTarget> target = PrepareTarget(fixed, options);
+  return RegisterPair(*target, moving, fixed_landmarks, moving_landmarks, initial, options);
 }
 
 }  // namespace pectus

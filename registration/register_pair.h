@@ -3,6 +3,7 @@
 // surfaces, optionally on circular patches around the landmarks.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -89,6 +90,13 @@ PairRegistrationResult RegisterPair(const PointCloud& fixed, const PointCloud& m
                                     const LandmarkSet* fixed_landmarks, const LandmarkSet* moving_landmarks,
                                     const Similarity3& initial = {},
                                     const PairRegistrationOptions& options = {});
+
+/// The fixed scan prepared as ICP's target the way RegisterPair prepares it: centred, its k-d tree built,
+/// its own normals if it has them, else normals estimated with `options.normals`. Pass the scan with
+/// std::move when it is not needed afterwards: its arrays are then taken over, not copied. Throws
+/// Error(kBadInput) naming `name` for a scan ICP cannot use (fewer than 3 points, a non-finite value).
+std::unique_ptr<IcpTarget> PrepareTarget(PointCloud fixed, const PairRegistrationOptions& options,
+                                         const std::string& name = "fixed scan");
 
 /// The same against a prepared fixed scan (reused across many moving scans, as in a cohort).
 PairRegistrationResult RegisterPair(const IcpTarget& fixed, const PointCloud& moving,

@@ -2,6 +2,8 @@
 // a reference, or groupwise by generalised Procrustes): landmarks for the coarse step, ICP for the fine.
 #include <algorithm>
 #include <filesystem>
+#include <future>
+#include <memory>
 #include <optional>
 
 #include "apps/command.h"
@@ -155,10 +157,20 @@ class RegisterCommand : public Command {
     PointCloud moving, fixed;
     std::optional<LandmarkSet> moving_lm, fixed_lm;
     Similarity3 initial;
+    std::unique_ptr<IcpTarget> target;
+    Eigen::Index fixed_points = 0;
     {
       auto t = report.Stage("read");
+      // The fixed scan is read and prepared as ICP's target (centred, its k-d tree built) on a second
+      // thread while this one reads the moving scan and the landmarks; with --threads 1, here, in turn.
+      const PairRegistrationOptions prepare = options_;  // this thread sets the landmark names meanwhile
+      auto prepared = std::async(context->threads > 1 ? std::launch::async : std::launch::deferred, [&] {
+        fixed = ReadPointCloud(fixed_, read_options_);
+        fixed_points = fixed.size();
+        // ICP's target takes over the scan's arrays; the scan itself is needed only without ICP.
+        return prepare.refine ? PrepareTarget(std::move(fixed), prepare, fixed_) : nullptr;
+      });
       moving = ReadPointCloud(moving_, read_options_);
-      fixed = ReadPointCloud(fixed_, read_options_);
       if (!moving_landmarks_.empty()) {
         moving_lm = ReadLandmarks(moving_landmarks_, landmark_options_);
         fixed_lm = ReadLandmarks(fixed_landmarks_, landmark_options_);
@@ -166,6 +178,7 @@ class RegisterCommand : public Command {
         options_.fixed_landmarks_name = fixed_landmarks_;
       }
       if (!initial_.empty()) initial = ReadTransformJson(initial_);
+      target = prepared.get();
     }
     // A rigid pose written with doubles reads back with a scale of 1 to rounding (cbrt of a determinant).
     if (!(std::abs(initial.scale - 1.0) <= 1e-9)) {
@@ -176,13 +189,15 @@ class RegisterCommand : public Command {
     PairRegistrationResult r;
     {
       auto t = report.Stage("register");
-      r = RegisterPair(fixed, moving, fixed_lm ? &*fixed_lm : nullptr, moving_lm ? &*moving_lm : nullptr,
-                       initial, options_);
+      r = target ? RegisterPair(*target, moving, fixed_lm ? &*fixed_lm : nullptr,
+                                moving_lm ? &*moving_lm : nullptr, initial, options_)
+                 : RegisterPair(fixed, moving, fixed_lm ? &*fixed_lm : nullptr,
+                                moving_lm ? &*moving_lm : nullptr, initial, options_);
     }
     report["moving"] = moving_;
     report["fixed"] = fixed_;
     report["moving_points"] = moving.size();
-    report["fixed_points"] = fixed.size();
+    report["fixed_points"] = fixed_points;
     if (r.landmarks) {
       report["landmarks"] = LandmarkJson(*r.landmarks);
       report["landmark_rms_after_mm"] = r.landmark_rms_mm;

@@ -85,7 +85,7 @@ std::int64_t FindPairs(const Problem& pb, const std::vector<std::uint32_t>& samp
   pairs->Resize(sample.size());
   const auto m = static_cast<std::int64_t>(sample.size());
   std::int64_t searches = 0;
-#pragma omp parallel for schedule(static) reduction(+ : searches) if (m >= kMinParallelPoints)
+#pragma omp parallel for schedule(dynamic, kChunk) reduction(+ : searches) if (m >= kMinParallelPoints)
   for (std::int64_t k = 0; k < m; ++k) {
     const auto s = static_cast<std::size_t>(k);
     const std::uint32_t i = sample[s];
@@ -162,7 +162,7 @@ BlockSum Accumulate(const Problem& pb, const Pairs& pairs, double scale, double 
   const std::size_t blocks = (m + kBlock - 1) / kBlock;
   std::vector<BlockSum> sums(blocks);
   const bool parallel = static_cast<std::int64_t>(m) >= kMinParallelPoints;
-#pragma omp parallel for schedule(static) if (parallel)
+#pragma omp parallel for schedule(dynamic, kChunk / kBlock) if (parallel)
   for (std::int64_t b = 0; b < static_cast<std::int64_t>(blocks); ++b) {
     BlockSum& s = sums[static_cast<std::size_t>(b)];
     const std::size_t end = std::min(m, (static_cast<std::size_t>(b) + 1) * kBlock);

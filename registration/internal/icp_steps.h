@@ -23,6 +23,10 @@ constexpr std::size_t kBlock = 512;
 // thousand points take less time than waking the threads, and on a busy machine every fork and join may
 // wait for a time slice.
 constexpr std::int64_t kMinParallelPoints = 16384;
+// Steps 1 and 3 hand out their points in chunks of this many, to whichever thread is free: when the
+// machine is busy and a thread is not given a core, the others take its share instead of waiting for it
+// (with static shares, the thread that finished first waited for the other's whole share at every join).
+constexpr std::int64_t kChunk = 2048;
 // Step 1 searches this many times the gate, so that a certificate holds while a point moves a little.
 constexpr double kSearchRadiusOverGate = 1.5;
 // Step 2 estimates the robust scale from at most this many residuals.
@@ -78,7 +82,7 @@ struct Problem {
 // that, it is the exact nearest target point (docs/registration.md, ICP-2), and step 1 searches the tree
 // only for the points whose certificate has expired.
 struct NearestCache {
-  static constexpr int kCandidates = 4;
+  static constexpr int kCandidates = 2;
   double radius = 0.0;  // search radius (mm), above the gate
   std::vector<Eigen::Vector3d> at;
   std::vector<std::array<std::uint32_t, kCandidates>> candidates;
