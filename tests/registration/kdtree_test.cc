@@ -73,7 +73,9 @@ TEST(KdTree3, TwoHalvesAnswerAsOneTree) {
     for (const double radius : {0.2, 0.6, 2.0}) {
       const bool f1 = whole.NearestWithin(query, radius, &i1, &d1);
       ASSERT_EQ(f1, halves.NearestWithin(query, radius, &i2, &d2));
-      if (f1) EXPECT_EQ(i1, i2);
+      if (f1) {
+        EXPECT_EQ(i1, i2);
+      }
       std::uint32_t a[KdTree3::kMaxBounded], b[KdTree3::kMaxBounded];
       double da[KdTree3::kMaxBounded], db[KdTree3::kMaxBounded];
       const int n1 = whole.NearestWithin(query, radius, 3, a, da);
