@@ -30,6 +30,14 @@ struct SweepSurfaceOptions {
   /// and Levoy 1994 weight them down); they are left out of every correspondence. 90 = off. On the
   /// Stanford bunny 65 brings the joint solution 0.05 mm nearer the published alignment than 90.
   double max_view_angle_deg = 65.0;
+  /// The line of sight a point's view angle is taken from: the sweep's mean normal over a cube of half
+  /// side this many sweep widths about the point (the width: the sweep's narrow extent across its mean
+  /// normal, sqrt(12) times the standard deviation of its points projected on the plane normal to it,
+  /// along their narrow principal axis). Normals are turned to its side too. A handheld wand travels
+  /// along its sweep facing the skin, so a strip wrapped around a chest is seen head-on at its ends,
+  /// where the sweep's mean normal is 60-90 degrees off; a scan from one view point, about as wide as
+  /// long, keeps about one line of sight. 0: one line of sight, the sweep's mean normal.
+  double sight_radius_widths = 0.5;
   /// Correspondences are weighted by (cos a_p cos a_q)^view_weight_power, a the angle between a
   /// point's normal and its sweep's line of sight (the confidence of Turk and Levoy 1994); 0 = off.
   double view_weight_power = 0.0;
@@ -67,12 +75,19 @@ struct SweepSurface {
 SweepSurface PrepareSweep(const PointCloud& cloud, const SweepSurfaceOptions& options,
                           const std::string& name);
 
+/// A row of no point: a correspondence whose points' rows are not known.
+inline constexpr std::uint32_t kUnknownRow = 0xffffffffu;
+
 /// A point of sweep j on the tangent plane of sweep i: the residual is n . (T_j p - T_i q) in the world.
 struct SweepCorrespondence {
   std::size_t i = 0, j = 0;  ///< target sweep i, source sweep j
   Eigen::Vector3d p;         ///< mm, in sweep j's frame
   Eigen::Vector3d q, n;      ///< mm and unit normal, in sweep i's frame
   double weight = 1.0;       ///< confidence of the pair, in (0, 1]
+  /// The rows of p in sweep j and of q in sweep i (kUnknownRow: not known, counted as a point no other
+  /// correspondence uses): a point's noise enters every correspondence that uses it, which
+  /// AdjustPosesToTracker counts (TrackerAdjustmentOptions::count_shared_points).
+  std::uint32_t p_row = kUnknownRow, q_row = kUnknownRow;
 };
 
 /// Pairs evenly strided samples of sweep j (at most max_samples) with their nearest points of sweep i at
