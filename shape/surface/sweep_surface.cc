@@ -111,6 +111,36 @@ Points3 LinesOfSight(const Points3& points, const Points3& normals, const Eigen:
   return sight;
 }
 
+// Whether the scanner moved along the sweep, from its sampling: a scanner standing still samples a surface
+// turned by theta from its line of sight at cos(theta) of the density it gives one facing it, a wand
+// carried along the sweep facing the skin samples it evenly. The median density (1 / the squared distance
+// to the 8th neighbour, over at most 3000 points) 55-80 degrees from the sweep's mean normal `view`, over
+// that within 30 degrees, at least `min_ratio`; false when either holds fewer than 20 points (nothing
+// much to see at a grazing angle) or min_ratio is > 1.
+bool ScannerMovedAlongSweep(const Points3& points, const Points3& normals, const KdTree3& tree,
+                            const Eigen::Vector3d& view, double min_ratio) {
+  if (min_ratio > 1.0) return false;
+  if (!(min_ratio > 0.0)) return true;
+  const Eigen::Index stride = std::max<Eigen::Index>(1, points.rows() / 3000);
+  const double head_on = std::cos(30.0 * M_PI / 180.0), near = std::cos(55.0 * M_PI / 180.0),
+               far = std::cos(80.0 * M_PI / 180.0);
+  std::vector<double> facing, turned;
+  std::uint32_t index[9];
+  double d2[9];
+  for (Eigen::Index r = 0; r < points.rows(); r += stride) {
+    const double c = std::abs(normals.row(r).dot(view.transpose()));
+    if (c < head_on && (c > near || c < far)) continue;
+    if (tree.Knn(points.row(r).transpose(), 9, index, d2) < 9 || !(d2[8] > 0.0)) continue;
+    (c >= head_on ? facing : turned).push_back(1.0 / d2[8]);
+  }
+  if (facing.size() < 20 || turned.size() < 20) return false;
+  auto median = [](std::vector<double>* v) {
+    std::nth_element(v->begin(), v->begin() + std::ptrdiff_t(v->size() / 2), v->end());
+    return (*v)[v->size() / 2];
+  };
+  return median(&turned) >= min_ratio * median(&facing);
+}
+
 }  // namespace
 
 bool SweepSurfaceOptions::IsValid(std::string* why) const {
@@ -125,6 +155,8 @@ bool SweepSurfaceOptions::IsValid(std::string* why) const {
     return fail("max view angle must be in (0, 90]");
   if (!(view_weight_power >= 0.0 && view_weight_power <= 8.0))
     return fail("view weight power must be in [0, 8]");
+  if (!(moving_scanner_density_ratio >= 0.0) || !std::isfinite(moving_scanner_density_ratio))
+    return fail("moving scanner density ratio must be >= 0");
   if (!(sight_radius_widths >= 0.0 && sight_radius_widths <= 100.0))
     return fail("sight radius must be in [0, 100] sweep widths");
   if (!(sample_spacings >= 1.0) || !std::isfinite(sample_spacings))
@@ -163,7 +195,10 @@ SweepSurface PrepareSweep(const PointCloud& cloud, const SweepSurfaceOptions& op
     // sight where it was seen (sight_radius_widths; the sweep's mean normal by default), from the
     // propagated normals (propagation alone can flip a part across a fold).
     const Eigen::Vector3d view = s.normals.colwise().sum().transpose().normalized();
-    const Points3 sight = LinesOfSight(cloud.positions, s.normals, view, options.sight_radius_widths);
+    s.scanner_moved =
+        ScannerMovedAlongSweep(cloud.positions, s.normals, tree, view, options.moving_scanner_density_ratio);
+    const Points3 sight =
+        LinesOfSight(cloud.positions, s.normals, view, s.scanner_moved ? options.sight_radius_widths : 0.0);
     for (Eigen::Index r = 0; r < s.normals.rows(); ++r) {
       if (s.normals.row(r).dot(sight.row(r)) < 0.0) s.normals.row(r) *= -1.0;
     }

@@ -30,14 +30,20 @@ struct SweepSurfaceOptions {
   /// and Levoy 1994 weight them down); they are left out of every correspondence. 90 = off. On the
   /// Stanford bunny 65 brings the joint solution 0.05 mm nearer the published alignment than 90.
   double max_view_angle_deg = 65.0;
-  /// The line of sight a point's view angle is taken from: the sweep's mean normal over a cube of half
-  /// side this many sweep widths about the point (the width: the sweep's narrow extent across its mean
-  /// normal, sqrt(12) times the standard deviation of its points projected on the plane normal to it,
-  /// along their narrow principal axis). Normals are turned to its side too. A handheld wand travels
-  /// along its sweep facing the skin, so a strip wrapped around a chest is seen head-on at its ends,
-  /// where the sweep's mean normal is 60-90 degrees off; a scan from one view point, about as wide as
-  /// long, keeps about one line of sight. 0: one line of sight, the sweep's mean normal.
+  /// Of a sweep whose scanner moved along it (moving_scanner_density_ratio), the line of sight a point's
+  /// view angle is taken from: the sweep's mean normal over a cube of half side this many sweep widths
+  /// about the point (the width: the sweep's narrow extent across its mean normal, sqrt(12) times the
+  /// standard deviation of its points projected on the plane normal to it, along their narrow principal
+  /// axis). Normals are turned to its side too. A handheld wand travels along its sweep facing the skin,
+  /// so a strip wrapped around a chest is seen head-on at its ends, where the sweep's mean normal is
+  /// 60-90 degrees off (a quarter of a chest strip's points were left out as grazing). 0: one line of
+  /// sight, the sweep's mean normal, for every sweep.
   double sight_radius_widths = 0.5;
+  /// A sweep's scanner moved along it when its sampling density 55-80 degrees from its mean normal is at
+  /// least this fraction of that within 30 degrees: a scanner standing still samples a surface turned by
+  /// theta at cos(theta) of the density (the Stanford bunny's ten scans: 0.44-0.54), a wand facing the
+  /// skin all along evenly (the synthetic chest strips: 0.86-1.06). 0: every sweep; > 1: none.
+  double moving_scanner_density_ratio = 0.7;
   /// Correspondences are weighted by (cos a_p cos a_q)^view_weight_power, a the angle between a
   /// point's normal and its sweep's line of sight (the confidence of Turk and Levoy 1994); 0 = off.
   double view_weight_power = 0.0;
@@ -65,6 +71,9 @@ struct SweepSurface {
   /// Expected squared angular error of a normal (rad^2 per tangent axis): 2 c / k for PCA over k
   /// neighbours whose surface variation (lambda_min / sum of lambdas) has the median c over the sweep.
   double normal_variance = 0.0;
+  /// The scanner moved along the sweep (SweepSurfaceOptions::moving_scanner_density_ratio): its points'
+  /// lines of sight follow the sweep (sight_radius_widths).
+  bool scanner_moved = false;
 
   /// Reverses every normal (the sweep's side; the target's normals are sign-free).
   void FlipNormals();

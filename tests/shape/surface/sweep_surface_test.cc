@@ -103,11 +103,36 @@ TEST(SweepSurface, AWrappedStripIsSeenHeadOnAlongItsLength) {
       global_inward_beyond_90 += global.normals.row(i).dot(out.transpose()) < -0.9;
     }
   }
+  EXPECT_TRUE(local.scanner_moved);  // evenly sampled: a wand carried along it
   EXPECT_EQ(local_grazing, 0);
   EXPECT_EQ(local_inward, 0);
   EXPECT_EQ(global_wrong_grazing, 0);
   EXPECT_GT(beyond_90, 1000);
   EXPECT_EQ(global_inward_beyond_90, beyond_90);
+}
+
+// A scanner standing still on the z axis: a 0.5 mm grid in its image plane cast on a cap of a sphere of
+// radius 60 mm, out to 80 degrees, so that the surface is sampled at cos(theta) of the density facing it.
+// One line of sight, the sweep's mean normal: every point beyond 65 degrees is grazing, none within.
+TEST(SweepSurface, AScanFromAScannerStandingStillKeepsOneLineOfSight) {
+  std::vector<Eigen::Vector3d> p;
+  const double radius = 60.0, rim = radius * std::sin(80.0 * M_PI / 180.0);
+  for (double x = -rim; x <= rim; x += 0.5)
+    for (double y = -rim; y <= rim; y += 0.5)
+      if (x * x + y * y <= rim * rim) p.emplace_back(x, y, std::sqrt(radius * radius - x * x - y * y));
+  PointCloud cap;
+  cap.positions.resize(Eigen::Index(p.size()), 3);
+  for (std::size_t i = 0; i < p.size(); ++i) cap.positions.row(Eigen::Index(i)) = p[i].transpose();
+  const SweepSurface s = PrepareSweep(cap, SweepSurfaceOptions{}, "cap");
+  EXPECT_FALSE(s.scanner_moved);
+  int wrong = 0, beyond = 0;
+  for (Eigen::Index i = 0; i < cap.size(); ++i) {
+    const double angle = std::acos(std::clamp(cap.positions(i, 2) / radius, -1.0, 1.0)) * 180.0 / M_PI;
+    if (angle > 66.0) ++beyond;
+    if ((angle > 66.0 && !s.grazing[std::size_t(i)]) || (angle < 64.0 && s.grazing[std::size_t(i)])) ++wrong;
+  }
+  EXPECT_GT(beyond, 1000);
+  EXPECT_EQ(wrong, 0);
 }
 
 TEST(SweepSurface, TooFewPointsIsBadInput) {
