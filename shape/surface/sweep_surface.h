@@ -36,7 +36,7 @@ struct SweepSurfaceOptions {
   /// standard deviation of its points projected on the plane normal to it, along their narrow principal
   /// axis). Normals are turned to its side too. A handheld wand travels along its sweep facing the skin,
   /// so a strip wrapped around a chest is seen head-on at its ends, where the sweep's mean normal is
-  /// 60-90 degrees off (a quarter of a chest strip's points were left out as grazing). 0: one line of
+  /// 60-90 degrees off (21-27 % of a 3-strip chest sweep's points were left out as grazing). 0: one line of
   /// sight, the sweep's mean normal, for every sweep.
   double sight_radius_widths = 0.5;
   /// A sweep's scanner moved along it when its sampling density 55-80 degrees from its mean normal is at
