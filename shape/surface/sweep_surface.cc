@@ -76,7 +76,9 @@ Points3 LinesOfSight(const Points3& points, const Points3& normals, const Eigen:
                               across / double(points.rows());
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> pca(cov);
   const double radius = radius_widths * std::sqrt(12.0 * std::max(0.0, pca.eigenvalues()(1)));
-  if (!(radius > 0.0) || !std::isfinite(radius)) return sight;
+  const double length = std::sqrt(12.0 * std::max(0.0, pca.eigenvalues()(2)));
+  // A sweep about as thin as a line has no width to follow (and voxel indices must fit the key's 21 bits).
+  if (!(radius > 1e-5 * length) || !std::isfinite(radius)) return sight;
   const double side = radius / 2.0;
   auto voxel = [&](Eigen::Index r) {
     const Eigen::RowVector3d x = (points.row(r) - mean) / side;
