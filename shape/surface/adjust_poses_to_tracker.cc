@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <utility>
 
@@ -37,7 +38,28 @@ struct PairSums {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   double weight = 0.0;
   int count = 0;
+  // Every use of a point (sweep << 32 | row) with its correspondence's weight; the sum of 2 w^2 over the
+  // correspondences, and of w^2 over the uses of points whose row is not known (each its own point).
+  std::vector<std::pair<std::uint64_t, double>> uses;
+  double independent_w2 = 0.0, unknown_w2 = 0.0;
 };
+
+// The factor sum_k 2 w_k^2 / sum_points (sum of w over its uses)^2 on a pair's information: the variance
+// of the gradient, whose terms of one point add up (same sign on the relative pose), over the variance
+// the information assumes (every point in one residual), for the residuals' local Jacobians alike.
+double IndependentFraction(PairSums* ps) {
+  if (!(ps->independent_w2 > 0.0)) return 1.0;
+  std::sort(ps->uses.begin(), ps->uses.end());
+  double shared = ps->unknown_w2;
+  for (std::size_t a = 0; a < ps->uses.size();) {
+    double w = 0.0;
+    std::size_t b = a;
+    for (; b < ps->uses.size() && ps->uses[b].first == ps->uses[a].first; ++b) w += ps->uses[b].second;
+    shared += w * w;
+    a = b;
+  }
+  return std::clamp(ps->independent_w2 / std::max(shared, 1e-300), 0.0, 1.0);
+}
 
 }  // namespace
 
@@ -105,7 +127,17 @@ TrackerAdjustmentResult AdjustPosesToTracker(const std::vector<SweepCorresponden
     Vector6 J;
     J << arm.cross(normal), normal;
     J *= sign;
-    const double w = RobustWeight(RobustLoss::kCauchy, r[k], c_loss) * c.weight / (s * s);
+    const double robust = RobustWeight(RobustLoss::kCauchy, r[k], c_loss) * c.weight;
+    const double w = robust / (s * s);
+    if (options.count_shared_points) {
+      ps.independent_w2 += 2.0 * robust * robust;
+      for (const auto& [sweep, row] : {std::pair{c.j, c.p_row}, std::pair{c.i, c.q_row}}) {
+        if (row == kUnknownRow)
+          ps.unknown_w2 += robust * robust;
+        else
+          ps.uses.push_back({std::uint64_t(sweep) << 32 | row, robust});
+      }
+    }
     ps.H += w * J * J.transpose();
     ps.g += w * r[k] * J;
     const double e2 = normal_variance(c.i);
@@ -121,9 +153,15 @@ TrackerAdjustmentResult AdjustPosesToTracker(const std::vector<SweepCorresponden
   // 3. The joint normal equations: every pair's pinned part, every sweep's prior.
   Eigen::MatrixXd A = Eigen::MatrixXd::Zero(Eigen::Index(6 * n), Eigen::Index(6 * n));
   Eigen::VectorXd b = Eigen::VectorXd::Zero(Eigen::Index(6 * n));
-  for (const auto& [key, ps] : sums) {
+  for (auto& [key, ps] : sums) {
     const auto [lo, hi] = key;
     PairConstraintReport report{lo, hi, 0, ps.count};
+    // A point's noise once, however many of the pair's residuals carry it: the pair's information (and
+    // the normals' share of it, so lambda is unchanged) scaled down; its own best step is the same.
+    report.independent_fraction = IndependentFraction(&ps);
+    ps.H *= report.independent_fraction;
+    ps.g *= report.independent_fraction;
+    ps.spurious *= report.independent_fraction;
     const double scale = std::max(ps.spurious.trace(), ps.H.trace()) * 1e-12 + 1e-300;
     const Matrix6 B = ps.spurious + scale * Matrix6::Identity();
     Eigen::GeneralizedSelfAdjointEigenSolver<Matrix6> ges(ps.H, B);

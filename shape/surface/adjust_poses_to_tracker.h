@@ -33,6 +33,17 @@ struct TrackerAdjustmentOptions {
   /// issue-13 chest grid 4 loses less to a 4 mm tracker error than 25 (shape 0.14-0.31 against
   /// 0.20-0.40 mm RMS) at 0.03-0.09 against 0.02-0.08 mm from exact poses (docs/benchmarks/merge.md).
   double min_pinned_ratio = 4.0;
+  /// Count each point's noise once, however many correspondences of a pair use it: a point of the overlap
+  /// is the source of one correspondence and the target of about one more (the other direction, or a
+  /// neighbour's nearest point), and both residuals carry its noise with the same sign on the pair's
+  /// relative pose. The pair's information is scaled by sum_k 2 w_k^2 / sum_points (sum_{k using it}
+  /// w_k)^2 (w_k the correspondence's robust weight): 1 when no point is shared, 1/2 when every point
+  /// of the overlap is used once from each side (the two sides then hold what one holds). It makes the
+  /// joint step's information honest (the merge's shape over its model's prediction 1.59 -> 1.33 on the
+  /// issue-13 grid's 4 mm, 15 % cells) but not the merge better (seed 1: the line met in 16 cells of 36
+  /// against 15, seed 2: 11 against 11; docs/benchmarks/merge.md): off, every residual independent.
+  /// Needs the rows (SweepCorrespondence::p_row, q_row).
+  bool count_shared_points = false;
 
   /// False, with the reason in `why`, if a value is out of range.
   bool IsValid(std::string* why) const;
@@ -43,6 +54,9 @@ struct PairConstraintReport {
   std::size_t i = 0, j = 0;   ///< the sweeps
   int pinned_directions = 0;  ///< of the six of their relative pose
   int correspondences = 0;    ///< used (both directions)
+  /// The factor on the pair's information for points its correspondences share (count_shared_points;
+  /// 1: none shared or not counted).
+  double independent_fraction = 1.0;
 };
 
 /// What AdjustPosesToTracker did.

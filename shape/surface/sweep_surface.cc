@@ -1,7 +1,10 @@
 #include "shape/surface/sweep_surface.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <unordered_map>
 
 #include "registration/estimate_normals.h"
 #include "registration/voxel_downsample.h"
@@ -56,6 +59,90 @@ std::vector<std::uint8_t> FindBorder(const Points3& points, const Points3& norma
   return border;
 }
 
+// Per point, the mean of the normals over a cube of half side `radius_widths` sweep widths about it
+// (SweepSurfaceOptions::sight_radius_widths; the width across `view`), from sums over voxels of half that
+// side: every point takes its voxel's line of sight. `view` (the sweep's mean normal) where the mean
+// vanishes or radius_widths is 0.
+Points3 LinesOfSight(const Points3& points, const Points3& normals, const Eigen::Vector3d& view,
+                     double radius_widths) {
+  Points3 sight(points.rows(), 3);
+  sight.rowwise() = view.transpose();
+  if (!(radius_widths > 0.0) || points.rows() < 3) return sight;
+  // The width across the line of sight: the points projected on the plane normal to `view`, their
+  // narrow principal axis (the projected covariance's middle eigenvalue; the smallest is along `view`).
+  const Eigen::RowVector3d mean = points.colwise().mean();
+  const Eigen::Matrix3d across = Eigen::Matrix3d::Identity() - view * view.transpose();
+  const Eigen::Matrix3d cov = across * (points.rowwise() - mean).transpose() * (points.rowwise() - mean) *
+                              across / double(points.rows());
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> pca(cov);
+  const double radius = radius_widths * std::sqrt(12.0 * std::max(0.0, pca.eigenvalues()(1)));
+  const double length = std::sqrt(12.0 * std::max(0.0, pca.eigenvalues()(2)));
+  // A sweep about as thin as a line has no width to follow (and voxel indices must fit the key's 21 bits).
+  if (!(radius > 1e-5 * length) || !std::isfinite(radius)) return sight;
+  const double side = radius / 2.0;
+  auto voxel = [&](Eigen::Index r) {
+    const Eigen::RowVector3d x = (points.row(r) - mean) / side;
+    return Eigen::Vector3i(int(std::floor(x.x())), int(std::floor(x.y())), int(std::floor(x.z())));
+  };
+  auto key = [](const Eigen::Vector3i& v) {
+    return (std::uint64_t(std::uint32_t(v.x() + (1 << 20))) << 42) |
+           (std::uint64_t(std::uint32_t(v.y() + (1 << 20))) << 21) |
+           std::uint64_t(std::uint32_t(v.z() + (1 << 20)));
+  };
+  std::unordered_map<std::uint64_t, Eigen::Vector3d> sums;
+  for (Eigen::Index r = 0; r < points.rows(); ++r) {
+    auto [it, added] = sums.try_emplace(key(voxel(r)), Eigen::Vector3d::Zero());
+    it->second += normals.row(r).transpose();
+  }
+  std::unordered_map<std::uint64_t, Eigen::Vector3d> voxel_sight;
+  for (Eigen::Index r = 0; r < points.rows(); ++r) {
+    const Eigen::Vector3i v = voxel(r);
+    auto [it, added] = voxel_sight.try_emplace(key(v), Eigen::Vector3d::Zero());
+    if (added) {
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (int dx = -2; dx <= 2; ++dx)
+        for (int dy = -2; dy <= 2; ++dy)
+          for (int dz = -2; dz <= 2; ++dz) {
+            const auto found = sums.find(key(v + Eigen::Vector3i(dx, dy, dz)));
+            if (found != sums.end()) sum += found->second;
+          }
+      it->second = sum.norm() > 1e-9 ? Eigen::Vector3d(sum.normalized()) : view;
+    }
+    sight.row(r) = it->second.transpose();
+  }
+  return sight;
+}
+
+// Whether the scanner moved along the sweep, from its sampling: a scanner standing still samples a surface
+// turned by theta from its line of sight at cos(theta) of the density it gives one facing it, a wand
+// carried along the sweep facing the skin samples it evenly. The median density (1 / the squared distance
+// to the 8th neighbour, over at most 3000 points) 55-80 degrees from the sweep's mean normal `view`, over
+// that within 30 degrees, at least `min_ratio`; false when either holds fewer than 20 points (nothing
+// much to see at a grazing angle) or min_ratio is > 1.
+bool ScannerMovedAlongSweep(const Points3& points, const Points3& normals, const KdTree3& tree,
+                            const Eigen::Vector3d& view, double min_ratio) {
+  if (min_ratio > 1.0) return false;
+  if (!(min_ratio > 0.0)) return true;
+  const Eigen::Index stride = std::max<Eigen::Index>(1, points.rows() / 3000);
+  const double head_on = std::cos(30.0 * M_PI / 180.0), near = std::cos(55.0 * M_PI / 180.0),
+               far = std::cos(80.0 * M_PI / 180.0);
+  std::vector<double> facing, turned;
+  std::uint32_t index[9];
+  double d2[9];
+  for (Eigen::Index r = 0; r < points.rows(); r += stride) {
+    const double c = std::abs(normals.row(r).dot(view.transpose()));
+    if (c < head_on && (c > near || c < far)) continue;
+    if (tree.Knn(points.row(r).transpose(), 9, index, d2) < 9 || !(d2[8] > 0.0)) continue;
+    (c >= head_on ? facing : turned).push_back(1.0 / d2[8]);
+  }
+  if (facing.size() < 20 || turned.size() < 20) return false;
+  auto median = [](std::vector<double>* v) {
+    std::nth_element(v->begin(), v->begin() + std::ptrdiff_t(v->size() / 2), v->end());
+    return (*v)[v->size() / 2];
+  };
+  return median(&turned) >= min_ratio * median(&facing);
+}
+
 }  // namespace
 
 bool SweepSurfaceOptions::IsValid(std::string* why) const {
@@ -70,6 +157,10 @@ bool SweepSurfaceOptions::IsValid(std::string* why) const {
     return fail("max view angle must be in (0, 90]");
   if (!(view_weight_power >= 0.0 && view_weight_power <= 8.0))
     return fail("view weight power must be in [0, 8]");
+  if (!(moving_scanner_density_ratio >= 0.0) || !std::isfinite(moving_scanner_density_ratio))
+    return fail("moving scanner density ratio must be >= 0");
+  if (!(sight_radius_widths >= 0.0 && sight_radius_widths <= 100.0))
+    return fail("sight radius must be in [0, 100] sweep widths");
   if (!(sample_spacings >= 1.0) || !std::isfinite(sample_spacings))
     return fail("sample spacings must be >= 1");
   return true;
@@ -102,15 +193,21 @@ SweepSurface PrepareSweep(const PointCloud& cloud, const SweepSurfaceOptions& op
   s.grazing.assign(s.border.size(), 0);
   s.confidence.assign(s.border.size(), 1.0f);
   {
-    // A sweep sees only surfaces that face the scanner: every normal is turned to the side of the sweep's
-    // mean normal, which stands for the line of sight (propagation alone can flip a part across a fold).
+    // A sweep sees only surfaces that face the scanner: every normal is turned to the side of the line of
+    // sight where it was seen (sight_radius_widths; the sweep's mean normal by default), from the
+    // propagated normals (propagation alone can flip a part across a fold).
     const Eigen::Vector3d view = s.normals.colwise().sum().transpose().normalized();
+    s.scanner_moved =
+        ScannerMovedAlongSweep(cloud.positions, s.normals, tree, view, options.moving_scanner_density_ratio);
+    const Points3 sight =
+        LinesOfSight(cloud.positions, s.normals, view, s.scanner_moved ? options.sight_radius_widths : 0.0);
     for (Eigen::Index r = 0; r < s.normals.rows(); ++r) {
-      if (s.normals.row(r).dot(view.transpose()) < 0.0) s.normals.row(r) *= -1.0;
+      if (s.normals.row(r).dot(sight.row(r)) < 0.0) s.normals.row(r) *= -1.0;
     }
+    // The view angle against that line of sight.
     const double min_cos = std::cos(options.max_view_angle_deg * M_PI / 180.0);
     for (Eigen::Index r = 0; r < s.normals.rows(); ++r) {
-      const double c = std::abs(s.normals.row(r).dot(view.transpose()));
+      const double c = std::abs(s.normals.row(r).dot(sight.row(r)));
       if (c < min_cos) s.grazing[std::size_t(r)] = 1;
       if (options.view_weight_power > 0.0)
         s.confidence[std::size_t(r)] = float(std::pow(c, options.view_weight_power));
@@ -166,7 +263,7 @@ std::vector<SweepCorrespondence> FindSweepCorrespondences(const std::vector<Swee
     const Eigen::Vector3d q = a.target->centred_positions().row(k).transpose() + a.target->origin();
     const Eigen::Vector3d d = T_i_j * p - q;
     if ((d - nq.dot(d) * nq).squaredNorm() > a.spacing_mm * a.spacing_mm) continue;
-    out.push_back({i, j, p, q, nq, std::max(1e-3, double(a.confidence[k]) * double(b.confidence[r]))});
+    out.push_back({i, j, p, q, nq, std::max(1e-3, double(a.confidence[k]) * double(b.confidence[r])), r, k});
   }
   return out;
 }

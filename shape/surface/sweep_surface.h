@@ -30,6 +30,20 @@ struct SweepSurfaceOptions {
   /// and Levoy 1994 weight them down); they are left out of every correspondence. 90 = off. On the
   /// Stanford bunny 65 brings the joint solution 0.05 mm nearer the published alignment than 90.
   double max_view_angle_deg = 65.0;
+  /// Of a sweep whose scanner moved along it (moving_scanner_density_ratio), the line of sight a point's
+  /// view angle is taken from: the sweep's mean normal over a cube of half side this many sweep widths
+  /// about the point (the width: the sweep's narrow extent across its mean normal, sqrt(12) times the
+  /// standard deviation of its points projected on the plane normal to it, along their narrow principal
+  /// axis). Normals are turned to its side too. A handheld wand travels along its sweep facing the skin,
+  /// so a strip wrapped around a chest is seen head-on at its ends, where the sweep's mean normal is
+  /// 60-90 degrees off (21-27 % of a 3-strip chest sweep's points were left out as grazing). 0: one line of
+  /// sight, the sweep's mean normal, for every sweep.
+  double sight_radius_widths = 0.5;
+  /// A sweep's scanner moved along it when its sampling density 55-80 degrees from its mean normal is at
+  /// least this fraction of that within 30 degrees: a scanner standing still samples a surface turned by
+  /// theta at cos(theta) of the density (the Stanford bunny's ten scans: 0.44-0.54), a wand facing the
+  /// skin all along evenly (the synthetic chest strips: 0.86-1.06). 0: every sweep; > 1: none.
+  double moving_scanner_density_ratio = 0.7;
   /// Correspondences are weighted by (cos a_p cos a_q)^view_weight_power, a the angle between a
   /// point's normal and its sweep's line of sight (the confidence of Turk and Levoy 1994); 0 = off.
   double view_weight_power = 0.0;
@@ -57,6 +71,9 @@ struct SweepSurface {
   /// Expected squared angular error of a normal (rad^2 per tangent axis): 2 c / k for PCA over k
   /// neighbours whose surface variation (lambda_min / sum of lambdas) has the median c over the sweep.
   double normal_variance = 0.0;
+  /// The scanner moved along the sweep (SweepSurfaceOptions::moving_scanner_density_ratio): its points'
+  /// lines of sight follow the sweep (sight_radius_widths).
+  bool scanner_moved = false;
 
   /// Reverses every normal (the sweep's side; the target's normals are sign-free).
   void FlipNormals();
@@ -67,12 +84,19 @@ struct SweepSurface {
 SweepSurface PrepareSweep(const PointCloud& cloud, const SweepSurfaceOptions& options,
                           const std::string& name);
 
+/// A row of no point: a correspondence whose points' rows are not known.
+inline constexpr std::uint32_t kUnknownRow = 0xffffffffu;
+
 /// A point of sweep j on the tangent plane of sweep i: the residual is n . (T_j p - T_i q) in the world.
 struct SweepCorrespondence {
   std::size_t i = 0, j = 0;  ///< target sweep i, source sweep j
   Eigen::Vector3d p;         ///< mm, in sweep j's frame
   Eigen::Vector3d q, n;      ///< mm and unit normal, in sweep i's frame
   double weight = 1.0;       ///< confidence of the pair, in (0, 1]
+  /// The rows of p in sweep j and of q in sweep i (kUnknownRow: not known, counted as a point no other
+  /// correspondence uses): a point's noise enters every correspondence that uses it, which
+  /// AdjustPosesToTracker counts (TrackerAdjustmentOptions::count_shared_points).
+  std::uint32_t p_row = kUnknownRow, q_row = kUnknownRow;
 };
 
 /// Pairs evenly strided samples of sweep j (at most max_samples) with their nearest points of sweep i at

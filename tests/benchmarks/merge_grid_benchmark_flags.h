@@ -23,11 +23,14 @@ struct Flags {
   double final_pinned_ratio = -1.0;                                 // < 0: MergeSweeps's default
   double sample_spacings = -1.0;                                    // < 0: MergeSweeps's default
   int normal_neighbours = -1;                                       // < 0: MergeSweeps's default
-  bool model_bound = false;    // also the shape figure the merge's own information at the truth predicts
-  int points_per_pair = -1;    // < 0: MergeSweeps's default
-  int rounds = -1;             // < 0: MergeSweeps's default
-  int fit_tracker = -1;        // 0 / 1; < 0: MergeSweeps's default
-  int final_every_point = -1;  // 0 / 1; < 0: MergeSweeps's default
+  bool model_bound = false;      // also the shape figure the merge's own information at the truth predicts
+  int points_per_pair = -1;      // < 0: MergeSweeps's default
+  int rounds = -1;               // < 0: MergeSweeps's default
+  int fit_tracker = -1;          // 0 / 1; < 0: MergeSweeps's default
+  int final_every_point = -1;    // 0 / 1; < 0: MergeSweeps's default
+  int count_shared_points = -1;  // 0 / 1; < 0: MergeSweeps's default
+  double max_view_angle_deg = -1.0;   // < 0: MergeSweeps's default
+  double sight_radius_widths = -1.0;  // < 0: MergeSweeps's default
   bool open3d = true;
 };
 
@@ -105,6 +108,12 @@ inline Flags Parse(int argc, char** argv) {
       f.fit_tracker = std::stoi(value());
     else if (key == "--final-every-point")
       f.final_every_point = std::stoi(value());
+    else if (key == "--sight-radius")
+      f.sight_radius_widths = std::stod(value());
+    else if (key == "--max-view-angle")
+      f.max_view_angle_deg = std::stod(value());
+    else if (key == "--count-shared-points")
+      f.count_shared_points = std::stoi(value());
     else if (key == "--rounds")
       f.rounds = std::stoi(value());
     else if (key == "--points-per-pair")

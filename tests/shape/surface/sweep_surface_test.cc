@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "shape/core/error.h"
 
@@ -60,6 +62,77 @@ TEST(SweepSurface, CorrespondencesMeasureTheOffsetAndSkipTheEdge) {
   // Normals of opposite sides never pair (the two sides of a thin part).
   s[1].FlipNormals();
   EXPECT_TRUE(FindSweepCorrespondences(s, poses, 0, 1, 100000, 2.0).empty());
+}
+
+// A 40 mm strip wrapped 110 degrees either way around a cylinder of radius 120 mm (axis y), 1 mm grid:
+// a handheld sweep carried around a chest, the wand facing the skin all along.
+PointCloud WrappedStrip() {
+  std::vector<Eigen::Vector3d> p;
+  const double radius = 120.0, half_arc = 110.0 * M_PI / 180.0;
+  for (double s = -half_arc * radius; s <= half_arc * radius + 1e-9; s += 1.0)
+    for (double y = 0.0; y <= 40.0 + 1e-9; y += 1.0)
+      p.emplace_back(radius * std::sin(s / radius), y, radius * std::cos(s / radius));
+  PointCloud c;
+  c.positions.resize(Eigen::Index(p.size()), 3);
+  for (std::size_t i = 0; i < p.size(); ++i) c.positions.row(Eigen::Index(i)) = p[i].transpose();
+  return c;
+}
+
+// Seen from where the wand was (the mean normal over a stretch of the strip as long as half its width),
+// no point of the strip is grazing and every normal faces out, round to 110 degrees from the sweep's mean
+// normal; from the sweep's mean normal alone (sight_radius_widths 0), every point beyond 65 degrees is
+// grazing and those beyond 90 face in.
+TEST(SweepSurface, AWrappedStripIsSeenHeadOnAlongItsLength) {
+  const PointCloud strip = WrappedStrip();
+  const SweepSurface local = PrepareSweep(strip, SweepSurfaceOptions{}, "strip");
+  SweepSurfaceOptions one_view;
+  one_view.sight_radius_widths = 0.0;
+  const SweepSurface global = PrepareSweep(strip, one_view, "strip");
+  int local_grazing = 0, local_inward = 0, global_wrong_grazing = 0, global_inward_beyond_90 = 0,
+      beyond_90 = 0;
+  for (Eigen::Index i = 0; i < strip.size(); ++i) {
+    const Eigen::Vector3d x = strip.positions.row(i).transpose();
+    const Eigen::Vector3d out = Eigen::Vector3d(x.x(), 0.0, x.z()).normalized();
+    const double angle = std::acos(std::clamp(out.z(), -1.0, 1.0)) * 180.0 / M_PI;  // from the mean normal
+    local_grazing += local.grazing[std::size_t(i)];
+    local_inward += local.normals.row(i).dot(out.transpose()) < 0.9;
+    if (angle > 66.0 && !global.grazing[std::size_t(i)]) ++global_wrong_grazing;
+    if (angle < 64.0 && global.grazing[std::size_t(i)]) ++global_wrong_grazing;
+    if (angle > 91.0) {
+      ++beyond_90;
+      global_inward_beyond_90 += global.normals.row(i).dot(out.transpose()) < -0.9;
+    }
+  }
+  EXPECT_TRUE(local.scanner_moved);  // evenly sampled: a wand carried along it
+  EXPECT_EQ(local_grazing, 0);
+  EXPECT_EQ(local_inward, 0);
+  EXPECT_EQ(global_wrong_grazing, 0);
+  EXPECT_GT(beyond_90, 1000);
+  EXPECT_EQ(global_inward_beyond_90, beyond_90);
+}
+
+// A scanner standing still on the z axis: a 0.5 mm grid in its image plane cast on a cap of a sphere of
+// radius 60 mm, out to 80 degrees, so that the surface is sampled at cos(theta) of the density facing it.
+// One line of sight, the sweep's mean normal: every point beyond 65 degrees is grazing, none within.
+TEST(SweepSurface, AScanFromAScannerStandingStillKeepsOneLineOfSight) {
+  std::vector<Eigen::Vector3d> p;
+  const double radius = 60.0, rim = radius * std::sin(80.0 * M_PI / 180.0);
+  for (double x = -rim; x <= rim; x += 0.5)
+    for (double y = -rim; y <= rim; y += 0.5)
+      if (x * x + y * y <= rim * rim) p.emplace_back(x, y, std::sqrt(radius * radius - x * x - y * y));
+  PointCloud cap;
+  cap.positions.resize(Eigen::Index(p.size()), 3);
+  for (std::size_t i = 0; i < p.size(); ++i) cap.positions.row(Eigen::Index(i)) = p[i].transpose();
+  const SweepSurface s = PrepareSweep(cap, SweepSurfaceOptions{}, "cap");
+  EXPECT_FALSE(s.scanner_moved);
+  int wrong = 0, beyond = 0;
+  for (Eigen::Index i = 0; i < cap.size(); ++i) {
+    const double angle = std::acos(std::clamp(cap.positions(i, 2) / radius, -1.0, 1.0)) * 180.0 / M_PI;
+    if (angle > 66.0) ++beyond;
+    if ((angle > 66.0 && !s.grazing[std::size_t(i)]) || (angle < 64.0 && s.grazing[std::size_t(i)])) ++wrong;
+  }
+  EXPECT_GT(beyond, 1000);
+  EXPECT_EQ(wrong, 0);
 }
 
 TEST(SweepSurface, TooFewPointsIsBadInput) {
