@@ -2,6 +2,7 @@
 #pragma once
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstddef>
 #include <filesystem>
@@ -13,12 +14,14 @@ namespace pectus::testing_support {
 
 class ScratchDirTest : public ::testing::Test {
  protected:
-  /// The folder is <temp>/<prefix><test name>.
+  /// The folder is <temp>/<prefix><test name>_<process id>: two suites running at once (a Release and a
+  /// sanitizer build, or two checkouts) never share one.
   explicit ScratchDirTest(std::string prefix) : prefix_(std::move(prefix)) {}
 
   void SetUp() override {
     dir_ = std::filesystem::temp_directory_path() /
-           (prefix_ + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+           (prefix_ + ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
+            std::to_string(getpid()));
     std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_);
   }
