@@ -136,9 +136,10 @@ TEST(ImputeMissingVertices, ManyLargeHolesConvergeInsteadOfOvershooting) {
   o.local_scale_mm = 0.0;
   o.max_iterations = 60;
   const ImputationResult r = ImputeMissingVertices(start, seen, o);
-  // 36 modes and 39 others: the fills are poorly pinned (no better than a few mm), but they settle, and
-  // end nearer the truth than they started; sweeps that move every fill fully ran away to 14 m here.
-  EXPECT_LT(r.last_change_mm, 0.1) << r.message;
+  // 36 modes and 39 others: the fills are poorly pinned (no better than a few mm) and settle slowly (the
+  // last sweep's move 0.04 mm with GCC, 0.10 mm with clang), but they settle, and end nearer the truth
+  // than they started; sweeps that move every fill fully ran away to 14 m here (a last move of 27 m).
+  EXPECT_LT(r.last_change_mm, 0.5) << r.message;
   double worst = 0.0;
   for (int n = 0; n < N; ++n) worst = std::max(worst, LargestError(r.shapes, truth, n, seen));
   EXPECT_LT(worst, 5.0) << r.message;
