@@ -26,13 +26,18 @@ each subject's stage times (s) and the run's own stages. The model of a run on P
 --dataset: the report is instead that of `pectus surrogate build` (or `pectus plan --dataset`) run on one
 rank of one thread; its patients are the tasks:
 
-  T(P) = S + M(P) + A
-  M(P) the makespan of the patients' tasks (their measured times, "dataset.per_patient"), each handed in
-       table order to the first free rank;
-  S    what the run did besides the patients and the assembly (the plugin, the table, the generic
-       ribcage of rank 0 before its first patient...): the run's total minus the patients' times and A;
-  A    the assembly of the parts on rank 0 ("dataset.assemble_seconds").
-  The issue's line: T(P) within the slowest patient's time plus 10 % when P >= the patients.
+  T(P) = S + M(P) + A + R / P
+  M(P) the makespan of the patients' tasks, each handed in table order to the first free rank: a task's
+       own time ("dataset.per_patient": "seconds" less "setup_seconds"), and on each rank's first task the
+       process's setup G as well (the generic ribcage, built once per process: the largest
+       "setup_seconds" of the run);
+  A    the assembly of the parts on rank 0 ("dataset.assemble_seconds");
+  R    removing the parts once the dataset is made ("dataset.remove_parts_seconds"): each rank removes
+       the parts it made, at once;
+  S    what the run did besides (the plugin, the table, the folders): the run's total less the tasks, A
+       and R.
+  The issue's line: T(P) within the slowest patient's time plus 10 % when P >= the patients; both the
+  slowest task as the P ranks run it (its own time plus G) and its own time alone are shown.
 
 A cohort larger than the measured one draws its subjects' times from the measured ones (fixed seed).
 """
@@ -52,19 +57,33 @@ def makespan(times, ranks):
 def dataset(report, ranks):
     r = json.load(open(report))
     d = r["dataset"]
-    times = [p["seconds"] for p in d["per_patient"] if p.get("seconds") is not None]
+    rows = [p for p in d["per_patient"] if p.get("seconds") is not None]
+    setups = [p.get("setup_seconds", 0.0) for p in rows]
+    own = [p["seconds"] - g for p, g in zip(rows, setups)]
+    setup = max(setups)
     total = r["timings_s"]["total"]
     assemble = d["assemble_seconds"]
-    serial = max(0.0, total - sum(times) - assemble)
-    slowest = max(times)
-    print(f"measured: {len(times)} patients, {sum(times):.1f} s of tasks (mean {sum(times)/len(times):.2f} s, "
-          f"slowest {slowest:.2f} s), assembly {assemble:.2f} s, the rest of the run {serial:.2f} s, "
-          f"total {total:.1f} s")
-    t1 = serial + sum(times) + assemble
+    remove = d.get("remove_parts_seconds", 0.0)
+    serial = max(0.0, total - sum(p["seconds"] for p in rows) - assemble - remove)
+    slowest = max(own)
+    print(f"measured: {len(own)} patients, {sum(own):.1f} s of their own tasks (mean {sum(own)/len(own):.2f} s, "
+          f"slowest {slowest:.2f} s), setup per process {setup:.2f} s, assembly {assemble:.2f} s, removing "
+          f"the parts {remove:.2f} s, the rest of the run {serial:.2f} s, total {total:.1f} s")
+    t1 = serial + sum(own) + setup + assemble + remove
     for p in ranks:
-        tp = serial + makespan(times, p) + assemble
+        tp = serial + makespan_first(own, p, setup) + assemble + remove / p
         print(f"P={p:3d} T={tp:8.2f} s  speed-up {t1/tp:6.2f}  efficiency {100*t1/(p*tp):5.1f} %  "
-              f"T / slowest patient {tp/slowest:5.3f}")
+              f"T / (slowest + setup) {tp/(slowest + setup):5.3f}  T / slowest {tp/slowest:5.3f}")
+
+
+def makespan_first(times, ranks, setup):
+    """The makespan with `setup` added to each rank's first task."""
+    free = [(0.0, False)] * ranks
+    heapq.heapify(free)
+    for t in times:
+        at, started = heapq.heappop(free)
+        heapq.heappush(free, (at + t + (0.0 if started else setup), True))
+    return max(at for at, _ in free)
 
 
 def main():

@@ -42,7 +42,10 @@ void WriteDatasetOnFarm(Context* context, const Command& command, TaskFarmOption
          " (then: the same command with --gather)");
     return;
   }
-  if (!leader) return;
+  if (!leader) {  // the leader has the dataset: remove this process's parts with the others
+    planner::RemoveDatasetPartsOnFarm(run, result, true);
+    return;
+  }
   nlohmann::json patients = nlohmann::json::array(), failed = nlohmann::json::array();
   double seconds = 0.0;
   for (const planner::DatasetPatient& p : result.patients) {
@@ -53,6 +56,7 @@ void WriteDatasetOnFarm(Context* context, const Command& command, TaskFarmOption
     } else {
       row["seconds"] = nullptr;
     }
+    if (p.setup_seconds >= 0) row["setup_seconds"] = p.setup_seconds;  // its process's first task
     if (!p.ok) {
       row["error"] = p.error;
       failed.push_back(p.id);
@@ -78,7 +82,8 @@ void WriteDatasetOnFarm(Context* context, const Command& command, TaskFarmOption
   Info(what + ": " + std::to_string(s.patients) + " patients x " + std::to_string(s.load_cases) +
        " load cases = " + std::to_string(s.results) + " results in " + output.string() +
        (failed.empty() ? "" : " (" + std::to_string(failed.size()) + " failed, left out)"));
-  planner::RemoveDatasetParts(run.work);  // the dataset is staged: the parts are no longer needed
+  // The dataset is staged: the parts are no longer needed; each process removes its own.
+  context->report["dataset"]["remove_parts_seconds"] = planner::RemoveDatasetPartsOnFarm(run, result, true);
 }
 
 }  // namespace pectus::cli

@@ -28,7 +28,8 @@
  * plugin's own 1 kHz servo thread), their scores and records, and the thoracoscope's view.
  * Version 6 added the FE dataset one patient at a time, for a task farm (docs/cluster.md): one patient's
  * part file (write_dataset_part), in any order on any process, and the dataset assembled from the parts
- * (assemble_dataset), the same bytes as write_dataset's.
+ * (assemble_dataset), the same bytes as write_dataset's. Version 7: write_dataset_part's time leaves out
+ * the process's one-time generic ribcage, so that a farm can tell it from the patient's work.
  */
 #ifndef PECTUS_PLANNER_API_H_
 #define PECTUS_PLANNER_API_H_
@@ -41,7 +42,7 @@ extern "C" {
 #endif
 
 /** The interface version this header describes. Any change to a struct or function below bumps it. */
-#define PECTUS_PLANNER_INTERFACE_VERSION 6u
+#define PECTUS_PLANNER_INTERFACE_VERSION 7u
 /** The name of the one exported symbol (for dlsym). */
 #define PECTUS_PLANNER_ENTRY_POINT "pectus_planner_interface"
 
@@ -487,7 +488,9 @@ typedef struct PectusPlannerInterface {
    *  its 24 load cases, force to lift and, with `basis` (NULL: none), its exact response basis, written
    *  as a one-patient dataset at `part_path`, committed atomically (a temporary file renamed into place).
    *  Calls are independent: the parts of a table may be made in any order, in any process. `out` (may be
-   *  NULL): the part's figures (1 patient) and its wall time. */
+   *  NULL): the part's figures (1 patient) and its own wall time, without the generic ribcage of the
+   *  options, which a process builds once, in its first call (version 7; the host's time of the call less
+   *  this is that setup). */
   int32_t (*write_dataset_part)(const char* table_path, int64_t row, const char* part_path,
                                 const PectusPlannerOptions* options,
                                 const struct PectusPlannerBasisOptions* basis,

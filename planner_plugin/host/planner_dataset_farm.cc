@@ -1,6 +1,8 @@
 #include "planner_plugin/host/planner_dataset_farm.h"
 
+#include <algorithm>
 #include <chrono>
+#include <exception>
 #include <fstream>
 #include <mutex>
 #include <sstream>
@@ -34,6 +36,7 @@ class PartStore {
   fs::path Part(int i) const { return folder_ / (ids_[i] + ".h5"); }
   fs::path Failure(int i) const { return folder_ / (ids_[i] + ".failed"); }
   fs::path Seconds(int i) const { return folder_ / (ids_[i] + ".seconds"); }
+  fs::path Setup(int i) const { return folder_ / (ids_[i] + ".setup"); }
   bool Done(int i) const {
     std::error_code ec;
     return fs::exists(Part(i), ec) || fs::exists(Failure(i), ec);
@@ -53,6 +56,7 @@ class PartStore {
     p.ok = fs::exists(Part(i), ec);
     if (!p.ok) p.error = ReadText(Failure(i));
     if (fs::exists(Seconds(i), ec)) p.seconds = ReadExactText(Seconds(i).string());
+    if (fs::exists(Setup(i), ec)) p.setup_seconds = ReadExactText(Setup(i).string());
     return p;
   }
 
@@ -60,6 +64,30 @@ class PartStore {
   fs::path folder_;
   std::vector<std::string> ids_;
 };
+
+// The leader's part of BuildPlannerDatasetOnFarm: the patients' outcomes, and the dataset from the parts
+// of those that made it, in table order.
+void Assemble(const PlannerPlugin& plugin, const fs::path& table, const fs::path& output, const PartStore& parts,
+              int n, DatasetFarmResult* result) {
+  std::vector<std::string> paths;
+  for (int i = 0; i < n; ++i) {
+    result->patients.push_back(parts.Outcome(i));
+    if (result->patients.back().ok) paths.push_back(parts.Part(i).string());
+  }
+  if (paths.empty()) {
+    ThrowFailure("FE dataset: no patient of the table could be built (first: patient " +
+                     result->patients.front().id + ": " + result->patients.front().error + ")",
+                 table.string());
+  }
+  std::vector<const char*> c_paths;
+  for (const std::string& p : paths) c_paths.push_back(p.c_str());
+  PectusPlannerStatus status{};
+  ThrowIfFailed(plugin.api().assemble_dataset(c_paths.data(), static_cast<std::int64_t>(c_paths.size()),
+                                              output.c_str(), &result->summary, &status),
+                status);
+  result->assemble_seconds = result->summary.seconds;
+  result->written = true;
+}
 
 }  // namespace
 
@@ -98,6 +126,7 @@ DatasetFarmResult BuildPlannerDatasetOnFarm(const PlannerPlugin& plugin, const f
 
   // Each patient's part, in table order (their costs are alike): a failure is recorded, not thrown.
   std::mutex done_mutex;
+  std::vector<fs::path> made_here;
   runner.Run(missing, [&](int i) {
     const auto start = std::chrono::steady_clock::now();
     PectusPlannerDatasetSummary summary{};
@@ -105,39 +134,54 @@ DatasetFarmResult BuildPlannerDatasetOnFarm(const PlannerPlugin& plugin, const f
     const std::int32_t code = plugin.api().write_dataset_part(table.c_str(), i, parts.Part(i).c_str(),
                                                               &options, basis, &summary, &status);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    WriteFileAtomically(parts.Seconds(i), ExactText(seconds));  // after the part: lost if killed in between
-    if (code != PECTUS_PLANNER_OK) {
+    // After the part (lost if killed in between): the task's time, and what of it was not the part's own.
+    WriteFileAtomically(parts.Seconds(i), ExactText(seconds));
+    if (code == PECTUS_PLANNER_OK) {
+      WriteFileAtomically(parts.Setup(i), ExactText(std::max(0.0, seconds - summary.seconds)));
+    } else {
       WriteFileAtomically(parts.Failure(i), status.message[0] != '\0' ? status.message : "the plugin failed");
     }
-    if (done) {
-      const std::lock_guard<std::mutex> lock(done_mutex);
-      done(parts.Outcome(i));
+    const std::lock_guard<std::mutex> lock(done_mutex);
+    for (const fs::path& file : {parts.Part(i), parts.Failure(i), parts.Seconds(i), parts.Setup(i)}) {
+      made_here.push_back(file);
     }
+    if (done) done(parts.Outcome(i));
   });
   DatasetFarmResult result;
   result.built = static_cast<int>(missing.size());
-  if (farm.parts_only || !runner.IsLeader()) return result;
+  result.made_here = std::move(made_here);
+  if (farm.parts_only) return result;
 
-  // The dataset from the parts of the patients that made it, in table order.
-  std::vector<std::string> paths;
-  for (int i = 0; i < n; ++i) {
-    result.patients.push_back(parts.Outcome(i));
-    if (result.patients.back().ok) paths.push_back(parts.Part(i).string());
+  // The dataset from the parts of the patients that made it, in table order, on the leader; whether it
+  // was made, to every process (they wait for it to remove their parts: RemoveDatasetPartsOnFarm).
+  std::string why;
+  std::exception_ptr failed;
+  if (runner.IsLeader()) {
+    try {
+      Assemble(plugin, table, output, parts, n, &result);
+    } catch (const std::exception& e) {
+      failed = std::current_exception();
+      why = e.what();
+    }
   }
-  if (paths.empty()) {
-    ThrowFailure("FE dataset: no patient of the table could be built (first: patient " +
-                     result.patients.front().id + ": " + result.patients.front().error + ")",
-                 table.string());
+  if (!runner.BroadcastOutcome(failed == nullptr, &why)) {
+    if (failed) std::rethrow_exception(failed);
+    ThrowFailure("the leader could not assemble the dataset: " + why);
   }
-  std::vector<const char*> c_paths;
-  for (const std::string& p : paths) c_paths.push_back(p.c_str());
-  PectusPlannerStatus status{};
-  ThrowIfFailed(plugin.api().assemble_dataset(c_paths.data(), static_cast<std::int64_t>(c_paths.size()),
-                                              output.c_str(), &result.summary, &status),
-                status);
-  result.assemble_seconds = result.summary.seconds;
-  result.written = true;
   return result;
+}
+
+double RemoveDatasetPartsOnFarm(const DatasetFarm& farm, const DatasetFarmResult& result, bool remove) {
+  SerialTaskRunner serial;
+  TaskRunner& runner = farm.runner != nullptr ? *farm.runner : serial;
+  std::string why;
+  if (!runner.BroadcastOutcome(remove, &why)) return 0.0;
+  const auto start = std::chrono::steady_clock::now();
+  std::error_code ec;
+  for (const fs::path& file : result.made_here) fs::remove(file, ec);  // what is left, the leader removes
+  runner.Barrier();
+  if (runner.IsLeader()) RemoveDatasetParts(farm.work);
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 }  // namespace pectus::planner

@@ -39,7 +39,8 @@ void CheckPlannerInterface(const PectusPlannerInterface* api, const fs::path& pa
             (api->version < PECTUS_PLANNER_INTERFACE_VERSION
                  ? " (the plugin is older: it lacks the calls added since, such as the real-time "
                    "deform call of version 2, the emulator's evaluation of version 3, the basis table of "
-                   "version 4, the trainer of version 5 and the FE dataset by parts of version 6)"
+                   "version 4, the trainer of version 5, the FE dataset by parts of version 6 and the "
+                   "parts' own times of version 7)"
                  : " (the plugin is newer than this pectus)") +
             "; use a plugin built with this pectus (or the pectus it was built with)");
   }

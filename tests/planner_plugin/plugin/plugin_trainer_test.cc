@@ -236,9 +236,9 @@ TEST_F(PluginTrainer, ThePluginsServoThreadTicksTheHostsDeviceAndTheScopeLooksAt
   const Eigen::Index middle = scene_->tunnel.points.rows() / 2;
   const double under_sternum[3] = {scene_->tunnel.points(middle, 0), scene_->tunnel.points(middle, 1),
                                    scene_->tunnel.points(middle, 2)};
-  for (const double* target : {static_cast<const double*>(tunnel.exit_port_mm), under_sternum}) {
+  for (const double* aim : {static_cast<const double*>(tunnel.exit_port_mm), under_sternum}) {
     PectusPlannerScopeView v{};
-    ASSERT_EQ(api_->trainer_scope_view(trainer, nullptr, target, 30.0, &v, &status), PECTUS_PLANNER_OK)
+    ASSERT_EQ(api_->trainer_scope_view(trainer, nullptr, aim, 30.0, &v, &status), PECTUS_PLANNER_OK)
         << status.message;
     ScopePose pose;
     pose.orientation = Eigen::Quaterniond(v.orientation_wxyz[0], v.orientation_wxyz[1], v.orientation_wxyz[2],
@@ -248,7 +248,7 @@ TEST_F(PluginTrainer, ThePluginsServoThreadTicksTheHostsDeviceAndTheScopeLooksAt
     // The eye is the scope's tip, and the target falls on the image's centre (the pinhole model's).
     EXPECT_LT((pose.Tip() - Eigen::Vector3d(v.eye_mm[0], v.eye_mm[1], v.eye_mm[2])).norm(), 1e-9);
     Eigen::Vector2d pixel;
-    ASSERT_TRUE(camera.Project(pose, Eigen::Vector3d(target[0], target[1], target[2]), &pixel));
+    ASSERT_TRUE(camera.Project(pose, Eigen::Vector3d(aim[0], aim[1], aim[2]), &pixel));
     EXPECT_LT((pixel - camera.principal_point()).norm(), 1e-6) << pixel.transpose();
     // Up is square to the view and towards the head.
     const Eigen::Vector3d forward(v.forward[0], v.forward[1], v.forward[2]), up(v.up[0], v.up[1], v.up[2]);
