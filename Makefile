@@ -1,8 +1,9 @@
 # pectus: the two commands of the README, and a few more for developers.
 #   make demo   install dependencies, build, run the main job on bundled data, print where results are
-#   make test   install dependencies, build everything once with ASan + UBSan (the benchmarks compiled
-#               at -O0 without instrumentation and linked, not run), run every test under them, and
-#               every fuzzer's smoke run
+#   make test   install dependencies, build everything once with ASan + UBSan (UBSan's per-access checks
+#               in the bottom layer and the fuzzers only: cmake/PectusWarnings.cmake; the benchmarks
+#               compiled at -O0 without instrumentation and linked, not run), run every test under them,
+#               and every fuzzer's smoke run
 BUILD      ?= build
 SANBUILD   ?= build-sanitize
 JOBS       ?= $(shell nproc)

@@ -132,7 +132,7 @@ class AnnBaseline {
               const std::vector<double>& forces, const std::vector<std::array<int, 2>>& cases,
               const std::vector<Eigen::Index>& basis_patients, int k, int iterations, double rate,
               unsigned seed)
-      : set_(set), inputs_(inputs), forces_(forces) {
+      : set_(set), inputs_(inputs) {
     const Eigen::Index q = set.num_positions(), m = 3 * set.num_skin_vertices();
     // Components of the per-newton responses (patient x position rows): u = F (mean + V t).
     Eigen::MatrixXd g(static_cast<Eigen::Index>(basis_patients.size()) * q, m);
@@ -194,7 +194,6 @@ class AnnBaseline {
   }
   const EmulatorTrainingSet& set_;
   const Eigen::MatrixXd& inputs_;
-  const std::vector<double>& forces_;
   Eigen::VectorXd mean_;
   Eigen::MatrixXd modes_;
   double explained_ = 0.0;

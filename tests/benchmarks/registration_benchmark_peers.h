@@ -9,7 +9,9 @@
 // inline (SSE loads of 3-vectors): silenced for these PCL headers only, not for the benchmark's own code.
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Warray-bounds"
+#if defined(__GNUC__) && !defined(__clang__)  // clang has no -Wuse-after-free group
 #pragma GCC diagnostic ignored "-Wuse-after-free"
+#endif
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 #include <pcl/registration/icp.h>
