@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <set>
 
 #include "registration/landmark_alignment.h"
 #include "shape/core/error.h"
+#include "shape/core/task_runner.h"
 
 namespace pectus {
 namespace {
@@ -29,7 +31,7 @@ bool ProcrustesOptions::IsValid(std::string* why) const {
 }
 
 ProcrustesResult GeneralisedProcrustes(const std::vector<Points3>& X, const ProcrustesOptions& options,
-                                       const std::vector<std::string>& names) {
+                                       const std::vector<std::string>& names, TaskRunner* runner) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage("Procrustes: " + why);
   if (X.size() < 2) ThrowBadInput("Procrustes", "needs at least two shapes");
@@ -47,24 +49,34 @@ ProcrustesResult GeneralisedProcrustes(const std::vector<Points3>& X, const Proc
     return UmeyamaAlignment(X[i], target, no_weights, options.estimate_scale, options.min_spread_ratio,
                             NameOf(names, i));
   };
+  SerialTaskRunner serial;
+  TaskRunner& farm = runner != nullptr ? *runner : serial;
+  // The shapes in blocks fixed by their number: each block's part of a sum is computed on one process, and
+  // every process adds the parts in block order, so the bits do not depend on the processes.
+  const auto count = static_cast<std::int64_t>(X.size());
+  const std::int64_t per_block = BlockRows(count, 32);
+  const std::int64_t blocks = (count + per_block - 1) / per_block;
+  const Eigen::Index p = X[0].rows();
+  auto sum_of = [&](const std::function<Points3(std::size_t)>& term) {
+    std::vector<double> parts(static_cast<std::size_t>(blocks * 3 * p));
+    farm.ComputeBlocks(BlockOffsets(blocks, 1, 3 * p), [&](int b, double* out) {
+      Eigen::Map<Points3> part(out, p, 3);
+      part.setZero();
+      const std::int64_t end = std::min(count, (b + 1) * per_block);
+      for (std::int64_t i = b * per_block; i < end; ++i) part += term(static_cast<std::size_t>(i));
+    }, parts.data());
+    Points3 sum = Points3::Zero(p, 3);
+    for (std::int64_t b = 0; b < blocks; ++b) sum += Eigen::Map<const Points3>(parts.data() + b * 3 * p, p, 3);
+    return sum;
+  };
 
   ProcrustesResult result;
   result.T_mean_shape.resize(X.size());
-  Points3 mean = Points3::Zero(X[0].rows(), 3);
-  if (options.reference) {
-    mean = X[static_cast<std::size_t>(*options.reference)];
-  } else {
-    for (const Points3& x : X) mean += x;
-    mean /= n;
-  }
+  Points3 mean = options.reference ? X[static_cast<std::size_t>(*options.reference)]
+                                   : Points3(sum_of([&](std::size_t i) { return X[i]; }) / n);
   for (int it = 1; it <= options.max_iterations && !result.converged; ++it) {
     // Align every shape to the current mean, average.
-    Points3 next = Points3::Zero(mean.rows(), 3);
-    for (std::size_t i = 0; i < X.size(); ++i) {
-      result.T_mean_shape[i] = align(i, mean);
-      next += result.T_mean_shape[i].Apply(X[i]);
-    }
-    next /= n;
+    Points3 next = sum_of([&](std::size_t i) { return align(i, mean).Apply(X[i]); }) / n;
     // Fix the gauge: the mean in the reference's frame and, with scale, of the reference's size.
     if (options.reference) {
       next = UmeyamaAlignment(next, X[static_cast<std::size_t>(*options.reference)], no_weights,
@@ -76,10 +88,28 @@ ProcrustesResult GeneralisedProcrustes(const std::vector<Points3>& X, const Proc
     result.iterations = it;
     result.converged = moved < options.tolerance_mm;
   }
+  // Every shape aligned to the last mean: per shape its transform (scale, rotation, translation) and its
+  // squared distance to the mean.
+  constexpr int kWidth = 14;
+  std::vector<double> last(static_cast<std::size_t>(count * kWidth));
+  farm.ComputeBlocks(BlockOffsets(count, per_block, kWidth), [&](int b, double* out) {
+    const std::int64_t end = std::min(count, (b + 1) * per_block);
+    for (std::int64_t i = b * per_block; i < end; ++i, out += kWidth) {
+      const Similarity3 T = align(static_cast<std::size_t>(i), mean);
+      out[0] = T.scale;
+      Eigen::Map<Eigen::Matrix3d>(out + 1) = T.rotation;
+      Eigen::Map<Eigen::Vector3d>(out + 10) = T.translation;
+      out[13] = (T.Apply(X[static_cast<std::size_t>(i)]) - mean).squaredNorm();
+    }
+  }, last.data());
   double sum = 0.0;
-  for (std::size_t i = 0; i < X.size(); ++i) {
-    result.T_mean_shape[i] = align(i, mean);
-    sum += (result.T_mean_shape[i].Apply(X[i]) - mean).squaredNorm();
+  for (std::int64_t i = 0; i < count; ++i) {
+    const double* row = last.data() + i * kWidth;
+    Similarity3& T = result.T_mean_shape[static_cast<std::size_t>(i)];
+    T.scale = row[0];
+    T.rotation = Eigen::Map<const Eigen::Matrix3d>(row + 1);
+    T.translation = Eigen::Map<const Eigen::Vector3d>(row + 10);
+    sum += row[13];
   }
   result.rms_mm = std::sqrt(sum / (n * static_cast<double>(mean.rows())));
   result.mean_points = std::move(mean);

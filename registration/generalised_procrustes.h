@@ -11,6 +11,8 @@
 
 namespace pectus {
 
+class TaskRunner;
+
 /// Options of GeneralisedProcrustes.
 struct ProcrustesOptions {
   bool estimate_scale = false;  ///< similarity transforms (the mean keeps the reference's size)
@@ -42,13 +44,19 @@ struct ProcrustesResult {
 /// Generalised Procrustes analysis of corresponding point sets (Gower 1975; Dryden and Mardia 2016,
 /// Alg. 7.1): align every shape to the current mean (Umeyama), average, place the new mean on the
 /// reference shape (when there is one), repeat until the mean stops moving; finally align every shape to
-/// the last mean. Throws Error(kUsage) for invalid options and Error(kBadInput) naming the shape at fault
-/// (via `names`) for fewer than two shapes, shapes of different sizes or degenerate points.
+/// the last mean. Throws Error(kUsage) for invalid options, Error(kBadInput) naming the shape at fault (via
+/// `names`) for fewer than two shapes or shapes of different sizes, and Error(kFailure) naming it for
+/// degenerate points.
+/// The shapes' alignments run in blocks fixed by their number, shared among `runner`'s processes (MPI ranks:
+/// a collective, every process calls it alike and gets the whole result) or this process's threads
+/// (nullptr); each mean adds the blocks' sums in block order, so the result is the same bits on any number
+/// of processes.
 /// @param[in] shapes  two or more #points by 3 sets (mm), row k of each corresponding
 /// @param[in] names   a name per shape for messages (file names), or empty
 ProcrustesResult GeneralisedProcrustes(const std::vector<Points3>& shapes,
                                        const ProcrustesOptions& options = {},
-                                       const std::vector<std::string>& names = {});
+                                       const std::vector<std::string>& names = {},
+                                       TaskRunner* runner = nullptr);
 
 /// What GeneralisedProcrustes of landmark sets found: the same, and the mean as landmarks.
 struct LandmarkProcrustesResult : ProcrustesResult {

@@ -19,7 +19,19 @@ each subject's stage times (s) and the run's own stages. The model of a run on P
               A report with the model's steps ("model align", "model impute", "model pca": the model as a
               collective, docs/cluster.md) splits the model: the alignment and the eigen decomposition
               (--eig N:SECONDS, measured by `model_benchmark model N`, scaled as N^3) stay on rank 0; the
-              imputation (scaled as N) and the rest of the PCA (N^2) are shared: divided by P.
+              imputation (scaled as N) and the rest of the PCA (N^2) are shared: divided by P. A report
+              that also has "model read" (the grids read back in blocks shared among the ranks) has the
+              alignment ("model align"), the subjects' records ("model records") and that read shared as
+              well (scaled as N), with "remove results" (each rank removes a block of the subjects' work
+              files); "model shapes" (in reports of 2026-11-28 04:00-04:30 UTC only: every rank aligning
+              every grid alike, before that became blocks of vertices too) counts in S.
+              A report with "model files" (the model's own files, written by rank 0 in a thread of its own
+              while the third tasks run) counts them as one more task of that phase (scaled as N).
+              A report with "model eig" (the eigen decomposition on rank 0 in a thread of its own while every
+              rank runs the third and fourth tasks, rank 0 reading the subjects' summaries back between
+              them): rank 0's core decomposes first while the other ranks take the third tasks, then takes
+              them too; T(P) = A(P) + B(P) + C(P | rank 0 busy EIG) + R + D(P) + S(N) + SHARED / P, EIG
+              scaled as N^3, R ("read back") as N.
   efficiency  T(1) / (P T(P)).
 --farm-only leaves S out: how the farm itself scales.
 
@@ -47,8 +59,10 @@ import json
 import random
 
 
-def makespan(times, ranks):
-    free = [0.0] * ranks
+def makespan(times, ranks, busy=0.0):
+    """Tasks handed in order to the first free of `ranks` ranks; rank 0 busy for `busy` seconds first."""
+    free = [busy] + [0.0] * (ranks - 1)
+    heapq.heapify(free)
     for t in times:
         heapq.heapreplace(free, free[0] + t)
     return max(free)
@@ -74,6 +88,40 @@ def dataset(report, ranks):
         tp = serial + makespan_first(own, p, setup) + assemble + remove / p
         print(f"P={p:3d} T={tp:8.2f} s  speed-up {t1/tp:6.2f}  efficiency {100*t1/(p*tp):5.1f} %  "
               f"T / (slowest + setup) {tp/(slowest + setup):5.3f}  T / slowest {tp/slowest:5.3f}")
+
+
+def rank0_model(total, n0, eig_n, eig_s, farmed_outputs=True):
+    """(rank 0 alone, shared among the ranks) at N subjects, from the run-level stages `total` of a run of n0."""
+    linear = sum(total.get(k, 0.0) for k in ("read back", "model records", "mean measures", "write"))
+    if not farmed_outputs:  # a run from before the outputs were farmed: its distances ran on rank 0
+        linear += total.get("distance", 0.0)
+    if "model align" not in total:  # before the model was a collective: all of it on rank 0, as N^2
+        model = sum(total.get(k, 0.0) for k in ("model", "quality"))
+        return lambda n: (model * (n / n0) ** 2 + linear * (n / n0), 0.0, 0.0, 0.0)
+    align, impute, pca = (total.get(k, 0.0) for k in ("model align", "model impute", "model pca"))
+    linear_shared = 0.0
+    if "model read" in total:  # the grids read, aligned and recorded in blocks shared among the ranks
+        linear_shared = sum(total.get(k, 0.0) for k in ("model read", "model records", "remove results")) + align
+        linear -= total.get("model records", 0.0)
+        align = total.get("model shapes", 0.0)  # every rank did it alike: rank 0's time all the same
+    eig_here = eig_s * (n0 / eig_n) ** 3 if eig_s is not None else 0.0
+    overlap = "model eig" in total  # the decomposition beside the third and fourth tasks
+    if overlap:
+        # the run's own decomposition time, or --eig's scaled to this run's N
+        eig_s = total["model eig"] if eig_s is None else eig_s * (n0 / eig_n) ** 3
+        eig_n, eig_here = n0, total["model eig"]
+        linear -= total.get("read back", 0.0)  # in the window, between the third and fourth tasks
+        pca += eig_here  # "model pca" is the rest of the PCA, all of it shared
+
+    def parts(n):
+        eig = eig_s * (n / eig_n) ** 3 if eig_s is not None else 0.0
+        quality = total.get("quality", 0.0) * (n / n0) ** 2
+        serial = (align + linear) * (n / n0) + (0.0 if overlap else eig) + quality
+        shared = (impute + linear_shared) * (n / n0) + max(0.0, pca - eig_here) * (n / n0) ** 2
+        if not overlap:
+            return serial, shared, 0.0, 0.0
+        return serial, shared, eig, total.get("read back", 0.0) * (n / n0)
+    return parts
 
 
 def makespan_first(times, ranks, setup):
@@ -113,24 +161,20 @@ def main():
     n0 = len(subjects)
     total = r["timings_s"]
     phase_d = [total.get("pictures", 0.0) / n0] * n0
-    steps = "model align" in total  # the model as a collective
-    model = sum(total.get(k, 0.0) for k in ("model", "quality"))
-    align, impute, pca = (total.get(k, 0.0) for k in ("model align", "model impute", "model pca"))
     eig_n, eig_s = (int(a.eig.split(":")[0]), float(a.eig.split(":")[1])) if a.eig else (1, 0.0)
-    linear = sum(total.get(k, 0.0) for k in ("read back", "model records", "mean measures", "write"))
-    if not any(phase_c):  # a run from before the outputs were farmed: its distances ran on rank 0
-        linear += total.get("distance", 0.0)
-    n_serial = n0
+    source, n_src = total, n0
     if a.serial_from:
         other = json.load(open(a.serial_from))
-        n_serial = len(other["subjects"])
-        model = sum(other["timings_s"].get(k, 0.0) for k in ("model", "quality"))
-        linear = sum(other["timings_s"].get(k, 0.0) for k in ("read back", "model records", "mean measures", "write"))
-        print(f"rank 0 alone from {a.serial_from} ({n_serial} subjects): model {model:.2f} s, records and "
-              f"outputs {linear:.2f} s")
+        source, n_src = other["timings_s"], len(other["subjects"])
+    rank0 = rank0_model(source, n_src, eig_n, eig_s if a.eig else None, farmed_outputs=any(phase_c))
     print(f"measured: {n0} subjects; per subject surface {sum(phase_a)/n0:.3f} s, registration and grid "
           f"{sum(phase_b)/n0:.3f} s, distance and files {sum(phase_c)/n0:.3f} s, picture {phase_d[0]:.3f} s "
-          f"(mean); rank 0 alone: model {model:.2f} s, records and outputs {linear:.2f} s")
+          f"(mean)")
+    serial_src, shared_src, eig_src, inside_src = rank0(n_src)
+    print(f"rank 0 and shared parts from {a.serial_from or a.report} ({n_src} subjects): rank 0 alone "
+          f"{serial_src:.2f} s, shared among the ranks {shared_src:.2f} s"
+          + (f", beside the third and fourth tasks: the eigen decomposition {eig_src:.2f} s on rank 0, "
+             f"its reading the summaries back {inside_src:.2f} s" if eig_src else ""))
     rng = random.Random(a.seed)
     for n in a.subjects:
         if n == n0:
@@ -138,23 +182,18 @@ def main():
         else:
             draw = [rng.randrange(n0) for _ in range(n)]
             ta, tb, tc, td = ([t[i] for i in draw] for t in (phase_a, phase_b, phase_c, phase_d))
-        shared = 0.0
-        if a.farm_only:
-            serial = 0.0
-        elif steps and not a.serial_from:
-            # the model's collective steps: rank 0 aligns and decomposes, the rest is shared (see above)
-            eig = eig_s * (n / eig_n) ** 3 if a.eig else 0.0
-            eig_here = eig_s * (n0 / eig_n) ** 3 if a.eig else 0.0
-            quality = total.get("quality", 0.0) * (n / n0) ** 2
-            serial = (align + linear) * (n / n0) + eig + quality
-            shared = impute * (n / n0) + max(0.0, pca - eig_here) * (n / n0) ** 2
-        else:
-            serial = model * (n / n_serial) ** 2 + linear * (n / n_serial)
-        t1 = sum(ta) + sum(tb) + sum(tc) + sum(td) + serial + shared
+        serial, shared, eig, inside = (0.0, 0.0, 0.0, 0.0) if a.farm_only else rank0(n)
+        if not a.farm_only and source.get("model files"):  # written on rank 0 beside its third tasks
+            tc = list(tc) + [source["model files"] * n / n_src]
+        t1 = sum(ta) + sum(tb) + sum(tc) + sum(td) + serial + shared + eig + inside
         for p in a.ranks:
             for largest, name in ((True, "largest first"), (False, "subject order")):
-                tp = serial + shared / p + sum(makespan(sorted(t, reverse=True) if largest else t, p)
-                                               for t in (ta, tb, tc, td))
+                order = (lambda t: sorted(t, reverse=True)) if largest else (lambda t: t)
+                a_p, b_p, c_p, d_p = (makespan(order(t), p) for t in (ta, tb, tc, td))
+                # rank 0's core decomposes, then takes third tasks like the others; then rank 0 reads the
+                # summaries back, then every rank runs the fourth tasks
+                window = (makespan(order(tc), p, busy=eig) if eig else c_p) + inside + d_p
+                tp = serial + shared / p + a_p + b_p + window
                 print(f"N={n:5d} P={p:3d} {name:14s} T={tp:9.1f} s  speed-up {t1/tp:6.2f}  "
                       f"efficiency {100*t1/(p*tp):5.1f} %  (rank 0 alone {serial:.1f} s, shared {shared/p:.1f} s)")
 

@@ -1,6 +1,9 @@
 // pectus pipeline COHORT_DIR --out OUT_DIR: the main job. From a folder of raw subjects (sweeps +
 // landmarks, as `pectus synth cohort` writes them) to the average chest with its modes, model quality,
 // each subject's distance to the mean, and one HTML report (pictures and numbers).
+#include <future>
+#include <mutex>
+
 #include "apps/command.h"
 #include "apps/task_farm_options.h"
 #include "shape/core/atomic_file.h"
@@ -131,7 +134,32 @@ class PipelineCommand : public Command {
     Info("pipeline: " + std::to_string(subjects_.size()) + " subjects in " + cohort_ + " (" +
          run.runner->Describe() + ")");
 
-    // 1-8. Every stage, subject by subject (the library reports failures per subject).
+    // 1-8. Every stage, subject by subject (the library reports failures per subject). Once the leader has
+    // written the outputs, every process removes its share of the subjects' results (RemoveSubjectResultsOnFarm;
+    // it tells the others to keep them if anything failed, for --resume).
+    std::vector<std::string> names;
+    for (const CohortSubject& s : subjects_) names.push_back(s.name);
+    bool removing = false;
+    try {
+      Pipeline(context, run, leader, html);
+      if (farm_.share_only()) return;
+      removing = true;
+      const double seconds = RemoveSubjectResultsOnFarm(*run.runner, run.work, names, true);
+      if (leader) {
+        Timings removed;
+        removed.Add("remove results", seconds);
+        context->report.AddTimes(removed);
+      }
+    } catch (...) {
+      if (!farm_.share_only() && !removing) RemoveSubjectResultsOnFarm(*run.runner, run.work, names, false);
+      throw;
+    }
+  }
+
+ private:
+  // The run and, on the leader, its outputs (staged).
+  void Pipeline(Context* context, const PipelineRun& run, bool leader, const fs::path& html) {
+    const fs::path out(out_);
     PipelineResult result;
     {
       auto t = context->report.Stage("pipeline");
@@ -164,14 +192,21 @@ class PipelineCommand : public Command {
                    {"grid", grid_},
                    {"profile fit", fit_},
                    {"threads", context->threads}};
+    // The model's own files in a thread of their own beside the rest (the farm's ranks on this node are
+    // done: their cores are free), each staged under a lock.
     const fs::path html_target = out / "report.html";
-    WritePipelineOutputs(
-        result, report_,
-        {{"source", "pectus pipeline"}, {"cohort", cohort_}, {"reference", result.reference}}, out,
-        [&](const fs::path& target) {
-          return target == html_target ? html : StageOutput(context, *this, target);
-        },
-        run.work);
+    std::mutex staging;
+    auto stage = [&](const fs::path& target) {
+      const std::lock_guard<std::mutex> lock(staging);
+      return target == html_target ? html : StageOutput(context, *this, target);
+    };
+    std::future<std::vector<fs::path>> model_files = std::async(std::launch::async, [&] {
+      return WriteModelFiles(result.model ? &*result.model : nullptr, result.quality ? &*result.quality : nullptr,
+                             ModelInfo(result.reference), out, stage);
+    });
+    WritePipelineOutputs(result, report_, ModelInfo(result.reference), out, stage, run.work,
+                         /*model_files_written=*/true);
+    model_files.get();
     nlohmann::json summary = PipelineJson(result);
     for (const auto& [key, value] : summary.items()) context->report[key] = value;
     context->report["cohort"] = cohort_;
@@ -181,10 +216,13 @@ class PipelineCommand : public Command {
                                {"sternal", options_.resample.grid.sternal}};
     context->report["profile_fit"] = ToString(options_.resample.fit.kind);
     Info("pipeline: " + result.BriefReport() + "; report: " + (out / "report.html").string());
-    RemoveSubjectResults(run.work);  // every output is staged: the subjects' results are no longer needed
   }
 
- private:
+  // What model.h5 says of its source (its /pectus info).
+  nlohmann::json ModelInfo(const std::string& reference) const {
+    return {{"source", "pectus pipeline"}, {"cohort", cohort_}, {"reference", reference}};
+  }
+
   std::string cohort_, out_, sweep_pattern_, landmarks_name_, grid_, fit_;
   TaskFarmOptions farm_;
   bool no_quality_ = false, no_surfaces_ = false;

@@ -1,9 +1,11 @@
 #include "shape/model/shape_model.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <future>
 #include <vector>
 
 #include "shape/core/error.h"
@@ -114,7 +116,8 @@ void ShapeModel::Validate(const std::string& what) const {
 }
 
 ShapeModel BuildShapeModel(const Eigen::MatrixXd& shapes, const ShapeModelOptions& options,
-                           const std::string& what, TaskRunner* runner) {
+                           const std::string& what, TaskRunner* runner,
+                           const std::function<void()>& while_decomposing, double* decomposition_seconds) {
   std::string why;
   if (!options.IsValid(&why)) ThrowUsage(why);
   const Eigen::Index n = shapes.rows(), d = shapes.cols();
@@ -151,16 +154,32 @@ ShapeModel BuildShapeModel(const Eigen::MatrixXd& shapes, const ShapeModelOption
   Eigen::MatrixXd V(n, n);
   std::string failure;
   bool ok = true;
+  if (decomposition_seconds != nullptr) *decomposition_seconds = 0.0;
   if (farm.IsLeader()) {
     Eigen::VectorXd values;
     Eigen::MatrixXd vectors;
-    ok = SymmetricEigen(G, &values, &vectors);
+    auto decompose = [&] {
+      const auto start = std::chrono::steady_clock::now();
+      const bool done = SymmetricEigen(G, &values, &vectors);
+      if (decomposition_seconds != nullptr)
+        *decomposition_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      return done;
+    };
+    if (while_decomposing) {
+      std::future<bool> decomposed = std::async(std::launch::async, decompose);
+      while_decomposing();  // if it throws, the future waits for the decomposition
+      ok = decomposed.get();
+    } else {
+      ok = decompose();
+    }
     if (ok) {
       s2 = values.reverse();
       V = vectors.rowwise().reverse();
     } else {
       failure = "the eigen decomposition of the Gram matrix failed for " + what;
     }
+  } else if (while_decomposing) {
+    while_decomposing();
   }
   if (!farm.BroadcastOutcome(ok, &failure)) ThrowFailure(failure);
   farm.Broadcast(s2.data(), n * static_cast<std::int64_t>(sizeof(double)));
@@ -195,13 +214,13 @@ ShapeModel BuildShapeModel(const Eigen::MatrixXd& shapes, const ShapeModelOption
     factor[c] = sign / (s * norm);
   }
   farm.Broadcast(factor.data(), k * static_cast<std::int64_t>(sizeof(double)));
-  if (farm.IsLeader()) model.scores.resize(n, k);
+  model.scores.resize(n, k);  // on every process: each subject's own record takes its scores
   farm.ComputeBlocks(BlockOffsets(k, kModes, n), [&](int b, double* out) {
     const Eigen::Index first = b * kModes, modes = std::min(kModes, k - first);
     Eigen::Map<Eigen::MatrixXd> block(out, n, modes);
     block.noalias() = G * V.middleCols(first, modes);
     block *= factor.segment(first, modes).asDiagonal();
-  }, model.scores.data(), /*leader_only=*/true);
+  }, model.scores.data());
   return model;
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -67,9 +68,15 @@ bool SymmetricEigen(const Eigen::MatrixXd& G, Eigen::VectorXd* values, Eigen::Ma
 /// With a `runner` of several processes (MPI ranks: docs/cluster.md) it is a collective: every process
 /// calls it with the same shapes; the Gram matrix, the basis and the scores are computed in blocks shared
 /// among them, the eigen decomposition on the leader; the leader's model is the bytes of a run on one
-/// process, and the others' has no basis and no scores.
+/// process, and the others' has the mean, the variances and the scores but no basis.
+/// `while_decomposing`, if given, runs on every process while the leader decomposes the Gram matrix in a
+/// thread of its own (a collective of the caller's, e.g. the pipeline's per-subject tasks, which need only
+/// the mean: the decomposition's time then hides in theirs); `decomposition_seconds`, if given, gets the
+/// decomposition's wall time on the leader (0 elsewhere).
 ShapeModel BuildShapeModel(const Eigen::MatrixXd& shapes, const ShapeModelOptions& options = {},
-                           const std::string& what = "shapes", TaskRunner* runner = nullptr);
+                           const std::string& what = "shapes", TaskRunner* runner = nullptr,
+                           const std::function<void()>& while_decomposing = {},
+                           double* decomposition_seconds = nullptr);
 
 /// A shape expressed in the model.
 struct ShapeProjection {

@@ -104,156 +104,196 @@ void MoveSubject(const Similarity3& T, SubjectOutcome* s) {
   s->T_aligned_registered = T * s->T_aligned_registered;
 }
 
-// Which grid vertices of each good subject count as seen: within `gap_mm` of its scan data ("scan_gap_mm",
-// ResampleSubject); every vertex when imputation is off (gap_mm <= 0 or infinite).
-Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> SeenVertices(const std::vector<int>& good, double gap_mm,
-                                                                 const PipelineResult& result) {
-  const Eigen::Index m = result.subjects[good[0]].grid.mesh.vertices.size();
-  Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> seen(static_cast<Eigen::Index>(good.size()), m);
-  seen.setConstant(true);
-  if (!(gap_mm > 0.0) || !std::isfinite(gap_mm)) return seen;
-  for (std::size_t k = 0; k < good.size(); ++k) {
-    const auto& scalars = result.subjects[good[k]].grid.mesh.vertices.scalars;
-    const auto gap = scalars.find("scan_gap_mm");
-    if (gap == scalars.end()) continue;
-    for (Eigen::Index v = 0; v < m; ++v) seen(static_cast<Eigen::Index>(k), v) = gap->second[v] <= gap_mm;
-  }
-  return seen;
-}
-
-// Generalized Procrustes analysis, rigid, of the grids (no reference: the mean floats with the grids);
-// each subject moved with its grid. Only the vertices every subject saw are compared, when they are at
-// least half of the grid (a vertex filled in one subject would otherwise pull every pose).
-void AlignGridsToTheirMean(const std::vector<int>& good, int iterations,
-                           const Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic>& seen,
-                           PipelineResult* result) {
-  if (iterations <= 0) return;
-  std::vector<Eigen::Index> common;
-  for (Eigen::Index v = 0; v < seen.cols(); ++v)
-    if (seen.col(v).all()) common.push_back(v);
-  const bool subset = static_cast<Eigen::Index>(common.size()) < seen.cols() &&
-                      2 * static_cast<Eigen::Index>(common.size()) >= seen.cols();
-  std::vector<Points3> grids;
-  std::vector<std::string> names;
-  for (int i : good) {
-    const Points3& all = result->subjects[i].grid.mesh.vertices.positions;
-    grids.push_back(subset ? Points3(all(common, Eigen::all)) : all);
-    names.push_back(result->subjects[i].name + " grid");
-  }
-  ProcrustesOptions o;
-  o.reference.reset();
-  o.max_iterations = iterations - 1;  // each grid aligned `iterations` times
-  o.tolerance_mm = 0.0;
-  o.min_spread_ratio = 0.0;
-  const ProcrustesResult gpa = GeneralisedProcrustes(grids, o, names);
-  for (std::size_t k = 0; k < good.size(); ++k) MoveSubject(gpa.T_mean_shape[k], &result->subjects[good[k]]);
-}
-
-// The good subjects' grids as shapes, N by 3m.
-Eigen::MatrixXd ShapesOf(const std::vector<int>& good, const PipelineResult& result) {
-  Eigen::MatrixXd shapes(static_cast<Eigen::Index>(good.size()),
-                         result.subjects[good[0]].grid.shape_vector.size());
-  for (std::size_t k = 0; k < good.size(); ++k) {
-    shapes.row(static_cast<Eigen::Index>(k)) = result.subjects[good[k]].grid.shape_vector.transpose();
-  }
-  return shapes;
-}
-
-// Each subject's unseen grid vertices as filled from the other subjects (`filled`: ImputeMissingVertices);
-// the grids take the fills and mark them ("filled_from_cohort": 1).
-void TakeFills(const std::vector<int>& good, const Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic>& seen,
-               const ImputationResult& filled, PipelineResult* result) {
-  for (std::size_t k = 0; k < good.size(); ++k) {
-    SubjectOutcome& s = result->subjects[good[k]];
-    const auto row = static_cast<Eigen::Index>(k);
-    s.grid.shape_vector = filled.shapes.row(row).transpose();
-    s.grid.mesh.vertices.positions = FromShapeVector(s.grid.shape_vector);
-    Eigen::VectorXd mark(seen.cols());
-    for (Eigen::Index v = 0; v < seen.cols(); ++v) mark[v] = seen(row, v) ? 0.0 : 1.0;
-    const bool too_little = std::find(filled.too_little_seen.begin(), filled.too_little_seen.end(),
-                                      static_cast<int>(k)) != filled.too_little_seen.end();
-    if (too_little) mark.setZero();
-    s.grid.mesh.vertices.scalars["filled_from_cohort"] = mark;
-    s.vertices_filled_from_cohort = filled.filled_vertices[k];
-    s.largest_fill_change_mm = filled.largest_change_mm[k];
-  }
-  result->imputation_message = filled.message;
-}
-
-// 7. The model of the subjects in `result` that made it: their grids aligned to their mean (Procrustes),
-// unseen vertices filled, PCA, quality; their scores; the mean's measures (on the mean landmark ROI).
-// A collective (every process calls it): the leader, which holds the subjects' grids, aligns them and
-// hands their shapes to the others; all of them fill and model the shapes together (ImputeMissingVertices,
-// BuildShapeModel); the leader keeps the model. `ready`: the leader's subjects are read back (false: its
-// error is in `why` on every process, and nothing is modelled).
-void BuildModel(const PipelineOptions& options, TaskRunner& runner, bool ready, std::string* why,
-                PipelineResult* result) {
+// 7. The model of the subjects that made it: their grids aligned to their mean (Procrustes), unseen
+// vertices filled, PCA, quality; their scores; the mean's measures (on the mean landmark ROI). A collective
+// (every process calls it alike): the subjects, in blocks fixed by their number, are shared among the
+// processes at each step: their grids read (`light`: subject i as registered and resampled, without its
+// surface), aligned, filled, modelled, and each one's part of the model kept (`keep`: subject i aligned,
+// filled and scored, for the third task); the leader decomposes the Gram matrix and keeps the model. Sums
+// over subjects add the blocks' parts in block order, so the bytes do not depend on the processes. `light`
+// and `keep` are called from any process's threads.
+void BuildModel(const PipelineOptions& options, TaskRunner& runner, const std::vector<std::string>& names,
+                const std::function<SubjectOutcome(int)>& light,
+                const std::function<void(int, SubjectOutcome)>& keep, std::optional<TriangleMesh>* mean,
+                const std::function<void()>& while_decomposing, PipelineResult* result) {
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   const bool leader = runner.IsLeader();
-  std::vector<int> good;
-  Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> seen;
-  Eigen::MatrixXd shapes;
+  const auto n = static_cast<std::int64_t>(names.size());
+  const Eigen::Index m = options.resample.grid.num_vertices();
+  const std::int64_t per_block = BlockRows(n, 8);
+  const std::int64_t blocks = (n + per_block - 1) / per_block;
+  auto rows_of = [&](int b) { return std::make_pair(b * per_block, std::min(n, (b + 1) * per_block)); };
+  auto timed = [&](const char* step, Clock::time_point since) {
+    if (leader) result->timings_s.Add(step, Since(since));
+  };
+  const double gap_mm = options.impute_gap_mm;
+  const bool gaps = gap_mm > 0.0 && std::isfinite(gap_mm);
+
+  // Each subject's row: made it (1/0), its grid's shape vector (3m), its vertices seen (1/0: within
+  // impute_gap_mm of its scan data, "scan_gap_mm", ResampleSubject; every vertex without gaps).
   Clock::time_point start = Clock::now();
-  if (leader && ready) {
-    try {
-      for (int i = 0; i < static_cast<int>(result->subjects.size()); ++i) {
-        if (result->subjects[i].ok) good.push_back(i);
+  const Eigen::Index width = 1 + 4 * m;
+  RowMajor table(n, width);
+  runner.ComputeBlocks(BlockOffsets(n, per_block, width), [&](int b, double* out) {
+    const auto [first, end] = rows_of(b);
+    for (std::int64_t i = first; i < end; ++i) {
+      Eigen::Map<Eigen::RowVectorXd> row(out + (i - first) * width, width);
+      row.setZero();
+      const SubjectOutcome s = light(static_cast<int>(i));
+      if (!s.ok) continue;
+      const Points3& grid = s.grid.mesh.vertices.positions;
+      if (grid.rows() != m) {
+        ThrowBadInput(s.name, "has a grid of " + std::to_string(grid.rows()) + " vertices; the pipeline's has " +
+                                  std::to_string(m));
       }
-      result->succeeded = static_cast<int>(good.size());
-      if (good.size() >= 2) {
-        const bool impute = static_cast<int>(good.size()) >= options.impute_min_subjects;
-        seen = SeenVertices(good, impute ? options.impute_gap_mm : 0.0, *result);
-        AlignGridsToTheirMean(good, options.procrustes_iterations, seen, result);
-        shapes = ShapesOf(good, *result);
-        result->timings_s.Add("model align", Since(start));
+      row[0] = 1.0;
+      row.segment(1, 3 * m) = ToShapeVector(grid).transpose();
+      const auto gap = s.grid.mesh.vertices.scalars.find("scan_gap_mm");
+      for (Eigen::Index v = 0; v < m; ++v) {
+        row[1 + 3 * m + v] = !gaps || gap == s.grid.mesh.vertices.scalars.end() || gap->second[v] <= gap_mm;
       }
-    } catch (const std::exception& e) {
-      ready = false;
-      *why = e.what();
     }
+  }, table.data());
+  std::vector<int> good;
+  for (std::int64_t i = 0; i < n; ++i) {
+    if (table(i, 0) == 1.0) good.push_back(static_cast<int>(i));
   }
-  if (!runner.BroadcastOutcome(ready, why)) ThrowFailure(*why);
-  std::int64_t size[3] = {shapes.rows(), shapes.cols(), seen.cols()};
-  runner.Broadcast(size, sizeof size);
-  if (size[0] < 2) return;
-  if (!leader) {
-    shapes.resize(size[0], size[1]);
-    seen.resize(size[0], size[2]);
+  result->succeeded = static_cast<int>(good.size());
+  timed("model read", start);
+  if (good.size() < 2) return;
+  const auto count = static_cast<Eigen::Index>(good.size());
+  const bool impute = static_cast<int>(good.size()) >= options.impute_min_subjects;
+  Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> seen(count, m);
+  seen.setConstant(true);
+  if (impute) {
+    for (Eigen::Index k = 0; k < count; ++k) seen.row(k) = table.row(good[k]).tail(m).array() != 0.0;
   }
-  runner.Broadcast(shapes.data(), shapes.size() * static_cast<std::int64_t>(sizeof(double)));
-  runner.Broadcast(seen.data(), seen.size() * static_cast<std::int64_t>(sizeof(bool)));
-  Clock::time_point step = Clock::now();
+
+  // Generalized Procrustes analysis, rigid, of the grids (no reference: the mean floats with the grids).
+  // Only the vertices every subject saw are compared, when they are at least half of the grid (a vertex
+  // filled in one subject would otherwise pull every pose).
+  start = Clock::now();
+  std::vector<Similarity3> T(good.size());
+  if (options.procrustes_iterations > 0) {
+    std::vector<Eigen::Index> common;
+    for (Eigen::Index v = 0; v < m; ++v)
+      if (seen.col(v).all()) common.push_back(v);
+    const bool subset = static_cast<Eigen::Index>(common.size()) < m && 2 * static_cast<Eigen::Index>(common.size()) >= m;
+    std::vector<Points3> grids;
+    std::vector<std::string> grid_names;
+    for (int i : good) {
+      const Points3 all = FromShapeVector(table.row(i).segment(1, 3 * m).transpose());
+      grids.push_back(subset ? Points3(all(common, Eigen::all)) : all);
+      grid_names.push_back(names[i] + " grid");
+    }
+    ProcrustesOptions o;
+    o.reference.reset();
+    o.max_iterations = options.procrustes_iterations - 1;  // each grid aligned `iterations` times
+    o.tolerance_mm = 0.0;
+    o.min_spread_ratio = 0.0;
+    T = GeneralisedProcrustes(grids, o, grid_names, &runner).T_mean_shape;
+  }
+  timed("model align", start);
+  // The aligned shapes, N by 3m (column-major, as the model takes them), in blocks of vertices: a block is a
+  // run of columns.
+  start = Clock::now();
+  Eigen::MatrixXd shapes(count, 3 * m);
+  const Eigen::Index per_vertices = BlockRows(m, 64);
+  runner.ComputeBlocks(BlockOffsets(m, per_vertices, 3 * count), [&](int b, double* out) {
+    const Eigen::Index first = b * per_vertices, vertices = std::min(m, first + per_vertices) - first;
+    Eigen::Map<Eigen::MatrixXd> block(out, count, 3 * vertices);
+    for (Eigen::Index k = 0; k < count; ++k) {
+      const Eigen::Matrix3d A = T[k].scale * T[k].rotation;
+      const double* x = table.data() + good[k] * width + 1 + 3 * first;
+      for (Eigen::Index v = 0; v < vertices; ++v) {
+        const Eigen::Vector3d y = A * Eigen::Map<const Eigen::Vector3d>(x + 3 * v) + T[k].translation;
+        block(k, 3 * v) = y[0], block(k, 3 * v + 1) = y[1], block(k, 3 * v + 2) = y[2];
+      }
+    }
+  }, shapes.data());
+  table.resize(0, 0);
+  timed("model align", start);
+
+  start = Clock::now();
+  std::optional<ImputationResult> filled;
   if (!seen.all()) {
-    ImputationResult filled =
-        ImputeMissingVertices(shapes, seen, options.imputation, "resampled subjects", &runner);
-    if (leader) TakeFills(good, seen, filled, result);
-    shapes = std::move(filled.shapes);
+    filled = ImputeMissingVertices(shapes, seen, options.imputation, "resampled subjects", &runner);
+    shapes = std::move(filled->shapes);
+    if (leader) result->imputation_message = filled->message;
   }
-  if (leader) result->timings_s.Add("model impute", Since(step));
-  step = Clock::now();
-  ShapeModel model = BuildShapeModel(shapes, options.model, "resampled subjects", &runner);
+  timed("model impute", start);
+
+  // Each subject's part: aligned with its grid (MoveSubject), its fills marked ("filled_from_cohort": 1);
+  // each block's sums of its subjects' landmarks (by the first subject's labels) for the mean's.
+  start = Clock::now();
+  std::vector<int> k_of(static_cast<std::size_t>(n), -1);
+  for (std::size_t k = 0; k < good.size(); ++k) k_of[good[k]] = static_cast<int>(k);
+  std::vector<std::string> labels;
+  for (const Landmark& l : light(good[0]).landmarks.items) labels.push_back(l.label);
+  const auto L = static_cast<std::int64_t>(labels.size());
+  std::vector<double> landmark_sums(static_cast<std::size_t>(blocks * 4 * L));
+  runner.ComputeBlocks(BlockOffsets(blocks, 1, 4 * L), [&](int b, double* out) {
+    std::fill(out, out + 4 * L, 0.0);
+    const auto [first, end] = rows_of(b);
+    for (std::int64_t i = first; i < end; ++i) {
+      const int k = k_of[i];
+      if (k < 0) continue;
+      SubjectOutcome s = light(static_cast<int>(i));
+      MoveSubject(T[k], &s);
+      s.grid.shape_vector = shapes.row(k).transpose();  // aligned as the model has it, and filled
+      s.grid.mesh.vertices.positions = FromShapeVector(s.grid.shape_vector);
+      if (filled) {
+        Eigen::VectorXd mark = (!seen.row(k).array()).cast<double>().transpose();
+        if (std::find(filled->too_little_seen.begin(), filled->too_little_seen.end(), k) !=
+            filled->too_little_seen.end()) {
+          mark.setZero();
+        }
+        s.grid.mesh.vertices.scalars["filled_from_cohort"] = mark;
+        s.vertices_filled_from_cohort = filled->filled_vertices[k];
+        s.largest_fill_change_mm = filled->largest_change_mm[k];
+      }
+      for (std::int64_t j = 0; j < L; ++j) {
+        if (const Landmark* l = s.landmarks.Find(labels[j])) {
+          Eigen::Map<Eigen::Vector3d>(out + 4 * j) += l->position;
+          out[4 * j + 3] += 1.0;
+        }
+      }
+      keep(static_cast<int>(i), std::move(s));
+    }
+  }, landmark_sums.data());
+  timed("model records", start);
+
+  // The mean (as BuildShapeModel has it) for the subjects' third tasks, which run (while_decomposing) while
+  // the leader decomposes the Gram matrix; then the model, its scores on every process.
+  *mean = TriangleMesh();
+  (*mean)->vertices.positions = FromShapeVector(shapes.colwise().mean().transpose());
+  (*mean)->faces = GridFaces(options.resample.grid);
+  start = Clock::now();
+  double while_seconds = 0.0, eig_seconds = 0.0;
+  ShapeModel model = BuildShapeModel(shapes, options.model, "resampled subjects", &runner, [&] {
+    const Clock::time_point begin = Clock::now();
+    while_decomposing();
+    while_seconds = Since(begin);
+  }, &eig_seconds);
+  if (leader) {
+    result->timings_s.Add("model pca", Since(start) - std::max(while_seconds, eig_seconds));
+    result->timings_s.Add("model eig", eig_seconds);
+    for (std::size_t k = 0; k < good.size(); ++k) result->subjects[good[k]].scores = model.scores.row(k).transpose();
+  }
   if (!leader) return;
-  result->timings_s.Add("model pca", Since(step));
-  result->model.emplace(std::move(model));
-  for (int i : good) result->model->names.push_back(result->subjects[i].name);
-  result->model->faces = GridFaces(options.resample.grid);
-  for (std::size_t k = 0; k < good.size(); ++k) {
-    result->subjects[good[k]].scores = result->model->scores.row(static_cast<Eigen::Index>(k)).transpose();
-  }
-  result->timings_s.Add("model", Since(start));
+  for (int i : good) model.names.push_back(names[i]);
+  model.faces = GridFaces(options.resample.grid);
   if (options.quality && good.size() >= 3) {
     start = Clock::now();
     result->quality = EvaluateModelQuality(shapes, options.quality_options);
     result->timings_s.Add("quality", Since(start));
   }
   start = Clock::now();
-  LandmarkSet mean_landmarks = result->subjects[good[0]].landmarks;
-  for (Landmark& l : mean_landmarks.items) {
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    int count = 0;
-    for (int i : good) {
-      if (const Landmark* m = result->subjects[i].landmarks.Find(l.label)) sum += m->position, ++count;
-    }
-    l.position = sum / count;
+  LandmarkSet mean_landmarks;
+  for (std::int64_t j = 0; j < L; ++j) {
+    Eigen::Vector4d sum = Eigen::Vector4d::Zero();
+    for (std::int64_t b = 0; b < blocks; ++b) sum += Eigen::Map<const Eigen::Vector4d>(&landmark_sums[(b * L + j) * 4]);
+    mean_landmarks.items.push_back({labels[j], sum.head<3>() / sum[3], ""});
   }
   try {
     result->mean_measures = MeasureChest(model.ToMesh(model.mean),
@@ -261,21 +301,23 @@ void BuildModel(const PipelineOptions& options, TaskRunner& runner, bool ready, 
   } catch (const Error& e) {
     result->mean_measures.message = e.what();
   }
+  result->model.emplace(std::move(model));
   result->timings_s.Add("mean measures", Since(start));
 }
 
-// The mean shape as a mesh record in the work folder, for the processes that compute the distances to it.
-void WriteMeanRecord(const fs::path& work, const ShapeModel& model) {
-  SubjectOutcome mean;
-  mean.name = "mean shape";
-  mean.surface = model.ToMesh(model.mean);
-  internal::WriteSubjectRecord(work / "mean.rec", mean);
-}
-
-std::optional<TriangleMesh> ReadMeanRecord(const fs::path& work) {
-  std::error_code ec;
-  if (!fs::exists(work / "mean.rec", ec)) return std::nullopt;
-  return std::move(internal::ReadSubjectRecord(work / "mean.rec").surface);
+// A subject's outcome for the run's report and tables, without the arrays only its own files need: its
+// grid's vertices stay (the report tells a resampled subject by them) and its distances to the mean.
+SubjectOutcome Summary(const SubjectOutcome& full) {
+  SubjectOutcome s = full;
+  s.surface = TriangleMesh();
+  TriangleMesh& grid = s.grid.mesh;
+  grid.vertices.normals.resize(0, 3);
+  grid.vertices.colors.resize(0, 3);
+  grid.vertices.scalars.clear();
+  grid.faces.resize(0, 3);
+  s.grid.shape_vector.resize(0);
+  s.to_mean.closest.resize(0, 3);
+  return s;
 }
 
 // The subjects' results of one phase ("surface": stages 1-3; "registered": 4-6): in memory, or one record
@@ -403,11 +445,33 @@ fs::path SubjectFilesFolder(const fs::path& work, const std::string& name) { ret
 void RemoveSubjectResults(const fs::path& work) {
   std::error_code ec;
   for (const char* phase :
-       {"surface", "registered", "grids", "model", "outputs", "files", "mean.rec", "picture_scale"}) {
+       {"surface", "registered", "grids", "model", "outputs", "summary", "files", "mean.rec", "picture_scale"}) {
     fs::remove_all(work / phase, ec);
     if (ec) ThrowFailure("cannot remove the subjects' results: " + ec.message(), (work / phase).string());
   }
   if (fs::is_empty(work, ec)) fs::remove(work, ec);
+}
+
+double RemoveSubjectResultsOnFarm(TaskRunner& runner, const fs::path& work, const std::vector<std::string>& names,
+                                  bool remove) {
+  std::string why;
+  if (!runner.BroadcastOutcome(remove, &why) || work.empty()) return 0.0;
+  const Clock::time_point start = Clock::now();
+  const auto n = static_cast<std::int64_t>(names.size());
+  std::vector<double> done(static_cast<std::size_t>(n));
+  runner.ComputeBlocks(BlockOffsets(n, BlockRows(n, 8), 1), [&](int b, double* out) {
+    const std::int64_t first = b * BlockRows(n, 8), end = std::min(n, first + BlockRows(n, 8));
+    for (std::int64_t i = first; i < end; ++i) {
+      std::error_code ec;
+      for (const char* phase : {"surface", "registered", "grids", "model", "outputs", "summary"}) {
+        fs::remove(work / phase / (names[i] + ".rec"), ec);
+      }
+      fs::remove_all(SubjectFilesFolder(work, names[i]), ec);
+      out[i - first] = 1.0;
+    }
+  }, done.data());
+  if (runner.IsLeader()) RemoveSubjectResults(work);  // what is left: the phases' folders, the mean
+  return Since(start);
 }
 
 std::string PipelineResult::BriefReport() const {
@@ -539,68 +603,16 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
   });
   if (run.subjects_only) return result;
 
-  // 7. The model of the subjects that made it, on the leader, from their grids read back one by one in
-  // subject order (with a work folder, without their surfaces: they are not all held at once). Each
-  // subject's part of it (alignment, fills, scores) is committed for the third task, with the mean.
+  // 7-9. The model of the subjects that made it, on every process, from their grids (with a work folder,
+  // read back without their surfaces: they are not all held at once). Each subject's part of it (alignment,
+  // fills) is committed for its third task (8: its distance to the mean, its files), which runs on the farm
+  // while the leader decomposes the model's Gram matrix, and so does the fourth (9: its picture on the
+  // colour scale of all of them). If the model stops short of that, they run after it.
   SubjectStore modelled(run.work, "model", inputs), finished(run.work, "outputs", inputs);
+  SubjectStore summaries(run.work, "summary", inputs);
   std::exception_ptr model_error;
-  {
-    // The leader reads the grids back while the other processes wait: it takes their cores meanwhile (the
-    // bytes do not depend on it); then they model together (BuildModel).
-    const int threads = omp_get_max_threads();
-    bool ready = true;
-    std::string not_ready;
-    if (runner.IsLeader()) {
-      omp_set_num_threads(runner.SerialThreads());
-      try {
-        const Clock::time_point start = Clock::now();
-        result.subjects.reserve(inputs.size());
-        for (int i = 0; i < n; ++i) result.subjects.push_back(in_memory ? registered.Take(i) : grids.Get(i));
-        result.timings_s.Add("read back", Since(start));
-      } catch (const std::exception& e) {
-        ready = false;
-        not_ready = e.what();
-      }
-      omp_set_num_threads(threads);
-    }
-    try {
-      BuildModel(options, runner, ready, &not_ready, &result);
-    } catch (...) {
-      if (runner.IsLeader()) model_error = std::current_exception();  // the leader reports it, below
-    }
-  }
-  if (runner.IsLeader() && !model_error) {
-    const int threads = omp_get_max_threads();
-    omp_set_num_threads(runner.SerialThreads());
-    try {
-      Clock::time_point start = Clock::now();
-      if (!in_memory) {
-        std::error_code ec;
-        fs::remove_all(run.work / "model", ec);
-        for (int i = 0; i < n; ++i) {
-          if (result.subjects[i].ok && result.model) modelled.Put(i, result.subjects[i]);
-        }
-        if (result.model) WriteMeanRecord(run.work, *result.model);
-      }
-      result.timings_s.Add("model records", Since(start));
-    } catch (...) {
-      model_error = std::current_exception();
-    }
-    omp_set_num_threads(threads);
-  }
-  // The mean, once per process, for the third task (read from the work folder on other processes).
-  std::once_flag mean_once;
-  std::optional<TriangleMesh> mean;
-  auto the_mean = [&]() -> const std::optional<TriangleMesh>& {
-    std::call_once(mean_once, [&] {
-      if (runner.IsLeader() && result.model) {
-        mean = result.model->ToMesh(result.model->mean);
-      } else if (!in_memory) {
-        mean = ReadMeanRecord(run.work);
-      }
-    });
-    return mean;
-  };
+  std::optional<TriangleMesh> mean;  // the mean shape, on every process (BuildModel)
+  const std::vector<int> no_tasks;
 
   // 8. Each subject's distance to the mean, then its output files (subjects in parallel, on the farm).
   auto finish = [&](int i) {
@@ -616,10 +628,9 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
         s = std::move(m);
       }
     }
-    if (s.ok && the_mean()) {
+    if (s.ok && mean) {
       const Clock::time_point start = Clock::now();
-      s.to_mean =
-          ComputeDistanceMap(s.grid.mesh.vertices.positions, *the_mean(), options.distance, "mean shape");
+      s.to_mean = ComputeDistanceMap(s.grid.mesh.vertices.positions, *mean, options.distance, "mean shape");
       s.timings_s.Add("distance", Since(start));
     }
     if (run.subject_files) {
@@ -633,42 +644,73 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
       result.subjects[i] = std::move(s);
     } else {
       s.surface = TriangleMesh();
-      finished.Put(i, s);  // commits the subject's third task
+      summaries.Put(i, Summary(s));  // for the leader's report, first: `finished` commits the task
+      finished.Put(i, s);            // commits the subject's third task
     }
   };
-  const std::vector<int> no_tasks;
-  runner.Run(model_error ? no_tasks : finished.Missing(largest_first), finish);
-  if (runner.IsLeader() && !in_memory && !model_error) {
-    const Clock::time_point start = Clock::now();
-    for (int i = 0; i < n; ++i) result.subjects[i] = finished.Get(i);
-    result.timings_s.Add("read back", Since(start));
-  }
-
-  // 9. The files that need every subject's distances (the report's maps on one colour scale), on the farm.
-  if (run.subject_pictures) {
-    const fs::path scale_path = run.work / "picture_scale";
-    if (runner.IsLeader() && !model_error) {
-      try {
-        const double scale = run.picture_scale ? run.picture_scale(result.subjects) : 0.0;
-        WriteFileAtomically(scale_path, ExactText(scale));
-      } catch (...) {
-        model_error = std::current_exception();  // thrown below, once the other processes are let go
-      }
-    }
-    std::once_flag scale_once;
-    double scale = 0.0;
-    std::mutex seconds_mutex;
-    double seconds = 0.0;  // this process's part
-    runner.Run(model_error ? no_tasks : largest_first, [&](int i) {
+  // 8-9 on every process (a collective): the third tasks, the leader's summaries of every subject, the
+  // fourth tasks.
+  bool subjects_done = false;
+  auto finish_subjects = [&] {
+    runner.Run(model_error ? no_tasks : finished.Missing(largest_first), finish);
+    if (runner.IsLeader() && !in_memory && !model_error) {
       const Clock::time_point start = Clock::now();
-      std::call_once(scale_once, [&] { scale = ReadExactText(scale_path.string()); });
-      const SubjectOutcome s = in_memory ? result.subjects[i] : finished.Get(i);
-      run.subject_pictures(s, scale, SubjectFilesFolder(run.work, s.name));
-      const std::lock_guard<std::mutex> lock(seconds_mutex);
-      seconds += Since(start);
-    });
-    result.timings_s.Add("pictures", seconds);
+      for (int i = 0; i < n; ++i) result.subjects[i] = summaries.Get(i);
+      result.timings_s.Add("read back", Since(start));
+    }
+    // 9. The files that need every subject's distances (the report's maps on one colour scale).
+    if (run.subject_pictures) {
+      const fs::path scale_path = run.work / "picture_scale";
+      if (runner.IsLeader() && !model_error) {
+        try {
+          const double scale = run.picture_scale ? run.picture_scale(result.subjects) : 0.0;
+          WriteFileAtomically(scale_path, ExactText(scale));
+        } catch (...) {
+          model_error = std::current_exception();  // thrown below, once the other processes are let go
+        }
+      }
+      std::once_flag scale_once;
+      double scale = 0.0;
+      std::mutex seconds_mutex;
+      double seconds = 0.0;  // this process's part
+      runner.Run(model_error ? no_tasks : largest_first, [&](int i) {
+        const Clock::time_point start = Clock::now();
+        std::call_once(scale_once, [&] { scale = ReadExactText(scale_path.string()); });
+        const SubjectOutcome s = in_memory ? result.subjects[i] : finished.Get(i);
+        run.subject_pictures(s, scale, SubjectFilesFolder(run.work, s.name));
+        const std::lock_guard<std::mutex> lock(seconds_mutex);
+        seconds += Since(start);
+      });
+      result.timings_s.Add("pictures", seconds);
+    }
+    subjects_done = true;
+  };
+  {
+    const Clock::time_point start = Clock::now();
+    std::vector<std::string> names;
+    for (const CohortSubject& s : inputs) names.push_back(s.name);
+    std::function<SubjectOutcome(int)> light;
+    std::function<void(int, SubjectOutcome)> keep;
+    if (in_memory) {
+      result.subjects.reserve(inputs.size());
+      for (int i = 0; i < n; ++i) result.subjects.push_back(registered.Take(i));
+      light = [&](int i) { return result.subjects[i]; };
+      keep = [&](int i, SubjectOutcome s) { result.subjects[i] = std::move(s); };
+    } else {
+      std::error_code ec;
+      if (runner.IsLeader()) fs::remove_all(run.work / "model", ec);  // before any process keeps a subject
+      light = [&](int i) { return grids.Get(i); };
+      keep = [&](int i, SubjectOutcome s) { modelled.Put(i, std::move(s)); };
+      if (runner.IsLeader()) result.subjects.resize(inputs.size());
+    }
+    try {
+      BuildModel(options, runner, names, light, keep, &mean, finish_subjects, &result);
+    } catch (...) {
+      if (runner.IsLeader()) model_error = std::current_exception();  // the leader reports it, below
+    }
+    if (runner.IsLeader()) result.timings_s.Add("model", Since(start));
   }
+  if (!subjects_done) finish_subjects();
   if (model_error) std::rethrow_exception(model_error);
   if (!runner.IsLeader()) return result;
   Timings subjects;

@@ -231,6 +231,13 @@ std::filesystem::path SubjectFilesFolder(const std::filesystem::path& work, cons
 /// itself if that leaves it empty. Nothing else in `work` is touched.
 void RemoveSubjectResults(const std::filesystem::path& work);
 
+/// RemoveSubjectResults shared among the runner's processes (a collective, every process calls it with the
+/// subjects' names in the run's order): each removes the files of a block of subjects, the leader then the
+/// rest. `remove` is the leader's word for every process (false: everything is kept, e.g. for --resume
+/// after a failure). Returns the seconds it took on this process (0 when nothing was removed).
+double RemoveSubjectResultsOnFarm(TaskRunner& runner, const std::filesystem::path& work,
+                                  const std::vector<std::string>& names, bool remove);
+
 /// Runs the pipeline. Throws Error(kUsage) for invalid options or an unknown reference name, and
 /// Error(kFailure) if no subject reconstructs (nothing to register to); a failing subject never throws.
 /// Only the runner's leader returns the whole result; other processes (and `subjects_only`) return the

@@ -29,18 +29,16 @@ void WriteSubjectFiles(const SubjectOutcome& s, const std::function<fs::path(con
   }
 }
 
-std::vector<fs::path> WritePipelineOutputs(const PipelineResult& result, const PipelineReportOptions& report,
-                                           const nlohmann::json& model_info, const fs::path& folder,
-                                           const std::function<fs::path(const fs::path&)>& stage,
-                                           const fs::path& work) {
+std::vector<fs::path> WriteModelFiles(const ShapeModel* model, const ModelQualityCurves* quality,
+                                      const nlohmann::json& model_info, const fs::path& folder,
+                                      const std::function<fs::path(const fs::path&)>& stage) {
   std::vector<fs::path> written;
   auto target = [&](const fs::path& name) {
     written.push_back(folder / name);
     return stage(folder / name);
   };
-  // The model and its tables.
-  if (result.model) {
-    const ShapeModel& m = *result.model;
+  if (model) {
+    const ShapeModel& m = *model;
     WriteStatismoModel(target("model.h5"), m, model_info);
     WriteMesh(target("mean.ply"), m.ToMesh(m.mean));
     std::vector<std::string> header{"subject"};
@@ -53,8 +51,8 @@ std::vector<fs::path> WritePipelineOutputs(const PipelineResult& result, const P
     eigen.col(3) = m.CumulativeFraction();
     WriteCsv(target("eigen.csv"), {"mode", "eigenvalue_mm2", "explained", "cumulative"}, eigen);
   }
-  if (result.quality) {
-    const ModelQualityCurves& q = *result.quality;
+  if (quality) {
+    const ModelQualityCurves& q = *quality;
     Eigen::MatrixXd table(q.modes.size(), 7);
     table << q.modes.cast<double>(), q.compactness, q.compactness_sd, q.generalization_mm,
         q.generalization_sd, q.specificity_mm, q.specificity_sd;
@@ -62,6 +60,23 @@ std::vector<fs::path> WritePipelineOutputs(const PipelineResult& result, const P
              {"modes", "compactness_mm2", "compactness_sd_mm2", "generalization_mm", "generalization_sd_mm",
               "specificity_mm", "specificity_sd_mm"},
              table);
+  }
+  return written;
+}
+
+std::vector<fs::path> WritePipelineOutputs(const PipelineResult& result, const PipelineReportOptions& report,
+                                           const nlohmann::json& model_info, const fs::path& folder,
+                                           const std::function<fs::path(const fs::path&)>& stage,
+                                           const fs::path& work, bool model_files_written) {
+  std::vector<fs::path> written;
+  auto target = [&](const fs::path& name) {
+    written.push_back(folder / name);
+    return stage(folder / name);
+  };
+  // The model and its tables.
+  if (!model_files_written) {
+    written = WriteModelFiles(result.model ? &*result.model : nullptr, result.quality ? &*result.quality : nullptr,
+                              model_info, folder, stage);
   }
   // Each subject's meshes and landmarks (and its picture in the report): made on the farm, or here.
   for (const SubjectOutcome& s : result.subjects) {

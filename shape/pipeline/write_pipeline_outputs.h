@@ -23,11 +23,21 @@ namespace pectus {
 /// With `work` (PipelineRun::work of a run whose subject_files were WriteSubjectFiles and subject_pictures
 /// SubjectDistancePicture), each subject's files were made on the farm: they are moved from
 /// SubjectFilesFolder(work, NAME) rather than written from `result` (whose subjects have no surface then).
+/// `model_files_written`: the caller writes the model's files itself (WriteModelFiles, e.g. in a thread
+/// beside this one: `stage` must then be safe to call from both).
 std::vector<std::filesystem::path> WritePipelineOutputs(
     const PipelineResult& result, const PipelineReportOptions& report, const nlohmann::json& model_info,
     const std::filesystem::path& folder,
     const std::function<std::filesystem::path(const std::filesystem::path&)>& stage,
-    const std::filesystem::path& work = {});
+    const std::filesystem::path& work = {}, bool model_files_written = false);
+
+/// The files of WritePipelineOutputs that need only the model and its quality curves (either may be null):
+/// model.h5, mean.ply, scores.csv, eigen.csv, quality.csv, each through `stage` as there. Returns the target
+/// paths written.
+std::vector<std::filesystem::path> WriteModelFiles(
+    const ShapeModel* model, const ModelQualityCurves* quality, const nlohmann::json& model_info,
+    const std::filesystem::path& folder,
+    const std::function<std::filesystem::path(const std::filesystem::path&)>& stage);
 
 /// One subject's files: under subjects/NAME/, surface.ply (its registered surface, if kept and made) and,
 /// if it made it, grid.ply, landmarks.mrk.json and distance_to_mean.ply (coloured, scalar distance_mm).
