@@ -27,11 +27,11 @@ each subject's stage times (s) and the run's own stages. The model of a run on P
               every grid alike, before that became blocks of vertices too) counts in S.
               A report with "model files" (the model's own files, written by rank 0 in a thread of its own
               while the third tasks run) counts them as one more task of that phase (scaled as N).
-              A report with "model eig" (the eigen decomposition on rank 0 in a thread of its own while every
-              rank runs the third and fourth tasks, rank 0 reading the subjects' summaries back between
-              them): rank 0's core decomposes first while the other ranks take the third tasks, then takes
-              them too; T(P) = A(P) + B(P) + C(P | rank 0 busy EIG) + R + D(P) + S(N) + SHARED / P, EIG
-              scaled as N^3, R ("read back") as N.
+              A report with "model eig" (the eigen decomposition on rank 0 in a thread of its own while the
+              ranks run the third and fourth tasks, and rank 0 reads the subjects' summaries back beside the
+              fourth): rank 0's core decomposes and reads while the other P - 1 ranks run both phases,
+              T(P) = A(P) + B(P) + max(EIG + R, C(P - 1) + D(P - 1)) + S(N) + SHARED / P (one rank: EIG +
+              C(1) + R + D(1)), EIG scaled as N^3, R ("read back") as N.
   efficiency  T(1) / (P T(P)).
 --farm-only leaves S out: how the farm itself scales.
 
@@ -190,9 +190,12 @@ def main():
             for largest, name in ((True, "largest first"), (False, "subject order")):
                 order = (lambda t: sorted(t, reverse=True)) if largest else (lambda t: t)
                 a_p, b_p, c_p, d_p = (makespan(order(t), p) for t in (ta, tb, tc, td))
-                # rank 0's core decomposes, then takes third tasks like the others; then rank 0 reads the
-                # summaries back, then every rank runs the fourth tasks
-                window = (makespan(order(tc), p, busy=eig) if eig else c_p) + inside + d_p
+                if eig and p > 1:
+                    # rank 0's core decomposes and reads the summaries back while the other ranks run the
+                    # third tasks, then (the colour scale read in shared blocks) the fourth
+                    window = max(eig + inside, makespan(order(tc), p - 1) + makespan(order(td), p - 1))
+                else:
+                    window = eig + c_p + inside + d_p
                 tp = serial + shared / p + a_p + b_p + window
                 print(f"N={n:5d} P={p:3d} {name:14s} T={tp:9.1f} s  speed-up {t1/tp:6.2f}  "
                       f"efficiency {100*t1/(p*tp):5.1f} %  (rank 0 alone {serial:.1f} s, shared {shared/p:.1f} s)")

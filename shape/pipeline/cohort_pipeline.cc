@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <exception>
 #include <fstream>
+#include <future>
 #include <mutex>
 #include <sstream>
 
@@ -648,34 +649,42 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
       finished.Put(i, s);            // commits the subject's third task
     }
   };
-  // 8-9 on every process (a collective): the third tasks, the leader's summaries of every subject, the
-  // fourth tasks.
+  // 8-9 on every process (a collective): the third tasks; the colour scale, from blocks of subjects shared
+  // among the processes; the fourth tasks, beside which the leader reads every subject's summary back.
   bool subjects_done = false;
   auto finish_subjects = [&] {
     runner.Run(model_error ? no_tasks : finished.Missing(largest_first), finish);
+    std::future<double> read_back;  // its seconds; a failure is the leader's, thrown once the others are let go
+    std::exception_ptr read_back_error;
     if (runner.IsLeader() && !in_memory && !model_error) {
-      const Clock::time_point start = Clock::now();
-      for (int i = 0; i < n; ++i) result.subjects[i] = summaries.Get(i);
-      result.timings_s.Add("read back", Since(start));
+      read_back = std::async(std::launch::async, [&] {
+        const Clock::time_point start = Clock::now();
+        try {
+          for (int i = 0; i < n; ++i) result.subjects[i] = summaries.Get(i);
+        } catch (...) {
+          read_back_error = std::current_exception();
+        }
+        return Since(start);
+      });
     }
     // 9. The files that need every subject's distances (the report's maps on one colour scale).
     if (run.subject_pictures) {
-      const fs::path scale_path = run.work / "picture_scale";
-      if (runner.IsLeader() && !model_error) {
-        try {
-          const double scale = run.picture_scale ? run.picture_scale(result.subjects) : 0.0;
-          WriteFileAtomically(scale_path, ExactText(scale));
-        } catch (...) {
-          model_error = std::current_exception();  // thrown below, once the other processes are let go
-        }
-      }
-      std::once_flag scale_once;
       double scale = 0.0;
+      if (run.picture_scale) {
+        const std::int64_t per_block = BlockRows(n, 8);
+        std::vector<double> scales(static_cast<std::size_t>((n + per_block - 1) / per_block));
+        runner.ComputeBlocks(BlockOffsets(static_cast<std::int64_t>(scales.size()), 1, 1), [&](int b, double* out) {
+          std::vector<SubjectOutcome> block;
+          for (std::int64_t i = b * per_block; i < std::min<std::int64_t>(n, (b + 1) * per_block); ++i)
+            block.push_back(in_memory ? result.subjects[i] : summaries.Get(static_cast<int>(i)));
+          *out = run.picture_scale(block);
+        }, scales.data());
+        scale = *std::max_element(scales.begin(), scales.end());
+      }
       std::mutex seconds_mutex;
       double seconds = 0.0;  // this process's part
       runner.Run(model_error ? no_tasks : largest_first, [&](int i) {
         const Clock::time_point start = Clock::now();
-        std::call_once(scale_once, [&] { scale = ReadExactText(scale_path.string()); });
         const SubjectOutcome s = in_memory ? result.subjects[i] : finished.Get(i);
         run.subject_pictures(s, scale, SubjectFilesFolder(run.work, s.name));
         const std::lock_guard<std::mutex> lock(seconds_mutex);
@@ -683,6 +692,8 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
       });
       result.timings_s.Add("pictures", seconds);
     }
+    if (read_back.valid()) result.timings_s.Add("read back", read_back.get());
+    if (read_back_error && !model_error) model_error = read_back_error;
     subjects_done = true;
   };
   {

@@ -215,8 +215,10 @@ struct PipelineRun {
   /// `work/files/NAME/` for the leader to move into the outputs (SubjectFilesFolder). Needs `work`;
   /// empty: none.
   std::function<void(const SubjectOutcome& subject, const std::filesystem::path& folder)> subject_files;
-  /// On the leader, once every subject's distances are known: one number every fourth task gets (the
-  /// colour scale of the report's distance maps), from the subjects' outcomes without their surfaces.
+  /// Once every subject's distances are known: one number every fourth task gets (the colour scale of the
+  /// report's distance maps), from the subjects' outcomes without their surfaces. It must be the largest
+  /// of the numbers it gives for parts of the cohort (a maximum over subjects, as DistanceMapRange): it is
+  /// called on blocks of subjects, shared among the processes, and the blocks' largest is taken.
   std::function<double(const std::vector<SubjectOutcome>& subjects)> picture_scale;
   /// The fourth task: one subject's files that need `scale` (its picture on the common scale), written
   /// into `folder` as subject_files does. Empty: none.
