@@ -189,11 +189,12 @@ using PipelineObserver = std::function<void(const SubjectOutcome& subject, const
 
 /// Where the subjects' stages run and where their results are kept (docs/cluster.md). Each subject goes
 /// through two tasks, its surface (stages 1-3) and its registration and grid (5-6, after the reference is
-/// known), each committing the subject's result as one file when it finishes; the model is then built on
-/// the leader from those files read back in subject order, without the subjects' surfaces (with a work
-/// folder), and each subject goes through a third task: its distances to the mean and its output files
-/// (`subject_files`), then, once every subject's distances are known, a fourth: its files that depend on
-/// all of them (`subject_pictures`). So the outputs are the same bytes whatever ran where.
+/// known), each committing the subject's result as one file when it finishes; the model is then built by
+/// every process together from those files, in blocks of subjects fixed by their number, without the
+/// subjects' surfaces (with a work folder), and each subject goes through a third task: its distances to
+/// the mean and its output files (`subject_files`), then, once every subject's distances are known, a
+/// fourth: its files that depend on all of them (`subject_pictures`); both run while the leader
+/// decomposes the model's Gram matrix. So the outputs are the same bytes whatever ran where.
 struct PipelineRun {
   /// Runs the subjects' tasks; nullptr: SerialTaskRunner (this process's threads).
   TaskRunner* runner = nullptr;
