@@ -62,4 +62,9 @@ std::vector<std::unique_ptr<Command>> MakeAllCommands();
 std::filesystem::path StageOutput(Context* context, const Command& command,
                                   const std::filesystem::path& target);
 
+/// Moves `from` (a file, or a folder that replaces `target` whole) onto `target` when the context's
+/// transaction commits, after refusing to overwrite any input (any under the folder).
+void MoveOutputAtCommit(Context* context, const Command& command, const std::filesystem::path& from,
+                        const std::filesystem::path& target);
+
 }  // namespace pectus::cli

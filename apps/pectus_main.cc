@@ -30,6 +30,18 @@ std::filesystem::path StageOutput(Context* context, const Command& command,
   return context->outputs.Stage(target);
 }
 
+void MoveOutputAtCommit(Context* context, const Command& command, const std::filesystem::path& from,
+                        const std::filesystem::path& target) {
+  if (!context->inputs) context->inputs.emplace(command.Inputs());
+  std::error_code ec;
+  if (std::filesystem::is_directory(from, ec)) {
+    context->inputs->RefuseFolder(target);
+  } else {
+    context->inputs->Refuse(target);
+  }
+  context->outputs.MoveAtCommit(from, target);
+}
+
 namespace {
 
 std::vector<std::pair<int, CommandRegistration::Factory>>& Registry() {

@@ -32,6 +32,10 @@ each subject's stage times (s) and the run's own stages. The model of a run on P
               fourth): rank 0's core decomposes and reads while the other P - 1 ranks run both phases,
               T(P) = A(P) + B(P) + max(EIG + R, C(P - 1) + D(P - 1)) + S(N) + SHARED / P (one rank: EIG +
               C(1) + R + D(1)), EIG scaled as N^3, R ("read back") as N.
+              A report with "model outputs" (the files of the model alone, model.h5, its tables and the
+              report's figures of it, one task each on the farm after the fourth tasks) adds that phase,
+              E(P) = min(E, E / P + (1 - 1 / P) L) (the bound of a greedy hand-out, from the phase's total E
+              and its longest task L, "model outputs largest"), both scaled as N.
   efficiency  T(1) / (P T(P)).
 --farm-only leaves S out: how the farm itself scales.
 
@@ -185,7 +189,9 @@ def main():
         serial, shared, eig, inside = (0.0, 0.0, 0.0, 0.0) if a.farm_only else rank0(n)
         if not a.farm_only and source.get("model files"):  # written on rank 0 beside its third tasks
             tc = list(tc) + [source["model files"] * n / n_src]
-        t1 = sum(ta) + sum(tb) + sum(tc) + sum(td) + serial + shared + eig + inside
+        outputs = 0.0 if a.farm_only else source.get("model outputs", 0.0) * n / n_src
+        outputs_largest = source.get("model outputs largest", 0.0) * n / n_src
+        t1 = sum(ta) + sum(tb) + sum(tc) + sum(td) + serial + shared + eig + inside + outputs
         for p in a.ranks:
             for largest, name in ((True, "largest first"), (False, "subject order")):
                 order = (lambda t: sorted(t, reverse=True)) if largest else (lambda t: t)
@@ -196,7 +202,8 @@ def main():
                     window = max(eig + inside, makespan(order(tc), p - 1) + makespan(order(td), p - 1))
                 else:
                     window = eig + c_p + inside + d_p
-                tp = serial + shared / p + a_p + b_p + window
+                e_p = min(outputs, outputs / p + (1.0 - 1.0 / p) * outputs_largest)
+                tp = serial + shared / p + a_p + b_p + window + e_p
                 print(f"N={n:5d} P={p:3d} {name:14s} T={tp:9.1f} s  speed-up {t1/tp:6.2f}  "
                       f"efficiency {100*t1/(p*tp):5.1f} %  (rank 0 alone {serial:.1f} s, shared {shared/p:.1f} s)")
 

@@ -1,9 +1,6 @@
 // pectus pipeline COHORT_DIR --out OUT_DIR: the main job. From a folder of raw subjects (sweeps +
 // landmarks, as `pectus synth cohort` writes them) to the average chest with its modes, model quality,
 // each subject's distance to the mean, and one HTML report (pictures and numbers).
-#include <future>
-#include <mutex>
-
 #include "apps/command.h"
 #include "apps/task_farm_options.h"
 #include "shape/core/atomic_file.h"
@@ -128,6 +125,11 @@ class PipelineCommand : public Command {
       fs::create_directories((folder / picture.path).parent_path());
       WriteFileAtomically(folder / picture.path, picture.bytes);
     };
+    // 10. The files of the model alone (model.h5, its tables, the report's figures of it) on the farm too,
+    // one task each; the leader moves them into the outputs as well.
+    run.model_files = [this](const PipelineResult& result) {
+      return ModelOutputFiles(*result.model, ModelInfo(result.reference), report_);
+    };
     const bool leader = farm_.Leader(*context->runner);
     fs::path html;
     if (leader) html = StageOutput(context, *this, out / "report.html");  // refuses an input early
@@ -135,8 +137,8 @@ class PipelineCommand : public Command {
          run.runner->Describe() + ")");
 
     // 1-8. Every stage, subject by subject (the library reports failures per subject). Once the leader has
-    // written the outputs, every process removes its share of the subjects' results (RemoveSubjectResultsOnFarm;
-    // it tells the others to keep them if anything failed, for --resume).
+    // written the outputs, every process removes its share of the subjects' results
+    // (RemoveSubjectResultsOnFarm; it tells the others to keep them if anything failed, for --resume).
     std::vector<std::string> names;
     for (const CohortSubject& s : subjects_) names.push_back(s.name);
     bool removing = false;
@@ -192,21 +194,22 @@ class PipelineCommand : public Command {
                    {"grid", grid_},
                    {"profile fit", fit_},
                    {"threads", context->threads}};
-    // The model's own files in a thread of their own beside the rest (the farm's ranks on this node are
-    // done: their cores are free), each staged under a lock.
+    // The model's own files and its figures were made on the farm (run.model_files): the quality curves'
+    // table, each subject's files and those moved in at the commit, the report.
     const fs::path html_target = out / "report.html";
-    std::mutex staging;
     auto stage = [&](const fs::path& target) {
-      const std::lock_guard<std::mutex> lock(staging);
       return target == html_target ? html : StageOutput(context, *this, target);
     };
-    std::future<std::vector<fs::path>> model_files = std::async(std::launch::async, [&] {
-      return WriteModelFiles(result.model ? &*result.model : nullptr, result.quality ? &*result.quality : nullptr,
-                             ModelInfo(result.reference), out, stage);
-    });
+    auto move = [&](const fs::path& from, const fs::path& target) {
+      MoveOutputAtCommit(context, *this, from, target);
+    };
+    WriteModelFiles(nullptr, result.quality ? &*result.quality : nullptr, ModelInfo(result.reference), out,
+                    stage);
     WritePipelineOutputs(result, report_, ModelInfo(result.reference), out, stage, run.work,
-                         /*model_files_written=*/true);
-    model_files.get();
+                         /*model_files_written=*/true, move);
+    // The outputs in place (the subjects' files moved from the work folder) before the work folder is
+    // removed; the run's JSON report, written last, is committed after it.
+    context->outputs.CommitAll();
     nlohmann::json summary = PipelineJson(result);
     for (const auto& [key, value] : summary.items()) context->report[key] = value;
     context->report["cohort"] = cohort_;

@@ -71,28 +71,65 @@ void WriteFileAtomically(const fs::path& path, std::string_view contents) {
 }
 
 OutputTransaction::~OutputTransaction() {
-  if (committed_) return;
-  for (const auto& [temp, target] : staged_) {
+  for (const Entry& e : staged_) {
+    if (e.move) continue;
     std::error_code ec;
-    fs::remove_all(temp, ec);
+    fs::remove_all(e.from, ec);
   }
 }
 
 fs::path OutputTransaction::Stage(const fs::path& target) {
   EnsureParent(target);
   fs::path temp = TempPathFor(target);
-  staged_.emplace_back(temp, target);
+  staged_.push_back({temp, target, false});
   return temp;
 }
 
-void OutputTransaction::CommitAll() {
-  for (const auto& [temp, target] : staged_) {
-    std::error_code ec;
-    if (!fs::exists(temp, ec)) continue;  // a stage that was never written is simply skipped
-    if (fs::is_directory(target, ec) && fs::is_directory(temp, ec)) fs::remove_all(target, ec);
-    RenameInto(temp, target);
+void OutputTransaction::MoveAtCommit(const fs::path& from, const fs::path& target) {
+  EnsureParent(target);
+  staged_.push_back({from, target, true});
+}
+
+namespace {
+
+// `from` onto `target` (a folder replaces a folder whole): a rename, or where the two are on different file
+// systems a copy beside the target renamed into place, then `from` removed.
+void MoveInto(const fs::path& from, const fs::path& target) {
+  std::error_code ec;
+  if (fs::is_directory(target, ec) && fs::is_directory(from, ec)) fs::remove_all(target, ec);
+  fs::rename(from, target, ec);
+  if (!ec) return;
+  if (ec != std::errc::cross_device_link)
+    ThrowFailure("cannot move a result into the outputs: " + ec.message(), target.string());
+  ec.clear();
+  const fs::path temp = TempPathFor(target);
+  fs::copy(from, temp, fs::copy_options::recursive, ec);
+  if (ec) {
+    fs::remove_all(temp, ec);
+    ThrowFailure("cannot copy a result into the outputs: " + ec.message(), target.string());
   }
-  committed_ = true;
+  RenameInto(temp, target);
+  fs::remove_all(from, ec);
+}
+
+}  // namespace
+
+void OutputTransaction::CommitAll() {
+  std::vector<Entry> pending;
+  for (const Entry& e : staged_) {
+    std::error_code ec;
+    if (e.move) {
+      if (fs::exists(e.from, ec)) MoveInto(e.from, e.target);
+      continue;
+    }
+    if (!fs::exists(e.from, ec)) {  // a stage not written yet: for a later commit
+      pending.push_back(e);
+      continue;
+    }
+    if (fs::is_directory(e.target, ec) && fs::is_directory(e.from, ec)) fs::remove_all(e.target, ec);
+    RenameInto(e.from, e.target);
+  }
+  staged_ = std::move(pending);
 }
 
 namespace {
@@ -137,6 +174,24 @@ InputGuard::InputGuard(const std::vector<fs::path>& inputs) {
     canonical_.insert(fs::weakly_canonical(in, ec).string());
     std::pair<std::uint64_t, std::uint64_t> id;
     if (FileIdentity(in, &id)) files_.insert(id);
+  }
+}
+
+void InputGuard::RefuseFolder(const fs::path& folder) const {
+  std::error_code ec;
+  const std::string inside = fs::weakly_canonical(folder, ec).string() + '/';
+  const auto first = canonical_.lower_bound(inside);
+  if (first != canonical_.end() && first->compare(0, inside.size(), inside) == 0) {
+    ThrowUsage("output folder " + folder.string() + " holds an input (" + *first +
+               "); pectus never overwrites its input");
+  }
+  if (!fs::is_directory(folder, ec)) return;
+  for (fs::recursive_directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    std::pair<std::uint64_t, std::uint64_t> id;
+    if (FileIdentity(it->path(), &id) && files_.count(id) > 0) {
+      ThrowUsage("output folder " + folder.string() + " holds an input (" + it->path().string() +
+                 "); pectus never overwrites its input");
+    }
   }
 }
 

@@ -8,7 +8,6 @@
 #include <set>
 #include <string>
 #include <string_view>
-#include <unordered_set>
 #include <vector>
 
 namespace pectus {
@@ -40,8 +39,10 @@ class AtomicOutput {
 void WriteFileAtomically(const std::filesystem::path& path, std::string_view contents);
 
 /// A set of outputs of one command, committed together: Stage() hands out a temporary path beside each
-/// target (same extension, so format detection still works); CommitAll() renames them all into place.
-/// Destroyed without CommitAll(), it removes every staged file, so a failed run leaves nothing behind.
+/// target (same extension, so format detection still works); MoveAtCommit() names files or folders made
+/// elsewhere (a work folder's); CommitAll() renames them all into place. Destroyed without CommitAll(), it
+/// removes every staged file and leaves every file to move where it is, so a failed run leaves nothing
+/// behind and loses nothing a rerun would need.
 class OutputTransaction {
  public:
   OutputTransaction() = default;
@@ -51,12 +52,22 @@ class OutputTransaction {
 
   /// A temporary path to write `target` to. Creates the target's parent folder if needed.
   std::filesystem::path Stage(const std::filesystem::path& target);
-  /// Renames every staged file onto its target.
+  /// Moves `from` (a file or a folder) onto `target` at CommitAll(): one rename (a copy where `from` is on
+  /// another file system), replacing what is at `target` (a folder whole). Creates the target's parent
+  /// folder now. Nothing happens to `from` until then.
+  void MoveAtCommit(const std::filesystem::path& from, const std::filesystem::path& target);
+  /// Renames every staged file that was written onto its target and makes every move, in the order they
+  /// were staged; a stage not written yet stays staged for a later CommitAll() (a command may commit its
+  /// outputs before the report of the run is written). Throws Error(kFailure) naming a target that cannot
+  /// be put in place.
   void CommitAll();
 
  private:
-  std::vector<std::pair<std::filesystem::path, std::filesystem::path>> staged_;  // temp, target
-  bool committed_ = false;
+  struct Entry {
+    std::filesystem::path from, target;
+    bool move = false;  // `from` is not ours: left in place if not committed
+  };
+  std::vector<Entry> staged_;
 };
 
 /// Moves every file under `from` (files made by a task in a work folder, at their paths relative to the
@@ -79,9 +90,13 @@ class InputGuard {
   /// Throws Error(kUsage) if `output` is one of the inputs: the same canonical path, or the same file
   /// reached another way (a link).
   void Refuse(const std::filesystem::path& output) const;
+  /// Refuse() for a folder that an output replaces whole: throws Error(kUsage) if an input lies under
+  /// `folder`, by its path or as one of the files there now (O(log inputs) look-ups, and one per file of
+  /// the folder if it exists).
+  void RefuseFolder(const std::filesystem::path& folder) const;
 
  private:
-  std::unordered_set<std::string> canonical_;
+  std::set<std::string> canonical_;                          // ordered: the inputs under a folder are a range
   std::set<std::pair<std::uint64_t, std::uint64_t>> files_;  // (device, inode) of each existing input
 };
 

@@ -189,20 +189,19 @@ ShapeModel BuildShapeModel(const Eigen::MatrixXd& shapes, const ShapeModelOption
   if (options.max_modes > 0) k = std::min<Eigen::Index>(k, options.max_modes);
   farm.Broadcast(V.data(), n * k * static_cast<std::int64_t>(sizeof(double)));  // its first k columns
 
-  // Eigenvectors of the covariance: e_c = X' v_c / s_c, in blocks of modes (on the leader); eigenvalues
-  // lambda_c = s_c^2 / (N - 1).
+  // Eigenvectors of the covariance: e_c = X' v_c / s_c, in blocks of modes, on every process (each can
+  // then write the files made of the model); eigenvalues lambda_c = s_c^2 / (N - 1).
   const Eigen::Index kModes = BlockRows(k, 64);
-  if (farm.IsLeader()) model.basis.resize(d, k);
+  model.basis.resize(d, k);
   farm.ComputeBlocks(BlockOffsets(k, kModes, d), [&](int b, double* out) {
     const Eigen::Index first = b * kModes, modes = std::min(kModes, k - first);
     Eigen::Map<Eigen::MatrixXd>(out, d, modes).noalias() = X.transpose() * V.middleCols(first, modes);
-  }, model.basis.data(), /*leader_only=*/true);
+  }, model.basis.data());
   model.variances.resize(k);
   // Scores of the training shapes (Eq. 14's z_n): basis' (x_n - mean) = G v_c / |X' v_c|, signed as e_c.
   Eigen::VectorXd factor(k);
   for (Eigen::Index c = 0; c < k; ++c) {
     model.variances[c] = s2[c] / static_cast<double>(n - 1);
-    if (!farm.IsLeader()) continue;
     const double s = std::sqrt(s2[c]);
     model.basis.col(c) /= s;
     const double norm = model.basis.col(c).norm();
@@ -213,7 +212,6 @@ ShapeModel BuildShapeModel(const Eigen::MatrixXd& shapes, const ShapeModelOption
     model.basis.col(c) *= sign;
     factor[c] = sign / (s * norm);
   }
-  farm.Broadcast(factor.data(), k * static_cast<std::int64_t>(sizeof(double)));
   model.scores.resize(n, k);  // on every process: each subject's own record takes its scores
   farm.ComputeBlocks(BlockOffsets(k, kModes, n), [&](int b, double* out) {
     const Eigen::Index first = b * kModes, modes = std::min(kModes, k - first);

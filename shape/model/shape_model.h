@@ -67,8 +67,8 @@ bool SymmetricEigen(const Eigen::MatrixXd& G, Eigen::VectorXd* values, Eigen::Ma
 
 /// With a `runner` of several processes (MPI ranks: docs/cluster.md) it is a collective: every process
 /// calls it with the same shapes; the Gram matrix, the basis and the scores are computed in blocks shared
-/// among them, the eigen decomposition on the leader; the leader's model is the bytes of a run on one
-/// process, and the others' has the mean, the variances and the scores but no basis.
+/// among them, the eigen decomposition on the leader; every process's model is the bytes of a run on one
+/// process.
 /// `while_decomposing`, if given, runs on every process while the leader decomposes the Gram matrix in a
 /// thread of its own (a collective of the caller's, e.g. the pipeline's per-subject tasks, which need only
 /// the mean: the decomposition's time then hides in theirs); `decomposition_seconds`, if given, gets the

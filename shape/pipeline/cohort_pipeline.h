@@ -195,6 +195,13 @@ using PipelineObserver = std::function<void(const SubjectOutcome& subject, const
 /// the mean and its output files (`subject_files`), then, once every subject's distances are known, a
 /// fourth: its files that depend on all of them (`subject_pictures`); both run while the leader
 /// decomposes the model's Gram matrix. So the outputs are the same bytes whatever ran where.
+/// One output file that a task makes alone: its path relative to the output folder, and how to write it
+/// (atomically) to a given path.
+struct OutputFile {
+  std::filesystem::path path;
+  std::function<void(const std::filesystem::path& to)> write;
+};
+
 struct PipelineRun {
   /// Runs the subjects' tasks; nullptr: SerialTaskRunner (this process's threads).
   TaskRunner* runner = nullptr;
@@ -217,7 +224,8 @@ struct PipelineRun {
   /// empty: none.
   std::function<void(const SubjectOutcome& subject, const std::filesystem::path& folder)> subject_files;
   /// Once every subject's distances are known: one number every fourth task gets (the colour scale of the
-  /// report's distance maps), from the subjects' outcomes without their surfaces. It must be the largest
+  /// report's distance maps), from the subjects' summaries (their figures without the arrays: a distance
+  /// map's statistics, not its distances; `ok` for a resampled subject, not its grid). It must be the largest
   /// of the numbers it gives for parts of the cohort (a maximum over subjects, as DistanceMapRange): it is
   /// called on blocks of subjects, shared among the processes, and the blocks' largest is taken.
   std::function<double(const std::vector<SubjectOutcome>& subjects)> picture_scale;
@@ -225,7 +233,16 @@ struct PipelineRun {
   /// into `folder` as subject_files does. Empty: none.
   std::function<void(const SubjectOutcome& subject, double scale, const std::filesystem::path& folder)>
       subject_pictures;
+  /// The files that need only the model (its own files, the report's figures of it), listed from the
+  /// result as every process has it after the model (its model, reference and count of subjects: the same
+  /// list on every process), largest first. Each is written by one task of the farm, after the fourth
+  /// tasks, into `work/model_files/PATH` (ModelFilesFolder) for the leader to move into the outputs. Needs
+  /// `work`; empty: none (the caller writes them).
+  std::function<std::vector<OutputFile>(const PipelineResult& result)> model_files;
 };
+
+/// The folder of the files written by PipelineRun::model_files, at their paths relative to the outputs.
+std::filesystem::path ModelFilesFolder(const std::filesystem::path& work);
 
 /// The folder of subject `name`'s files written by PipelineRun::subject_files and subject_pictures.
 std::filesystem::path SubjectFilesFolder(const std::filesystem::path& work, const std::string& name);

@@ -75,7 +75,7 @@ nlohmann::json PipelineJson(const PipelineResult& r) {
     for (const Rigid3& T : s.T_subject_sweep) poses.push_back(MatrixJson(T.matrix()));
     j["T_subject_sweep"] = poses;
     if (!s.ok) j["failed_stage"] = s.failed_stage, j["error"] = s.error;
-    if (s.grid.mesh.num_vertices() > 0) {
+    if (s.ok) {  // resampled (a summary has no grid)
       j["resample"] = {{"fit_rms_mm", s.grid.fit_rms_mm},
                        {"max_data_gap_mm", s.grid.max_data_gap_mm},
                        {"supported_fraction", s.grid.supported_fraction},
@@ -83,7 +83,7 @@ nlohmann::json PipelineJson(const PipelineResult& r) {
                        {"largest_fill_change_mm", s.largest_fill_change_mm}};
       j["measures"] = s.measures.ToJson();
     }
-    if (s.to_mean.distances.size() > 0) j["distance_to_mean"] = s.to_mean.stats.ToJson();
+    if (s.to_mean.stats.count > 0) j["distance_to_mean"] = s.to_mean.stats.ToJson();
     j["timings_s"] = s.timings_s.ToJson();
     subjects.push_back(j);
   }
@@ -121,7 +121,7 @@ double DistanceMapRange(const std::vector<SubjectOutcome>& subjects, const Pipel
   if (o.distance_range_mm > 0.0) return o.distance_range_mm;
   double range = 0.0;
   for (const SubjectOutcome& s : subjects) {
-    if (s.to_mean.distances.size() > 0) range = std::max(range, s.to_mean.stats.p99);
+    if (s.to_mean.stats.count > 0) range = std::max(range, s.to_mean.stats.p99);
   }
   return std::max(1.0, std::ceil(range));
 }
@@ -137,6 +137,29 @@ ReportFile SubjectDistancePicture(const SubjectOutcome& s, double range_mm, cons
   fig.size = o.picture_px;
   return {SubjectPicturePath(s),
           render::EncodePng(SurfaceMapImage(s.grid.mesh, s.to_mean.distances, s.grid.roi.normal, fig))};
+}
+
+std::vector<ReportFigure> ModelReportFigures(const ShapeModel& m, int subjects,
+                                             const PipelineReportOptions& o) {
+  std::vector<ReportFigure> figures;
+  figures.push_back({"figures/mean_sd.png", [&m, subjects, o] {
+                       const Eigen::VectorXd sd = VertexSd(m);
+                       SurfaceMapFigure figure;
+                       figure.title = "mean of " + std::to_string(subjects) + ": model SD per vertex";
+                       figure.label = "SD, mm";
+                       figure.min = 0.0;
+                       figure.max = std::max(1e-3, sd.maxCoeff());
+                       figure.size = o.picture_px;
+                       return render::EncodePng(
+                           SurfaceMapImage(m.ToMesh(m.mean), sd, Eigen::Vector3d::Zero(), figure));
+                     }});
+  figures.push_back({"figures/variance.png", [&m] { return render::EncodePng(VarianceExplainedImage(m)); }});
+  for (int k = 1; k <= std::min(o.modes, m.num_modes()); ++k) {
+    figures.push_back({"figures/mode_" + std::to_string(k) + ".png", [&m, k, sd = o.mode_sd] {
+                         return render::EncodePng(ModeDisplacementImage(m, k, sd));
+                       }});
+  }
+  return figures;
 }
 
 std::vector<ReportFile> MakePipelineReport(const PipelineResult& r, const PipelineReportOptions& o) {
@@ -181,8 +204,8 @@ std::vector<ReportFile> MakePipelineReport(const PipelineResult& r, const Pipeli
          << (s.ok ? Num(s.grid.fit_rms_mm, 3) : "") << "</td><td>"
          << (s.ok ? Num(s.grid.max_data_gap_mm, 1) : "") << "</td><td>"
          << (s.ok ? Num(s.measures.depression_depth_mm, 1) : "") << "</td><td>"
-         << (s.to_mean.distances.size() ? Num(s.to_mean.stats.rms) : "") << "</td><td>"
-         << (s.to_mean.distances.size() ? Num(s.to_mean.stats.max_abs) : "") << "</td><td>" << Num(total, 1)
+         << (s.to_mean.stats.count > 0 ? Num(s.to_mean.stats.rms) : "") << "</td><td>"
+         << (s.to_mean.stats.count > 0 ? Num(s.to_mean.stats.max_abs) : "") << "</td><td>" << Num(total, 1)
          << "</td></tr>\n";
   }
   html << "</table>\n";
@@ -199,20 +222,13 @@ std::vector<ReportFile> MakePipelineReport(const PipelineResult& r, const Pipeli
 
   // The average chest and its variability.
   const ShapeModel& m = *r.model;
-  const TriangleMesh mean = m.ToMesh(m.mean);
-  const Eigen::VectorXd sd = VertexSd(m);
-  SurfaceMapFigure sd_figure;
-  sd_figure.title = "mean of " + std::to_string(r.succeeded) + ": model SD per vertex";
-  sd_figure.label = "SD, mm";
-  sd_figure.min = 0.0;
-  sd_figure.max = std::max(1e-3, sd.maxCoeff());
-  sd_figure.size = o.picture_px;
+  if (!o.model_figures_made) {
+    for (const ReportFigure& f : ModelReportFigures(m, r.succeeded, o)) files.push_back({f.path, f.make()});
+  }
   html << "<h2>The average chest</h2>\n<p>Mean of " << r.succeeded << " resampled subjects ("
        << m.num_points() << " grid vertices); depression of the mean "
        << Num(r.mean_measures.depression_depth_mm, 1) << " mm. Total variance " << Num(m.total_variance, 1)
-       << " mm&sup2;.</p>\n<img src=\""
-       << figure("mean_sd.png", SurfaceMapImage(mean, sd, Eigen::Vector3d::Zero(), sd_figure)) << "\">\n";
-  html << "<img src=\"" << figure("variance.png", VarianceExplainedImage(m)) << "\">\n";
+       << " mm&sup2;.</p>\n<img src=\"figures/mean_sd.png\">\n<img src=\"figures/variance.png\">\n";
   html << "<table><tr><th>mode</th><th>eigenvalue mm&sup2;</th><th>SD mm</th><th>explained "
           "%</th><th>cumulative %</th></tr>";
   const Eigen::VectorXd f = m.ExplainedFraction(), c = m.CumulativeFraction();
@@ -222,10 +238,8 @@ std::vector<ReportFile> MakePipelineReport(const PipelineResult& r, const Pipeli
          << Num(100 * c[k], 1) << "</td></tr>";
   }
   html << "</table>\n<h2>Principal modes</h2>\n<div class=\"maps\">";
-  for (int k = 1; k <= std::min(o.modes, m.num_modes()); ++k) {
-    html << "<img src=\""
-         << figure("mode_" + std::to_string(k) + ".png", ModeDisplacementImage(m, k, o.mode_sd)) << "\">";
-  }
+  for (int k = 1; k <= std::min(o.modes, m.num_modes()); ++k)
+    html << "<img src=\"figures/mode_" << k << ".png\">";
   html << "</div>\n";
 
   // Model quality.
@@ -250,7 +264,7 @@ std::vector<ReportFile> MakePipelineReport(const PipelineResult& r, const Pipeli
           "(positive: in front of the mean), one colour scale &plusmn;"
        << Num(range, 1) << " mm.</p>\n<div class=\"maps\">";
   for (const SubjectOutcome& s : r.subjects) {
-    if (s.to_mean.distances.size() == 0) continue;
+    if (s.to_mean.stats.count == 0) continue;
     std::string picture = SubjectPicturePath(s);
     if (!o.subject_pictures_made) {
       ReportFile file = SubjectDistancePicture(s, range, o);

@@ -3,6 +3,7 @@
 // per stage), made as a set of files for the caller to write.
 #pragma once
 
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -24,6 +25,8 @@ struct PipelineReportOptions {
   /// The subjects' distance pictures are made elsewhere (SubjectDistancePicture, one task per subject on
   /// the farm): MakePipelineReport only shows them.
   bool subject_pictures_made = false;
+  /// The figures of the model alone (ModelReportFigures, tasks of the farm) are made elsewhere too.
+  bool model_figures_made = false;
 };
 
 /// One file of the report, relative to the output folder ("report.html", "figures/mean.png").
@@ -36,6 +39,18 @@ struct ReportFile {
 /// which subjects failed: they are listed with their stage and message.
 std::vector<ReportFile> MakePipelineReport(const PipelineResult& result,
                                            const PipelineReportOptions& options = {});
+
+/// One figure of the report that needs only the model, made when asked (on whichever process).
+struct ReportFigure {
+  std::string path;                   ///< relative to the output folder ("figures/mode_1.png")
+  std::function<std::string()> make;  ///< its PNG bytes
+};
+
+/// The report's figures of the model alone, as MakePipelineReport shows them: figures/mean_sd.png (the
+/// mean of `subjects` subjects coloured by the model's SD per vertex), figures/variance.png, and
+/// figures/mode_K.png for the first options.modes modes. `model` must outlive the figures.
+std::vector<ReportFigure> ModelReportFigures(const ShapeModel& model, int subjects,
+                                             const PipelineReportOptions& options);
 
 /// The colour scale of the distance maps, +-mm: options.distance_range_mm, or if that is 0, the largest
 /// 99th percentile of |d| over the subjects rounded up to a whole mm (at least 1).

@@ -29,6 +29,44 @@ void WriteSubjectFiles(const SubjectOutcome& s, const std::function<fs::path(con
   }
 }
 
+namespace {
+
+// The model's own files, largest first: model.h5, scores.csv, mean.ply, eigen.csv.
+std::vector<OutputFile> ModelOwnFiles(const ShapeModel& m, const nlohmann::json& model_info) {
+  std::vector<OutputFile> files;
+  files.push_back(
+      {"model.h5", [&m, model_info](const fs::path& to) { WriteStatismoModel(to, m, model_info); }});
+  files.push_back({"scores.csv", [&m](const fs::path& to) {
+                     std::vector<std::string> header{"subject"};
+                     for (int k = 1; k <= m.num_modes(); ++k)
+                       header.push_back("mode" + std::to_string(k) + "_mm");
+                     WriteCsv(to, header, m.scores, m.names);  // N by k, a row per subject
+                   }});
+  files.push_back({"mean.ply", [&m](const fs::path& to) { WriteMesh(to, m.ToMesh(m.mean)); }});
+  files.push_back({"eigen.csv", [&m](const fs::path& to) {
+                     Eigen::MatrixXd eigen(m.num_modes(), 4);
+                     eigen.col(0) = Eigen::VectorXd::LinSpaced(m.num_modes(), 1, m.num_modes());
+                     eigen.col(1) = m.variances;
+                     eigen.col(2) = m.ExplainedFraction();
+                     eigen.col(3) = m.CumulativeFraction();
+                     WriteCsv(to, {"mode", "eigenvalue_mm2", "explained", "cumulative"}, eigen);
+                   }});
+  return files;
+}
+
+}  // namespace
+
+std::vector<OutputFile> ModelOutputFiles(const ShapeModel& model, const nlohmann::json& model_info,
+                                         const PipelineReportOptions& report) {
+  std::vector<OutputFile> files = ModelOwnFiles(model, model_info);
+  for (ReportFigure& figure : ModelReportFigures(model, static_cast<int>(model.scores.rows()), report)) {
+    files.push_back({figure.path, [make = std::move(figure.make)](const fs::path& to) {
+                       WriteFileAtomically(to, make());
+                     }});
+  }
+  return files;
+}
+
 std::vector<fs::path> WriteModelFiles(const ShapeModel* model, const ModelQualityCurves* quality,
                                       const nlohmann::json& model_info, const fs::path& folder,
                                       const std::function<fs::path(const fs::path&)>& stage) {
@@ -38,18 +76,7 @@ std::vector<fs::path> WriteModelFiles(const ShapeModel* model, const ModelQualit
     return stage(folder / name);
   };
   if (model) {
-    const ShapeModel& m = *model;
-    WriteStatismoModel(target("model.h5"), m, model_info);
-    WriteMesh(target("mean.ply"), m.ToMesh(m.mean));
-    std::vector<std::string> header{"subject"};
-    for (int k = 1; k <= m.num_modes(); ++k) header.push_back("mode" + std::to_string(k) + "_mm");
-    WriteCsv(target("scores.csv"), header, m.scores, m.names);  // N by k, a row per subject
-    Eigen::MatrixXd eigen(m.num_modes(), 4);
-    eigen.col(0) = Eigen::VectorXd::LinSpaced(m.num_modes(), 1, m.num_modes());
-    eigen.col(1) = m.variances;
-    eigen.col(2) = m.ExplainedFraction();
-    eigen.col(3) = m.CumulativeFraction();
-    WriteCsv(target("eigen.csv"), {"mode", "eigenvalue_mm2", "explained", "cumulative"}, eigen);
+    for (const OutputFile& file : ModelOwnFiles(*model, model_info)) file.write(target(file.path));
   }
   if (quality) {
     const ModelQualityCurves& q = *quality;
@@ -64,10 +91,30 @@ std::vector<fs::path> WriteModelFiles(const ShapeModel* model, const ModelQualit
   return written;
 }
 
-std::vector<fs::path> WritePipelineOutputs(const PipelineResult& result, const PipelineReportOptions& report,
-                                           const nlohmann::json& model_info, const fs::path& folder,
-                                           const std::function<fs::path(const fs::path&)>& stage,
-                                           const fs::path& work, bool model_files_written) {
+namespace {
+
+// The entries of `from` one level down (subjects/NAME, figures/distance_NAME.png), in name order.
+std::vector<fs::path> EntriesOneLevelDown(const fs::path& from) {
+  std::vector<fs::path> entries;
+  std::error_code ec;
+  for (const fs::directory_entry& top : fs::directory_iterator(from, ec)) {
+    if (!top.is_directory()) {
+      entries.push_back(top.path().filename());
+      continue;
+    }
+    for (const fs::directory_entry& e : fs::directory_iterator(top.path(), ec))
+      entries.push_back(top.path().filename() / e.path().filename());
+  }
+  std::sort(entries.begin(), entries.end());
+  return entries;
+}
+
+}  // namespace
+
+std::vector<fs::path> WritePipelineOutputs(
+    const PipelineResult& result, const PipelineReportOptions& report, const nlohmann::json& model_info,
+    const fs::path& folder, const std::function<fs::path(const fs::path&)>& stage, const fs::path& work,
+    bool model_files_written, const std::function<void(const fs::path&, const fs::path&)>& move) {
   std::vector<fs::path> written;
   auto target = [&](const fs::path& name) {
     written.push_back(folder / name);
@@ -82,13 +129,28 @@ std::vector<fs::path> WritePipelineOutputs(const PipelineResult& result, const P
   for (const SubjectOutcome& s : result.subjects) {
     if (work.empty()) {
       WriteSubjectFiles(s, [&](const fs::path& name) { return target(name); });
+    } else if (move) {  // its folder and picture whole, at the commit
+      const fs::path from = SubjectFilesFolder(work, s.name);
+      for (const fs::path& name : EntriesOneLevelDown(from)) {
+        written.push_back(folder / name);
+        move(from / name, folder / name);
+      }
     } else {
       MoveFilesInto(SubjectFilesFolder(work, s.name), target);
+    }
+  }
+  // The files of the model alone, made on the farm (PipelineRun::model_files).
+  const bool model_files_made = !work.empty() && move && fs::is_directory(ModelFilesFolder(work));
+  if (model_files_made) {
+    for (const fs::path& name : EntriesOneLevelDown(ModelFilesFolder(work))) {
+      written.push_back(folder / name);
+      move(ModelFilesFolder(work) / name, folder / name);
     }
   }
   // The report and its figures.
   PipelineReportOptions report_options = report;
   report_options.subject_pictures_made = !work.empty();
+  report_options.model_figures_made = model_files_made;
   for (const ReportFile& file : MakePipelineReport(result, report_options)) {
     WriteFileAtomically(target(file.path), file.bytes);
   }

@@ -23,13 +23,25 @@ namespace pectus {
 /// With `work` (PipelineRun::work of a run whose subject_files were WriteSubjectFiles and subject_pictures
 /// SubjectDistancePicture), each subject's files were made on the farm: they are moved from
 /// SubjectFilesFolder(work, NAME) rather than written from `result` (whose subjects have no surface then).
+/// With `move` as well, those files are not moved now: each entry one level down in a subject's folder
+/// (its subjects/NAME/ folder, its figures/ picture) goes whole to `move(from, target)` (a transaction's
+/// MoveAtCommit: the work folder keeps them until the outputs are committed, for --resume); and if the
+/// files of the model were made on the farm (PipelineRun::model_files, in ModelFilesFolder(work)), they go
+/// to `move` too and the report does not make its figures of the model again.
 /// `model_files_written`: the caller writes the model's files itself (WriteModelFiles, e.g. in a thread
-/// beside this one: `stage` must then be safe to call from both).
+/// beside this one: `stage` and `move` must then be safe to call from both).
 std::vector<std::filesystem::path> WritePipelineOutputs(
     const PipelineResult& result, const PipelineReportOptions& report, const nlohmann::json& model_info,
     const std::filesystem::path& folder,
     const std::function<std::filesystem::path(const std::filesystem::path&)>& stage,
-    const std::filesystem::path& work = {}, bool model_files_written = false);
+    const std::filesystem::path& work = {}, bool model_files_written = false,
+    const std::function<void(const std::filesystem::path&, const std::filesystem::path&)>& move = {});
+
+/// The files that need only the model, each written alone (PipelineRun::model_files), largest first:
+/// model.h5, scores.csv, mean.ply, eigen.csv (as WriteModelFiles writes them), then the report's figures of
+/// the model (ModelReportFigures). `model` must outlive them.
+std::vector<OutputFile> ModelOutputFiles(const ShapeModel& model, const nlohmann::json& model_info,
+                                         const PipelineReportOptions& report);
 
 /// The files of WritePipelineOutputs that need only the model and its quality curves (either may be null):
 /// model.h5, mean.ply, scores.csv, eigen.csv, quality.csv, each through `stage` as there. Returns the target

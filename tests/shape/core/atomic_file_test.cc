@@ -14,8 +14,9 @@ namespace fs = std::filesystem;
 class AtomicFileTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("pectus_atomic_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-                                        "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() /
+           ("pectus_atomic_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -26,7 +27,9 @@ class AtomicFileTest : public ::testing::Test {
     s << in.rdbuf();
     return s.str();
   }
-  std::size_t CountFiles() const { return static_cast<std::size_t>(std::distance(fs::directory_iterator(dir_), {})); }
+  std::size_t CountFiles() const {
+    return static_cast<std::size_t>(std::distance(fs::directory_iterator(dir_), {}));
+  }
   fs::path dir_;
 };
 
@@ -76,6 +79,74 @@ TEST_F(AtomicFileTest, TransactionCommitsAllOrNothing) {
   }
   EXPECT_EQ(Slurp(dir_ / "a.ply"), "a");
   EXPECT_EQ(Slurp(dir_ / "sub" / "b.json"), "b");
+}
+
+TEST_F(AtomicFileTest, MovesAtCommitOnlyAndLeavesTheSourcesOtherwise) {
+  // A work folder's results: a subject's folder and a picture.
+  const fs::path work = dir_ / "work", out = dir_ / "out";
+  WriteFileAtomically(work / "s1" / "grid.ply", "grid");
+  WriteFileAtomically(work / "s1" / "deep" / "x.json", "x");
+  WriteFileAtomically(work / "s1.png", "png");
+  // An earlier run's outputs: the folder is replaced whole, the file overwritten.
+  WriteFileAtomically(out / "subjects" / "s1" / "stale.ply", "old");
+  WriteFileAtomically(out / "figures" / "s1.png", "old png");
+  {
+    OutputTransaction tx;
+    tx.MoveAtCommit(work / "s1", out / "subjects" / "s1");
+    tx.MoveAtCommit(work / "s1.png", out / "figures" / "s1.png");
+    WriteFileAtomically(tx.Stage(out / "report.html"), "report");
+  }  // destroyed without commit: the sources stay, the outputs are as they were
+  EXPECT_EQ(Slurp(work / "s1" / "grid.ply"), "grid");
+  EXPECT_EQ(Slurp(work / "s1.png"), "png");
+  EXPECT_EQ(Slurp(out / "subjects" / "s1" / "stale.ply"), "old");
+  EXPECT_FALSE(fs::exists(out / "report.html"));
+  {
+    OutputTransaction tx;
+    tx.MoveAtCommit(work / "s1", out / "subjects" / "s1");
+    tx.MoveAtCommit(work / "s1.png", out / "figures" / "s1.png");
+    const fs::path late = tx.Stage(out / "run.json");  // written after the first commit
+    WriteFileAtomically(tx.Stage(out / "report.html"), "report");
+    EXPECT_FALSE(fs::exists(out / "subjects" / "s1" / "grid.ply"));
+    tx.CommitAll();
+    EXPECT_EQ(Slurp(out / "subjects" / "s1" / "grid.ply"), "grid");
+    EXPECT_EQ(Slurp(out / "subjects" / "s1" / "deep" / "x.json"), "x");
+    EXPECT_FALSE(fs::exists(out / "subjects" / "s1" / "stale.ply"));
+    EXPECT_EQ(Slurp(out / "figures" / "s1.png"), "png");
+    EXPECT_EQ(Slurp(out / "report.html"), "report");
+    EXPECT_FALSE(fs::exists(work / "s1"));
+    EXPECT_FALSE(fs::exists(out / "run.json"));
+    WriteFileAtomically(late, "run");
+    tx.CommitAll();  // the stage written since
+    EXPECT_EQ(Slurp(out / "run.json"), "run");
+  }
+  EXPECT_EQ(Slurp(out / "run.json"), "run");
+  std::size_t left = 0;  // no temporary left beside the outputs
+  for (const auto& e : fs::recursive_directory_iterator(out))
+    left += e.path().filename().string().find("pectus-tmp") != std::string::npos;
+  EXPECT_EQ(left, 0u);
+}
+
+TEST_F(AtomicFileTest, RefusesAnOutputFolderThatHoldsAnInput) {
+  const fs::path in = dir_ / "cohort" / "s1" / "sweep_00.ply";
+  WriteFileAtomically(in, "x");
+  const InputGuard guard({in});
+  // By its path, however the folder is spelled.
+  EXPECT_THROW(guard.RefuseFolder(dir_ / "cohort" / "s1"), Error);
+  EXPECT_THROW(guard.RefuseFolder(dir_ / "cohort" / ".." / "cohort"), Error);
+  EXPECT_THROW(guard.RefuseFolder(dir_), Error);
+  // A folder whose name only begins like the input's is not its folder.
+  EXPECT_NO_THROW(guard.RefuseFolder(dir_ / "cohort" / "s"));
+  EXPECT_NO_THROW(guard.RefuseFolder(dir_ / "out" / "s1"));
+  // By identity: an existing folder holding a link to the input.
+  fs::create_directories(dir_ / "out" / "s1");
+  fs::create_hard_link(in, dir_ / "out" / "s1" / "linked.ply");
+  try {
+    guard.RefuseFolder(dir_ / "out" / "s1");
+    FAIL() << "a folder holding a hard link to an input was not refused";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kUsage);
+    EXPECT_NE(std::string(e.what()).find("linked.ply"), std::string::npos) << e.what();
+  }
 }
 
 TEST_F(AtomicFileTest, RefusesOutputEqualToInput) {
