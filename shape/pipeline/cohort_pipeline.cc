@@ -620,7 +620,8 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
   // colour scale of all of them). If the model stops short of that, they run after it.
   SubjectStore modelled(run.work, "model", inputs), finished(run.work, "outputs", inputs);
   SubjectStore summaries(run.work, "summary", inputs);
-  std::exception_ptr model_error;
+  std::exception_ptr model_error;  // the leader's: reported once the others are let go
+  bool model_failed = false;        // every process's: the model threw (a collective's error reaches all)
   std::optional<TriangleMesh> mean;  // the mean shape, on every process (BuildModel)
   const std::vector<int> no_tasks;
 
@@ -679,7 +680,7 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
     // 9. The files that need every subject's distances (the report's maps on one colour scale).
     if (run.subject_pictures) {
       double scale = 0.0;
-      if (run.picture_scale) {
+      if (run.picture_scale && !model_failed) {  // after a failure the summaries may not all be there
         const std::int64_t per_block = BlockRows(n, 8);
         std::vector<double> scales(static_cast<std::size_t>((n + per_block - 1) / per_block));
         runner.ComputeBlocks(BlockOffsets(static_cast<std::int64_t>(scales.size()), 1, 1), [&](int b, double* out) {
@@ -726,6 +727,7 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
     try {
       BuildModel(options, runner, names, light, keep, &mean, finish_subjects, &result);
     } catch (...) {
+      model_failed = true;
       if (runner.IsLeader()) model_error = std::current_exception();  // the leader reports it, below
     }
     if (runner.IsLeader()) result.timings_s.Add("model", Since(start));

@@ -1,6 +1,7 @@
 // `pectus pipeline` as a user runs it, on a small cohort that `pectus synth cohort` makes: the run
 // succeeds, and every row of the scores.csv it writes is the model's projection of that subject's grid
-// (both read back from the files written: model.h5 and subjects/NAME/grid.ply).
+// (both read back from the files written: model.h5 and subjects/NAME/grid.ply); a work file that cannot be
+// written is the error the run reports.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -73,6 +74,27 @@ TEST_F(PipelineCommand, ScoresCsvHoldsEachSubjectsProjectionOnTheModel) {
     }
   }
   EXPECT_EQ(rows, model.names.size());
+}
+
+TEST_F(PipelineCommand, AWorkFileThatCannotBeWrittenIsTheErrorReportedAndNothingIsWritten) {
+  // A subject's summary cannot be written (its folder in the work folder is a file, as a full disk or a
+  // lost mount would make it fail): that failure is what the run reports, not a missing summary read
+  // after it, and no output is left behind.
+  CliRun run = Pectus("synth cohort --subjects 4 --seed 3 --sweeps 3 --spacing 3 --no-sweep-truth -o " +
+                      P("cohort") + " --quiet");
+  ASSERT_EQ(run.code, 0) << run.output;
+  fs::create_directories(P("out/.pectus-work"));
+  std::ofstream(P("out/.pectus-work/summary")) << "not a folder";
+  run = Pectus("pipeline " + P("cohort") + " --out " + P("out") +
+               " --grid 21x41 --surface-spacing 3 --merge-spacing 0 --no-quality --no-surfaces --resume --quiet");
+  EXPECT_EQ(run.code, 1) << run.output;
+  // The write's own message ("…/summary: cannot create folder: Not a directory"), not the read of a
+  // summary that was never written ("…/summary/NAME.rec: cannot open", which it was until 2026-11-28).
+  EXPECT_NE(run.output.find("summary: cannot create folder"), std::string::npos) << run.output;
+  EXPECT_EQ(run.output.find("cannot open"), std::string::npos) << run.output;
+  EXPECT_FALSE(fs::exists(P("out/model.h5")));
+  EXPECT_FALSE(fs::exists(P("out/report.html")));
+  EXPECT_TRUE(fs::exists(P("out/.pectus-work/registered"))) << "the subjects' results are kept for --resume";
 }
 
 }  // namespace
