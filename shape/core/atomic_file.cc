@@ -122,12 +122,11 @@ void OutputTransaction::CommitAll() {
       if (fs::exists(e.from, ec)) MoveInto(e.from, e.target);
       continue;
     }
-    if (!fs::exists(e.from, ec)) {  // a stage not written yet: for a later commit
-      pending.push_back(e);
-      continue;
+    if (fs::exists(e.from, ec)) {
+      MoveInto(e.from, e.target);
+    } else {
+      pending.push_back(e);  // a stage not written yet: for a later commit
     }
-    if (fs::is_directory(e.target, ec) && fs::is_directory(e.from, ec)) fs::remove_all(e.target, ec);
-    RenameInto(e.from, e.target);
   }
   staged_ = std::move(pending);
 }
