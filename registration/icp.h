@@ -15,6 +15,9 @@
 
 namespace pectus {
 
+/// The most target points IcpOptions::plane_points may take.
+constexpr int kMaxPlanePoints = 4;
+
 /// The error that ICP minimises.
 enum class IcpMethod {
   kPointToPlane,  ///< sum w ((T p - q) . n_q)^2, target normals only
@@ -49,6 +52,13 @@ struct IcpOptions {
   /// than this many target point spacings: the source point is then over a hole in the target or beyond
   /// its edge, and the rim's plane would pull it (docs/registration.md). 0 = off.
   double max_tangential_spacings = 2.0;
+  /// The target's plane at a source point: through the mean of its `plane_points` nearest target points
+  /// (those within the gate), normal the mean of their normals (turned to agree with the nearest's). One
+  /// noisy target point and its normal (a PCA of a dozen noisy neighbours) bias the pose: the nearest
+  /// point is chosen for being near, noise included. The mean of four halves the target's share of the
+  /// residual's noise (docs/registration.md, "The target's plane from its nearest points"). 1 = the nearest
+  /// point's own plane (Chen and Medioni 1992). In [1, 4].
+  int plane_points = 4;
 
   /// Coarse to fine. Empty = automatic: one level per entry of `auto_level_points`, a random sample of
   /// that many source points (nested: every level's sample contains the coarser ones; 0 or more than the

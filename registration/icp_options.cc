@@ -57,6 +57,9 @@ bool IcpOptions::IsValid(std::string* why) const {
     }
     if (auto_max_iterations < 1) return fail("auto_max_iterations must be >= 1");
   }
+  if (plane_points < 1 || plane_points > kMaxPlanePoints) {
+    return fail("plane_points must be in [1, " + std::to_string(kMaxPlanePoints) + "]");
+  }
   if (!(target_pose_sd_fraction >= 0.0 && target_pose_sd_fraction < 1.0)) {
     return fail("target_pose_sd_fraction must be in [0, 1) (0: the last sample keeps its size)");
   }

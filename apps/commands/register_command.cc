@@ -85,6 +85,10 @@ class RegisterCommand : public Command {
     app->add_option("--pose-sd-fraction", pose_sd_fraction_,
                     "ICP's last sample grows until sampling adds at most this fraction of the residuals' "
                     "robust scale to the pose's standard error; 0 keeps 30000 points (default 0.01)");
+    app->add_option("--plane-points", plane_points_,
+                    "ICP's plane at a moving point passes through the mean of this many nearest fixed points, "
+                    "1 to 4; 1 = the nearest point's own plane (default 4)")
+        ->check(CLI::Range(1, kMaxPlanePoints));
     app->add_flag("--no-refine", no_refine_, "Landmarks (or --initial) only, no ICP");
     app->add_option("--work", work_,
                     "Cohort: folder of the scans' fits until the outputs are written, on a file system every "
@@ -116,6 +120,7 @@ class RegisterCommand : public Command {
     if (max_rms_) options_.icp.max_rms_mm = *max_rms_;
     if (min_inliers_) options_.icp.min_inlier_fraction = *min_inliers_;
     if (pose_sd_fraction_) options_.icp.target_pose_sd_fraction = *pose_sd_fraction_;
+    if (plane_points_) options_.icp.plane_points = *plane_points_;
     options_.landmarks.estimate_scale = scale_;
     options_.refine = !no_refine_;
     options_.icp.method = ParseIcpMethod(method_);
@@ -338,6 +343,7 @@ class RegisterCommand : public Command {
        resume_ = false, gather_ = false;
   std::optional<double> trim_, max_distance_, final_distance_, patch_radius_, max_rms_, min_inliers_,
       pose_sd_fraction_;
+  std::optional<int> plane_points_;
   PairRegistrationOptions options_;
   ReadOptions read_options_;
   LandmarkReadOptions landmark_options_;

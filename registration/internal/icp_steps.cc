@@ -12,26 +12,36 @@
 namespace pectus::icp_detail {
 namespace {
 
-// The nearest target row of `p` (kNoMatch if none within the cache's radius), from the certificate when it
-// still holds, else from the tree (renewing the certificate). Returns true if it searched the tree.
+// The `want` nearest target rows of `p` within `gate`, nearest first, into `j` (their number into
+// `found`; the nearest may lie beyond the gate when searched through the cache, for the caller's test),
+// from the certificate when it still holds, else from the tree (renewing the certificate). Returns true if
+// it searched the tree.
 bool Nearest(const KdTree3& tree, const Points3& target, const Eigen::Vector3d& p, double gate, std::size_t s,
-             NearestCache* cache, std::uint32_t* j) {
+             NearestCache* cache, int want, std::uint32_t* j, int* found) {
+  constexpr int kMax = NearestCache::kMaxCandidates;
   if (cache == nullptr) {
-    double d2 = 0.0;
-    if (!tree.NearestWithin(p, gate, j, &d2)) *j = kNoMatch;
+    double d2[kMax];
+    if (want == 1) {
+      *found = tree.NearestWithin(p, gate, j, d2) ? 1 : 0;
+    } else {
+      *found = tree.NearestWithin(p, gate, want, j, d2);
+    }
     return true;
   }
+  const int C = NearestCache::Candidates(want);
   if (cache->valid[s]) {
     const double moved = (p - cache->at[s]).norm();
     const int count = cache->count[s];
+    // Any target point but the candidates is at least `others` away (triangle inequality).
+    const double others = cache->reach[s] - moved;
     if (count == 0) {
       // No target point within `reach` of where it was: none within the gate while it has moved less
       // than reach - gate.
-      if (moved <= cache->reach[s] - gate) {
-        *j = kNoMatch;
+      if (others >= gate) {
+        *found = 0;
         return false;
       }
-    } else {
+    } else if (want == 1) {
       const auto& c = cache->candidates[s];
       int best = 0;
       double best2 = (target.row(c[0]).transpose() - p).squaredNorm();
@@ -42,24 +52,54 @@ bool Nearest(const KdTree3& tree, const Points3& target, const Eigen::Vector3d& 
           best = k;
         }
       }
-      // Any other target point is at least reach - moved away (triangle inequality).
-      const double others = cache->reach[s] - moved;
       if (others > 0.0 && best2 < others * others) {
-        *j = c[static_cast<std::size_t>(best)];
+        j[0] = c[static_cast<std::size_t>(best)];
+        *found = 1;
+        return false;
+      }
+    } else {
+      // The candidates in order of their distance now; the nearest m of them are the nearest m target
+      // points if the m-th is nearer than any other target point can be, and all of those within the gate
+      // if fewer than `want` were candidates and no other target point can be within the gate.
+      const auto& c = cache->candidates[s];
+      std::uint32_t order[kMax];
+      double d2[kMax];
+      for (int k = 0; k < count; ++k) {
+        const double d = (target.row(c[static_cast<std::size_t>(k)]).transpose() - p).squaredNorm();
+        int at = k;
+        for (; at > 0 && d2[at - 1] > d; --at) {
+          d2[at] = d2[at - 1];
+          order[at] = order[at - 1];
+        }
+        d2[at] = d;
+        order[at] = c[static_cast<std::size_t>(k)];
+      }
+      const int m = std::min(want, count);
+      if (others > 0.0 && d2[m - 1] < others * others && (m == want || others >= gate)) {
+        int inside = 1;  // the nearest, whatever its distance (the caller gates it)
+        while (inside < m && d2[inside] <= gate * gate) ++inside;
+        std::copy(order, order + inside, j);
+        *found = inside;
         return false;
       }
     }
   }
-  constexpr int K = NearestCache::kCandidates;
-  std::uint32_t idx[K + 1];
-  double d2[K + 1];
-  const int found = tree.NearestWithin(p, cache->radius, K + 1, idx, d2);
+  std::uint32_t idx[kMax + 1];
+  double d2[kMax + 1];
+  const int hits = tree.NearestWithin(p, cache->radius, C + 1, idx, d2);
   cache->valid[s] = 1;
   cache->at[s] = p;
-  cache->count[s] = static_cast<std::uint8_t>(std::min(found, K));
-  for (int k = 0; k < std::min(found, K); ++k) cache->candidates[s][static_cast<std::size_t>(k)] = idx[k];
-  cache->reach[s] = found > K ? std::sqrt(d2[K]) : cache->radius;
-  *j = found > 0 ? idx[0] : kNoMatch;
+  cache->count[s] = static_cast<std::uint8_t>(std::min(hits, C));
+  for (int k = 0; k < std::min(hits, C); ++k) cache->candidates[s][static_cast<std::size_t>(k)] = idx[k];
+  cache->reach[s] = hits > C ? std::sqrt(d2[C]) : cache->radius;
+  if (hits == 0) {
+    *found = 0;
+    return true;
+  }
+  int inside = 1;
+  while (inside < std::min(hits, want) && d2[inside] <= gate * gate) ++inside;
+  std::copy(idx, idx + inside, j);
+  *found = inside;
   return true;
 }
 
@@ -82,6 +122,7 @@ std::int64_t FindPairs(const Problem& pb, const std::vector<std::uint32_t>& samp
       pb.source_normals->rows() > 0 && (symmetric || pb.cos_max_normal_angle > -1.0);
   const Points3& tp = pb.target->centred_positions();
   const Points3& tn = pb.target->normals();
+  const int plane_points = pb.options->plane_points;
   pairs->Resize(sample.size());
   const auto m = static_cast<std::int64_t>(sample.size());
   std::int64_t searches = 0;
@@ -90,11 +131,13 @@ std::int64_t FindPairs(const Problem& pb, const std::vector<std::uint32_t>& samp
     const auto s = static_cast<std::size_t>(k);
     const std::uint32_t i = sample[s];
     const Eigen::Vector3d p = R * (pb.source->row(i).transpose() - pb.source_origin) + t;
-    std::uint32_t j = kNoMatch;
-    searches += Nearest(pb.target->tree(), tp, p, gate, s, cache, &j) ? 1 : 0;
+    std::uint32_t near[NearestCache::kMaxCandidates];
+    int found = 0;
+    searches += Nearest(pb.target->tree(), tp, p, gate, s, cache, plane_points, near, &found) ? 1 : 0;
     pairs->target[s] = kNoMatch;
-    if (j == kNoMatch) continue;
-    const Eigen::Vector3d q = tp.row(j).transpose();
+    if (found == 0) continue;
+    const std::uint32_t j = near[0];
+    Eigen::Vector3d q = tp.row(j).transpose();
     if ((p - q).squaredNorm() > gate * gate) continue;
     Eigen::Vector3d n = tn.row(j).transpose();
     if (n.squaredNorm() == 0.0) continue;
@@ -104,6 +147,23 @@ std::int64_t FindPairs(const Problem& pb, const std::vector<std::uint32_t>& samp
     const Eigen::Vector3d d = p - q;
     const double along = d.dot(n);
     if (d.squaredNorm() - along * along > pb.max_tangential2) continue;
+    if (found > 1) {
+      // The plane through the mean of the nearest target points, normal their mean normal
+      // (IcpOptions::plane_points).
+      Eigen::Vector3d sum_q = q, sum_n = n;
+      int used = 1;
+      for (int h = 1; h < found; ++h) {
+        const Eigen::Vector3d nk = tn.row(near[h]).transpose();
+        if (nk.squaredNorm() == 0.0) continue;
+        sum_q += tp.row(near[h]).transpose();
+        sum_n += nk.dot(n) < 0.0 ? Eigen::Vector3d(-nk) : nk;
+        ++used;
+      }
+      if (used > 1 && sum_n.squaredNorm() > 0.0) {
+        q = sum_q / used;
+        n = sum_n.normalized();
+      }
+    }
     if (use_source_normals) {
       Eigen::Vector3d ns = R * pb.source_normals->row(i).transpose();
       if (ns.squaredNorm() == 0.0) continue;

@@ -82,10 +82,13 @@ struct Problem {
 // that, it is the exact nearest target point (docs/registration.md, ICP-2), and step 1 searches the tree
 // only for the points whose certificate has expired.
 struct NearestCache {
-  static constexpr int kCandidates = 2;
+  // Candidates kept: the plane's points, and at least two (a second candidate lets a certificate survive
+  // when the nearest two swap).
+  static constexpr int kMaxCandidates = kMaxPlanePoints + 1;
+  static int Candidates(int plane_points) { return plane_points + 1; }
   double radius = 0.0;  // search radius (mm), above the gate
   std::vector<Eigen::Vector3d> at;
-  std::vector<std::array<std::uint32_t, kCandidates>> candidates;
+  std::vector<std::array<std::uint32_t, kMaxCandidates>> candidates;
   std::vector<std::uint8_t> count;
   std::vector<double> reach;
   std::vector<std::uint8_t> valid;

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <string>
 
 #include "synthetic_chest.h"
 
@@ -13,7 +14,7 @@ namespace {
 
 // Along a path of poses such as ICP walks (large steps, then ever smaller ones, and a jump back), the
 // pairs found with certificates carried from pose to pose are those of a full search at every pose, and
-// most poses need few searches.
+// most poses need few searches; so are the planes through the nearest four target points.
 TEST(FindPairs, CertifiedReuseEqualsSearchingEveryTime) {
   const PointCloud target = testing::SampleChest(20000, 7, 0.2, -1.3, 0.9);
   const PointCloud source = testing::SampleChest(20000, 8, 0.2, -0.9, 1.3);
@@ -31,32 +32,37 @@ TEST(FindPairs, CertifiedReuseEqualsSearchingEveryTime) {
   std::vector<std::uint32_t> sample(static_cast<std::size_t>(source.size()));
   for (std::size_t k = 0; k < sample.size(); ++k) sample[k] = static_cast<std::uint32_t>(k);
 
-  const double gate = 3.0 * prepared.spacing_mm();
-  NearestCache cache;
-  cache.Reset(sample.size(), kSearchRadiusOverGate * gate);
-  Pairs reused, searched;
-  std::mt19937_64 rng(11);
-  // The source in the target's centred frame, then moved step by step.
-  Rigid3 T = Rigid3::Identity();
-  T.translation() = origin - prepared.origin();
-  std::int64_t reused_searches = 0, full_searches = 0, matched = 0;
-  const double steps_mm[] = {1.0, 0.3, 0.1, 0.03, 0.01, 0.003, 0.001, 0.5, 0.01, 0.002};
-  for (const double step : steps_mm) {
-    T = testing::RandomPose(&rng, step / 100.0, step, T.translation()) * T;  // 100 mm lever
-    reused_searches += FindPairs(pb, sample, T, gate, &cache, &reused);
-    full_searches += FindPairs(pb, sample, T, gate, nullptr, &searched);
-    ASSERT_EQ(reused.target, searched.target) << "step " << step << " mm";
-    for (std::size_t k = 0; k < sample.size(); ++k) {
-      if (searched.target[k] == kNoMatch) continue;
-      ++matched;
-      ASSERT_EQ(reused.r[k], searched.r[k]) << "point " << k;
+  // The nearest point's own plane, and the plane through the nearest four (exact certificates for all four).
+  for (const int plane_points : {1, 4}) {
+    SCOPED_TRACE("plane_points " + std::to_string(plane_points));
+    options.plane_points = plane_points;
+    const double gate = 3.0 * prepared.spacing_mm();
+    NearestCache cache;
+    cache.Reset(sample.size(), kSearchRadiusOverGate * gate);
+    Pairs reused, searched;
+    std::mt19937_64 rng(11);
+    // The source in the target's centred frame, then moved step by step.
+    Rigid3 T = Rigid3::Identity();
+    T.translation() = origin - prepared.origin();
+    std::int64_t reused_searches = 0, full_searches = 0, matched = 0;
+    const double steps_mm[] = {1.0, 0.3, 0.1, 0.03, 0.01, 0.003, 0.001, 0.5, 0.01, 0.002};
+    for (const double step : steps_mm) {
+      T = testing::RandomPose(&rng, step / 100.0, step, T.translation()) * T;  // 100 mm lever
+      reused_searches += FindPairs(pb, sample, T, gate, &cache, &reused);
+      full_searches += FindPairs(pb, sample, T, gate, nullptr, &searched);
+      ASSERT_EQ(reused.target, searched.target) << "step " << step << " mm";
+      for (std::size_t k = 0; k < sample.size(); ++k) {
+        if (searched.target[k] == kNoMatch) continue;
+        ++matched;
+        ASSERT_EQ(reused.r[k], searched.r[k]) << "point " << k;
+      }
     }
+    // The two scans overlap on most of the source; the first pose searches every point, the small steps
+    // almost none.
+    EXPECT_GT(matched, 10 * 15000);
+    EXPECT_EQ(full_searches, 10 * 20000);
+    EXPECT_LT(reused_searches, 2 * 20000) << "certificates renewed too often";
   }
-  // The two scans overlap on most of the source; the first pose searches every point, the small steps
-  // almost none.
-  EXPECT_GT(matched, 10 * 15000);
-  EXPECT_EQ(full_searches, 10 * 20000);
-  EXPECT_LT(reused_searches, 2 * 20000) << "certificates renewed too often";
 }
 
 }  // namespace
