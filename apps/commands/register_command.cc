@@ -85,9 +85,10 @@ class RegisterCommand : public Command {
     app->add_option("--pose-sd-fraction", pose_sd_fraction_,
                     "ICP's last sample grows until sampling adds at most this fraction of the residuals' "
                     "robust scale to the pose's standard error; 0 keeps 30000 points (default 0.01)");
-    app->add_option("--plane-points", plane_points_,
-                    "ICP's plane at a moving point passes through the mean of this many nearest fixed points, "
-                    "1 to 4; 1 = the nearest point's own plane (default 4)")
+    app->add_option(
+           "--plane-points", plane_points_,
+           "ICP's plane at a moving point passes through the mean of this many nearest fixed points, "
+           "1 to 4; 1 = the nearest point's own plane (default 4)")
         ->check(CLI::Range(1, kMaxPlanePoints));
     app->add_flag("--no-refine", no_refine_, "Landmarks (or --initial) only, no ICP");
     app->add_option("--work", work_,

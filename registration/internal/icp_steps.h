@@ -75,15 +75,16 @@ struct Problem {
 };
 
 // The correspondence certificates of one level: per sample point, where it was when last searched (`at`),
-// the kCandidates nearest target rows from there, closest first (`count` of them; fewer when fewer lie
-// within `radius`), and `reach`, the distance from `at` to the next nearest target point (`radius` when
-// there is none within it). Every target point but the candidates lies at least `reach` from `at`, so at
-// least reach - |p - at| from the point's current position p: while the closest candidate is nearer than
-// that, it is the exact nearest target point (docs/registration.md, ICP-2), and step 1 searches the tree
-// only for the points whose certificate has expired.
+// the Candidates(plane_points) nearest target rows from there, closest first (`count` of them; fewer when
+// fewer lie within `radius`), and `reach`, the distance from `at` to the next nearest target point (`radius`
+// when there is none within it). Every target point but the candidates lies at least `reach` from `at`, so
+// at least reach - |p - at| from the point's current position p: while the closest candidate (the plane's
+// farthest, for a plane of several points) is nearer than that, they are the exact nearest target points
+// (docs/registration.md, ICP-2), and step 1 searches the tree only for the points whose certificate has
+// expired.
 struct NearestCache {
-  // Candidates kept: the plane's points, and at least two (a second candidate lets a certificate survive
-  // when the nearest two swap).
+  // Candidates kept: one more than the plane's points, so that a certificate survives when the plane's last
+  // point and the next swap.
   static constexpr int kMaxCandidates = kMaxPlanePoints + 1;
   static int Candidates(int plane_points) { return plane_points + 1; }
   double radius = 0.0;  // search radius (mm), above the gate
