@@ -161,6 +161,8 @@ bool SweepSurfaceOptions::IsValid(std::string* why) const {
     return fail("moving scanner density ratio must be >= 0");
   if (!(sight_radius_widths >= 0.0 && sight_radius_widths <= 100.0))
     return fail("sight radius must be in [0, 100] sweep widths");
+  static_assert(kMaxPlanePoints == 4, "the message below");
+  if (plane_points < 1 || plane_points > kMaxPlanePoints) return fail("plane points must be in [1, 4]");
   if (!(sample_spacings >= 1.0) || !std::isfinite(sample_spacings))
     return fail("sample spacings must be >= 1");
   return true;
@@ -176,6 +178,7 @@ SweepSurface PrepareSweep(const PointCloud& cloud, const SweepSurfaceOptions& op
   cloud.Validate(name);
   SweepSurface s;
   s.cloud = &cloud;
+  s.plane_points = options.plane_points;
   const KdTree3 tree(cloud.positions);
   NormalOptions no;
   no.k = options.normal_neighbours;
@@ -250,20 +253,39 @@ std::vector<SweepCorrespondence> FindSweepCorrespondences(const std::vector<Swee
   for (std::size_t s = 0; s < n; s += stride) {
     const std::uint32_t r = rows[s];
     const Eigen::Vector3d p = b.cloud->positions.row(r).transpose();
-    std::uint32_t k;
-    double d2;
-    if (!a.target->tree().NearestWithin(T_i_j * p - a.target->origin(), gate_mm, &k, &d2) || d2 > gate2)
-      continue;
+    const Eigen::Vector3d x = T_i_j * p - a.target->origin();
+    std::uint32_t near[kMaxPlanePoints];
+    double d2[kMaxPlanePoints];
+    const int found = a.plane_points == 1 ? (a.target->tree().NearestWithin(x, gate_mm, near, d2) ? 1 : 0)
+                                          : a.target->tree().NearestWithin(x, gate_mm, a.plane_points, near, d2);
+    if (found == 0 || d2[0] > gate2) continue;
+    const std::uint32_t k = near[0];
     if (a.border[k] || a.grazing[k] || b.grazing[r]) continue;
     const Eigen::Vector3d nq = a.normals.row(k).transpose();
     const Eigen::Vector3d np = T_i_j.linear() * b.normals.row(r).transpose();
     if (nq.squaredNorm() < 0.5 || np.squaredNorm() < 0.5 || np.dot(nq) < min_cos) continue;
     // A pair more than a point spacing apart along the tangent plane is a point beyond i's edge paired
     // with the edge: the plane extrapolated there misses a curved surface (by curvature * d^2 / 2).
-    const Eigen::Vector3d q = a.target->centred_positions().row(k).transpose() + a.target->origin();
+    Eigen::Vector3d q = a.target->centred_positions().row(k).transpose() + a.target->origin();
     const Eigen::Vector3d d = T_i_j * p - q;
     if ((d - nq.dot(d) * nq).squaredNorm() > a.spacing_mm * a.spacing_mm) continue;
-    out.push_back({i, j, p, q, nq, std::max(1e-3, double(a.confidence[k]) * double(b.confidence[r])), r, k});
+    Eigen::Vector3d plane_normal = nq;
+    if (found > 1) {
+      // The plane through the mean of the nearest points of i (SweepSurfaceOptions::plane_points).
+      Eigen::Vector3d sq = q, sn = nq;
+      int used = 1;
+      for (int h = 1; h < found; ++h) {
+        if (a.border[near[h]] || a.grazing[near[h]]) continue;
+        const Eigen::Vector3d nh = a.normals.row(near[h]).transpose();
+        if (nh.squaredNorm() < 0.5) continue;
+        sq += a.target->centred_positions().row(near[h]).transpose() + a.target->origin();
+        sn += nh.dot(nq) < 0 ? Eigen::Vector3d(-nh) : nh;
+        ++used;
+      }
+      q = sq / used;
+      plane_normal = sn.normalized();
+    }
+    out.push_back({i, j, p, q, plane_normal, std::max(1e-3, double(a.confidence[k]) * double(b.confidence[r])), r, k});
   }
   return out;
 }

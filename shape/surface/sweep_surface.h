@@ -49,6 +49,12 @@ struct SweepSurfaceOptions {
   double view_weight_power = 0.0;
   /// Cube side of the subsample that correspondences start from, in point spacings (>= 1).
   double sample_spacings = 2.0;
+  /// A correspondence's plane on this sweep passes through the mean of the point's this many nearest
+  /// points of the sweep (those within the gate, neither on the border nor grazing), normal their mean
+  /// normal, as ICP's (IcpOptions::plane_points): the sweep's own noise enters each residual about this
+  /// many times less (issue-13 grid at 2-4 mm, >= 15 %: the whole line met in 15 and 14 of 36 cells a seed
+  /// against 15 and 11 with the nearest point's plane; docs/benchmarks/merge.md). 1 to kMaxPlanePoints.
+  int plane_points = 4;
 
   /// False, with the reason in `why`, if a value is out of range.
   bool IsValid(std::string* why) const;
@@ -74,6 +80,7 @@ struct SweepSurface {
   /// The scanner moved along the sweep (SweepSurfaceOptions::moving_scanner_density_ratio): its points'
   /// lines of sight follow the sweep (sight_radius_widths).
   bool scanner_moved = false;
+  int plane_points = 1;  ///< SweepSurfaceOptions::plane_points
 
   /// Reverses every normal (the sweep's side; the target's normals are sign-free).
   void FlipNormals();
