@@ -256,8 +256,9 @@ std::vector<SweepCorrespondence> FindSweepCorrespondences(const std::vector<Swee
     const Eigen::Vector3d x = T_i_j * p - a.target->origin();
     std::uint32_t near[kMaxPlanePoints];
     double d2[kMaxPlanePoints];
-    const int found = a.plane_points == 1 ? (a.target->tree().NearestWithin(x, gate_mm, near, d2) ? 1 : 0)
-                                          : a.target->tree().NearestWithin(x, gate_mm, a.plane_points, near, d2);
+    const int found = a.plane_points == 1
+                          ? (a.target->tree().NearestWithin(x, gate_mm, near, d2) ? 1 : 0)
+                          : a.target->tree().NearestWithin(x, gate_mm, a.plane_points, near, d2);
     if (found == 0 || d2[0] > gate2) continue;
     const std::uint32_t k = near[0];
     if (a.border[k] || a.grazing[k] || b.grazing[r]) continue;
@@ -285,7 +286,8 @@ std::vector<SweepCorrespondence> FindSweepCorrespondences(const std::vector<Swee
       q = sq / used;
       plane_normal = sn.normalized();
     }
-    out.push_back({i, j, p, q, plane_normal, std::max(1e-3, double(a.confidence[k]) * double(b.confidence[r])), r, k});
+    out.push_back(
+        {i, j, p, q, plane_normal, std::max(1e-3, double(a.confidence[k]) * double(b.confidence[r])), r, k});
   }
   return out;
 }
