@@ -25,7 +25,7 @@
 //       [--prior-deg D --prior-mm M --prior-lever L] [--min-overlap-fraction F] [--border-gap DEG]
 //       [--min-pinned-ratio R] [--final-pinned-ratio R] [--sample-spacings S] [--points-per-pair N]
 //       [--rounds N] [--fit-tracker 0|1] [--final-every-point 0|1] [--normal-neighbours K] [--model-bound]
-//       [--count-shared-points 0|1] [--max-view-angle DEG] [--sight-radius WIDTHS]
+//       [--count-shared-points 0|1] [--max-view-angle DEG] [--sight-radius WIDTHS] [--plane-points K]
 // (the tracker prior, SweepMergeOptions::tracker_deg/tracker_mm/tracker_lever_mm, defaults MergeSweeps's;
 // the others override SweepMergeOptions::min_overlap_fraction, global_points_per_pair and global_rounds,
 // SweepSurfaceOptions::border_gap_deg and sample_spacings, and
@@ -80,6 +80,7 @@ SweepMergeOptions MergeOptions(const Flags& f) {
   if (f.final_every_point >= 0) options.final_every_point = f.final_every_point != 0;
   if (f.max_view_angle_deg >= 0.0) options.surface.max_view_angle_deg = f.max_view_angle_deg;
   if (f.sight_radius_widths >= 0.0) options.surface.sight_radius_widths = f.sight_radius_widths;
+  if (f.plane_points > 0) options.surface.plane_points = f.plane_points;
   if (f.count_shared_points >= 0) options.tracker_adjustment.count_shared_points = f.count_shared_points != 0;
   return options;
 }
@@ -366,7 +367,8 @@ int main(int argc, char** argv) {
         {"fit_tracker_accuracy", MergeOptions(f).fit_tracker_accuracy},
         {"count_shared_points", MergeOptions(f).tracker_adjustment.count_shared_points},
         {"max_view_angle_deg", MergeOptions(f).surface.max_view_angle_deg},
-        {"sight_radius_widths", MergeOptions(f).surface.sight_radius_widths}}},
+        {"sight_radius_widths", MergeOptions(f).surface.sight_radius_widths},
+        {"plane_points", MergeOptions(f).surface.plane_points}}},
       {"threads", omp_get_max_threads()},
       {"load_average", load},
       {"cells", cells}};

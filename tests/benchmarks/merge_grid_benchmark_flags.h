@@ -31,6 +31,7 @@ struct Flags {
   int count_shared_points = -1;  // 0 / 1; < 0: MergeSweeps's default
   double max_view_angle_deg = -1.0;   // < 0: MergeSweeps's default
   double sight_radius_widths = -1.0;  // < 0: MergeSweeps's default
+  int plane_points = 0;               // 0: MergeSweeps's default
   bool open3d = true;
 };
 
@@ -110,6 +111,8 @@ inline Flags Parse(int argc, char** argv) {
       f.final_every_point = std::stoi(value());
     else if (key == "--sight-radius")
       f.sight_radius_widths = std::stod(value());
+    else if (key == "--plane-points")
+      f.plane_points = std::stoi(value());
     else if (key == "--max-view-angle")
       f.max_view_angle_deg = std::stod(value());
     else if (key == "--count-shared-points")
