@@ -19,6 +19,8 @@ namespace {
 bool Nearest(const KdTree3& tree, const Points3& target, const Eigen::Vector3d& p, double gate, std::size_t s,
              NearestCache* cache, int want, std::uint32_t* j, int* found) {
   constexpr int kMax = NearestCache::kMaxCandidates;
+  static_assert(kMax + 1 <= KdTree3::kMaxBounded,
+                "a certificate's search finds one more than its candidates");
   if (cache == nullptr) {
     double d2[kMax];
     if (want == 1) {

@@ -3,6 +3,7 @@
 // nothing.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -133,6 +134,43 @@ TEST_F(RegisterCommand, PoseSdFractionDecidesHowFarTheLastSampleGrows) {
   r = run(" --pose-sd-fraction 1.5");
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("target_pose_sd_fraction"), std::string::npos) << r.output;
+}
+
+// --plane-points sets how many fixed points ICP's plane passes through: on two scans with 0.2 mm noise the
+// residual scale is the two noises', 0.2 sqrt(2) mm, with the nearest point's own plane, and the fixed
+// scan's share a quarter as large, 0.2 sqrt(1 + 1/4) mm, through four; both recover the pose; 0 or 5 is a
+// usage error.
+TEST_F(RegisterCommand, PlanePointsAverageTheFixedScansNoise) {
+  std::mt19937_64 rng(7);
+  const Rigid3 T_true = testing::RandomPose(&rng, 10.0, 30.0, Eigen::Vector3d(0, 100, 160));
+  WriteScan("fixed", Rigid3::Identity(), 21, dir_, 30000);
+  WriteScan("moving", T_true, 22, dir_, 30000);
+  auto run = [&](const std::string& extra) {
+    return Pectus("register " + P("moving.ply") + " --to " + P("fixed.ply") + " --moving-landmarks " +
+                  P("moving.mrk.json") + " --fixed-landmarks " + P("fixed.mrk.json") + " --report " +
+                  P("r.json") + " --transform " + P("T.json") + " --quiet" + extra);
+  };
+  auto scale = [&] {
+    nlohmann::json report;
+    std::ifstream(P("r.json")) >> report;
+    return report["icp"]["residual_scale_mm"].get<double>();
+  };
+  for (const auto& [flag, expected] : {std::pair{std::string(" --plane-points 1"), 0.2 * std::sqrt(2.0)},
+                                       std::pair{std::string(""), 0.2 * std::sqrt(1.25)}}) {
+    SCOPED_TRACE(flag.empty() ? "default" : flag);
+    const CliRun r = run(flag);
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_NEAR(scale(), expected, 0.02);
+    const PoseError e = ComparePoses(ReadTransformJson(P("T.json")), Similarity3::FromRigid(T_true),
+                                     Eigen::Vector3d(0, 100, 160));
+    EXPECT_LT(e.rotation_deg, 0.05);
+    EXPECT_LT(e.translation_mm, 0.1);
+  }
+  for (const std::string bad : {"0", "5"}) {
+    const CliRun r = run(" --plane-points " + bad);
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("--plane-points"), std::string::npos) << r.output;
+  }
 }
 
 // A cohort folder of three scans of one chest at known poses: to the reference (the second file) and
