@@ -52,8 +52,9 @@ struct SweepSurfaceOptions {
   /// A correspondence's plane on this sweep passes through the mean of the point's this many nearest
   /// points of the sweep (those within the gate, neither on the border nor grazing), normal their mean
   /// normal, as ICP's (IcpOptions::plane_points): the sweep's own noise enters each residual about this
-  /// many times less (issue-13 grid at 2-4 mm, >= 15 %: the whole line met in 15 and 14 of 36 cells a seed
-  /// against 15 and 11 with the nearest point's plane; docs/benchmarks/merge.md). 1 to kMaxPlanePoints.
+  /// many times less (issue-13 grid at 2-4 mm, >= 15 %: the whole line met in 15 and 14 of 36 cells on
+  /// seeds 1 and 2 against 15 and 11 with the nearest point's plane, about even on seeds 3 and 4;
+  /// docs/benchmarks/merge.md). 1 to kMaxPlanePoints.
   int plane_points = 4;
 
   /// False, with the reason in `why`, if a value is out of range.
