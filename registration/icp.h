@@ -37,6 +37,28 @@ struct IcpLevel {
   int points = 0;                ///< random sample of this many source points (RandomSample); 0 = off
 };
 
+/// The plane through several nearest target points (IcpOptions::plane_points, docs/registration.md): from
+/// the nearest one's point `q` and normal `n`, the mean of the positions of `rows[0..count)` (nearest
+/// first: rows[0] is the nearest, already in q and n) and the mean of their normals, each turned to agree
+/// with `n`, normalised. Rows `take(row)` refuses are left out; with none taken q and n stay as they are.
+template <class Take>
+void PlaneThroughNearestPoints(const Points3& positions, const Points3& normals, const std::uint32_t* rows,
+                               int count, Take take, Eigen::Vector3d* q, Eigen::Vector3d* n) {
+  Eigen::Vector3d sum_q = *q, sum_n = *n;
+  int used = 1;
+  for (int h = 1; h < count; ++h) {
+    if (!take(rows[h])) continue;
+    const Eigen::Vector3d nh = normals.row(rows[h]).transpose();
+    sum_q += positions.row(rows[h]).transpose();
+    sum_n += nh.dot(*n) < 0.0 ? Eigen::Vector3d(-nh) : nh;
+    ++used;
+  }
+  if (used > 1 && sum_n.squaredNorm() > 0.0) {
+    *q = sum_q / used;
+    *n = sum_n.normalized();
+  }
+}
+
 /// Options of AlignIcp. The defaults suit hand-held body scans and laser sweeps in mm.
 struct IcpOptions {
   IcpMethod method = IcpMethod::kPointToPlane;

@@ -149,23 +149,9 @@ std::int64_t FindPairs(const Problem& pb, const std::vector<std::uint32_t>& samp
     const Eigen::Vector3d d = p - q;
     const double along = d.dot(n);
     if (d.squaredNorm() - along * along > pb.max_tangential2) continue;
-    if (found > 1) {
-      // The plane through the mean of the nearest target points, normal their mean normal
-      // (IcpOptions::plane_points).
-      Eigen::Vector3d sum_q = q, sum_n = n;
-      int used = 1;
-      for (int h = 1; h < found; ++h) {
-        const Eigen::Vector3d nk = tn.row(near[h]).transpose();
-        if (nk.squaredNorm() == 0.0) continue;
-        sum_q += tp.row(near[h]).transpose();
-        sum_n += nk.dot(n) < 0.0 ? Eigen::Vector3d(-nk) : nk;
-        ++used;
-      }
-      if (used > 1 && sum_n.squaredNorm() > 0.0) {
-        q = sum_q / used;
-        n = sum_n.normalized();
-      }
-    }
+    // The plane through the nearest target points (IcpOptions::plane_points); a border point has no normal.
+    PlaneThroughNearestPoints(
+        tp, tn, near, found, [&](std::uint32_t row) { return tn.row(row).squaredNorm() != 0.0; }, &q, &n);
     if (use_source_normals) {
       Eigen::Vector3d ns = R * pb.source_normals->row(i).transpose();
       if (ns.squaredNorm() == 0.0) continue;

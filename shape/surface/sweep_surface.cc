@@ -267,25 +267,18 @@ std::vector<SweepCorrespondence> FindSweepCorrespondences(const std::vector<Swee
     if (nq.squaredNorm() < 0.5 || np.squaredNorm() < 0.5 || np.dot(nq) < min_cos) continue;
     // A pair more than a point spacing apart along the tangent plane is a point beyond i's edge paired
     // with the edge: the plane extrapolated there misses a curved surface (by curvature * d^2 / 2).
-    Eigen::Vector3d q = a.target->centred_positions().row(k).transpose() + a.target->origin();
-    const Eigen::Vector3d d = T_i_j * p - q;
+    Eigen::Vector3d q = a.target->centred_positions().row(k).transpose();  // i's frame, centred
+    const Eigen::Vector3d d = x - q;
     if ((d - nq.dot(d) * nq).squaredNorm() > a.spacing_mm * a.spacing_mm) continue;
+    // The plane through the nearest points of i (SweepSurfaceOptions::plane_points).
     Eigen::Vector3d plane_normal = nq;
-    if (found > 1) {
-      // The plane through the mean of the nearest points of i (SweepSurfaceOptions::plane_points).
-      Eigen::Vector3d sq = q, sn = nq;
-      int used = 1;
-      for (int h = 1; h < found; ++h) {
-        if (a.border[near[h]] || a.grazing[near[h]]) continue;
-        const Eigen::Vector3d nh = a.normals.row(near[h]).transpose();
-        if (nh.squaredNorm() < 0.5) continue;
-        sq += a.target->centred_positions().row(near[h]).transpose() + a.target->origin();
-        sn += nh.dot(nq) < 0 ? Eigen::Vector3d(-nh) : nh;
-        ++used;
-      }
-      q = sq / used;
-      plane_normal = sn.normalized();
-    }
+    PlaneThroughNearestPoints(
+        a.target->centred_positions(), a.normals, near, found,
+        [&](std::uint32_t row) {
+          return !a.border[row] && !a.grazing[row] && a.normals.row(row).squaredNorm() >= 0.5;
+        },
+        &q, &plane_normal);
+    q += a.target->origin();
     out.push_back(
         {i, j, p, q, plane_normal, std::max(1e-3, double(a.confidence[k]) * double(b.confidence[r])), r, k});
   }

@@ -39,6 +39,18 @@ class RegisterCommand : public testing_support::CommandTest {
     WritePointCloud(folder / (name + ".ply"), c);
     WriteLandmarks(folder / (name + ".mrk.json"), ChestLandmarks(T_world_scan.inverse(), 3.0, seed + 7));
   }
+  // `pectus register` of the scans written as "moving" and "fixed" with their landmarks, the report to
+  // r.json and the transform to T.json, with `extra` options.
+  CliRun RegisterMovingToFixed(const std::string& extra) const {
+    return Pectus("register " + P("moving.ply") + " --to " + P("fixed.ply") + " --moving-landmarks " +
+                  P("moving.mrk.json") + " --fixed-landmarks " + P("fixed.mrk.json") + " --report " +
+                  P("r.json") + " --transform " + P("T.json") + " --quiet" + extra);
+  }
+  nlohmann::json Report() const {
+    nlohmann::json report;
+    std::ifstream(P("r.json")) >> report;
+    return report;
+  }
 };
 
 // Moving and fixed scans 10 km from the origin, 20 degrees and 100 mm apart: landmarks then ICP give
@@ -112,14 +124,9 @@ TEST_F(RegisterCommand, PoseSdFractionDecidesHowFarTheLastSampleGrows) {
   const Rigid3 T_true = testing::RandomPose(&rng, 10.0, 30.0, Eigen::Vector3d(0, 100, 160));
   WriteScan("fixed", Rigid3::Identity(), 11, dir_, 40000);
   WriteScan("moving", T_true, 12, dir_, 40000);
-  auto run = [&](const std::string& extra) {
-    return Pectus("register " + P("moving.ply") + " --to " + P("fixed.ply") + " --moving-landmarks " +
-                  P("moving.mrk.json") + " --fixed-landmarks " + P("fixed.mrk.json") + " --report " +
-                  P("r.json") + " --quiet" + extra);
-  };
+  auto run = [&](const std::string& extra) { return RegisterMovingToFixed(extra); };
   auto last_points = [&] {
-    nlohmann::json report;
-    std::ifstream(P("r.json")) >> report;
+    const nlohmann::json report = Report();
     return std::pair{report["icp"]["levels"].back()["source_points"].get<int>(),
                      report["icp"]["sampling_sd_mm"].get<double>()};
   };
@@ -145,16 +152,8 @@ TEST_F(RegisterCommand, PlanePointsAverageTheFixedScansNoise) {
   const Rigid3 T_true = testing::RandomPose(&rng, 10.0, 30.0, Eigen::Vector3d(0, 100, 160));
   WriteScan("fixed", Rigid3::Identity(), 21, dir_, 30000);
   WriteScan("moving", T_true, 22, dir_, 30000);
-  auto run = [&](const std::string& extra) {
-    return Pectus("register " + P("moving.ply") + " --to " + P("fixed.ply") + " --moving-landmarks " +
-                  P("moving.mrk.json") + " --fixed-landmarks " + P("fixed.mrk.json") + " --report " +
-                  P("r.json") + " --transform " + P("T.json") + " --quiet" + extra);
-  };
-  auto scale = [&] {
-    nlohmann::json report;
-    std::ifstream(P("r.json")) >> report;
-    return report["icp"]["residual_scale_mm"].get<double>();
-  };
+  auto run = [&](const std::string& extra) { return RegisterMovingToFixed(extra); };
+  auto scale = [&] { return Report()["icp"]["residual_scale_mm"].get<double>(); };
   for (const auto& [flag, expected] : {std::pair{std::string(" --plane-points 1"), 0.2 * std::sqrt(2.0)},
                                        std::pair{std::string(""), 0.2 * std::sqrt(1.25)}}) {
     SCOPED_TRACE(flag.empty() ? "default" : flag);
