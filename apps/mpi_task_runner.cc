@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdlib>
 #include <exception>
 #include <limits>
 #include <thread>
@@ -27,13 +26,6 @@ void WaitGently(MPI_Request* request) {
 }
 
 }  // namespace
-
-bool LaunchedByMpi() {
-  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK"}) {
-    if (std::getenv(name) != nullptr) return true;
-  }
-  return false;
-}
 
 MpiSession::MpiSession(int* argc, char*** argv) {
   int provided = 0;

@@ -10,13 +10,10 @@
 #include <string>
 #include <vector>
 
+#include "apps/launched_by_mpi.h"
 #include "shape/core/task_runner.h"
 
 namespace pectus::cli {
-
-/// True if this process was started by an MPI launcher (mpirun, or srun with PMIx/PMI2): Open MPI's,
-/// PMIx's or PMI's rank variable is set. A plain `pectus` run never starts MPI.
-bool LaunchedByMpi();
 
 /// MPI for the life of the object (MPI_Init_thread with MPI_THREAD_MULTIPLE, MPI_Finalize). One per process.
 class MpiSession {

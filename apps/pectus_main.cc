@@ -7,13 +7,16 @@
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
 #include <algorithm>
+#include <cerrno>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <optional>
 #include <thread>
 
 #include "apps/command.h"
+#include "apps/launched_by_mpi.h"
 #include "shape/core/error.h"
 #include "shape/core/log.h"
 #include "shape/core/task_runner.h"
@@ -96,8 +99,37 @@ void TuneHeapForLargeArrays() {
   std::free(probe);
 }
 
+#ifdef PECTUS_FULL_PROGRAM
+// `pectus` runs the commands built into it (those needing only the scan libraries: apps/CMakeLists.txt)
+// and hands every other command line to PECTUS_FULL_PROGRAM in its own folder, which has every command:
+// `pectus --help`, any other command, and any command under mpirun (whose ranks the full program
+// starts). The same arguments, the same exit code.
+bool RunsHere(int argc, char** argv) {
+  if (argc < 2 || LaunchedByMpi()) return false;
+  for (const std::unique_ptr<Command>& command : MakeAllCommands()) {
+    if (command->Name() == argv[1]) return true;
+  }
+  return false;
+}
+
+int RunFullProgram(char** argv) {
+  std::error_code error;
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", error);
+  const std::filesystem::path full =
+      (error ? std::filesystem::path(argv[0]).parent_path() : self.parent_path()) / PECTUS_FULL_PROGRAM;
+  execv(full.c_str(), argv);
+  const char* command = argv[1] != nullptr ? argv[1] : "--help";
+  std::fprintf(stderr, "pectus: error: cannot start %s, which runs `pectus %s`: %s\n", full.c_str(), command,
+               std::strerror(errno));
+  return 1;
+}
+#endif
+
 // Exit codes (docs/errors.md): 0 success, 2 usage, 3 bad input, 1 any other failure.
 int Main(int argc, char** argv) {
+#ifdef PECTUS_FULL_PROGRAM
+  if (!RunsHere(argc, argv)) return RunFullProgram(argv);
+#endif
   TuneHeapForLargeArrays();
   // Under mpirun (or srun) every rank runs this same command: MPI is started once here, rank 0 hands out
   // the subjects of the commands that farm them out (Context::runner), prints, and writes the outputs.

@@ -117,6 +117,37 @@ TEST_F(CliTest, HelpShowsAnExample) {
   }
 }
 
+// `pectus` runs convert, info, place and register itself and hands everything else, and any command under
+// mpirun, to `pectus-full` beside it. A copy of `pectus` without `pectus-full` beside it shows which is
+// which.
+TEST_F(CliTest, RunsTheScanCommandsItselfAndHandsTheRestToTheFullProgram) {
+  const CliRun help = Pectus("--help");
+  EXPECT_EQ(help.code, 0) << help.output;
+  for (const char* command : {"register", "merge", "pipeline", "serve"}) {
+    EXPECT_NE(help.output.find(command), std::string::npos) << command << " missing from:\n" << help.output;
+  }
+  EXPECT_EQ(Pectus("merge --help").code, 0);
+
+  const fs::path alone = dir_ / "pectus";
+  fs::copy_file(PECTUS_EXECUTABLE, alone);
+  auto run = [&](const std::string& args) { return testing_support::RunShell(alone.string() + " " + args); };
+  for (const char* command : {"info", "convert", "place", "register"}) {
+    const CliRun r = run(std::string(command) + " --help");
+    EXPECT_EQ(r.code, 0) << command << ": " << r.output;
+    EXPECT_NE(r.output.find("Example"), std::string::npos) << command;
+  }
+  for (const std::string& args :
+       {std::string("merge --help"), std::string("--help"), std::string("--version")}) {
+    const CliRun r = run(args);
+    EXPECT_EQ(r.code, 1) << args << ": " << r.output;
+    EXPECT_NE(r.output.find((dir_ / "pectus-full").string()), std::string::npos) << r.output;
+  }
+  // Under mpirun the full program runs even the scan commands (the ranks are its business).
+  const CliRun mpi = testing_support::RunShell("OMPI_COMM_WORLD_SIZE=2 " + alone.string() + " info --help");
+  EXPECT_EQ(mpi.code, 1) << mpi.output;
+  EXPECT_NE(mpi.output.find("`pectus info`"), std::string::npos) << mpi.output;
+}
+
 TEST_F(CliTest, PlaceWritesOneCloudOfAllSweeps) {
   PECTUS_REQUIRE_SHARED_FILE(testing_support::kBunnyConf);
   const CliRun r = Pectus("place --poses " + kBunny + "bun.conf --input-units m -o " + P("bunny.ply") +

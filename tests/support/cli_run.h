@@ -14,11 +14,9 @@ struct CliRun {
   std::string output;  // stdout and stderr, interleaved
 };
 
-// `args` is appended to the executable's path and run through the shell; `launcher`, if any, comes before
-// the path (`mpiexec -n 2`, environment variables).
-inline CliRun Pectus(const std::string& args, const std::string& launcher = "") {
-  const std::string cmd =
-      (launcher.empty() ? "" : launcher + " ") + std::string(PECTUS_EXECUTABLE) + " " + args + " 2>&1";
+// Runs `command` through the shell.
+inline CliRun RunShell(const std::string& command) {
+  const std::string cmd = command + " 2>&1";
   CliRun run;
   FILE* pipe = ::popen(cmd.c_str(), "r");
   if (pipe == nullptr) return run;
@@ -27,6 +25,12 @@ inline CliRun Pectus(const std::string& args, const std::string& launcher = "") 
   const int status = ::pclose(pipe);
   run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return run;
+}
+
+// `args` is appended to the executable's path and run through the shell; `launcher`, if any, comes before
+// the path (`mpiexec -n 2`, environment variables).
+inline CliRun Pectus(const std::string& args, const std::string& launcher = "") {
+  return RunShell((launcher.empty() ? "" : launcher + " ") + std::string(PECTUS_EXECUTABLE) + " " + args);
 }
 
 }  // namespace pectus::testing_support
