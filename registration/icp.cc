@@ -121,11 +121,8 @@ std::size_t GrownSampleSize(double sd, double allowed, std::size_t n, std::size_
   return next >= 0.75 * Nd ? N : static_cast<std::size_t>(std::ceil(next));
 }
 
-// Inliers (a target point within `reach`) among the sample at pose T, and their RMS point-to-plane
-// distance.
-void Evaluate(const Problem& pb, const std::vector<std::uint32_t>& sample, const Rigid3& T, double reach,
-              NearestCache* cache, Pairs* pairs, IcpResult* result) {
-  FindPairs(pb, sample, T, reach, cache, pairs);
+// Inliers (the pairs found within the gate) and their RMS point-to-plane distance, out of `sample_size`.
+void Summarise(const Pairs* pairs, std::size_t sample_size, IcpResult* result) {
   double r2 = 0.0;
   result->inliers = 0;
   for (std::size_t k = 0; k < pairs->r.size(); ++k) {
@@ -134,7 +131,7 @@ void Evaluate(const Problem& pb, const std::vector<std::uint32_t>& sample, const
     r2 += pairs->r[k] * pairs->r[k];
   }
   result->inlier_fraction =
-      sample.empty() ? 0.0 : static_cast<double>(result->inliers) / static_cast<double>(sample.size());
+      sample_size == 0 ? 0.0 : static_cast<double>(result->inliers) / static_cast<double>(sample_size);
   result->rms_mm = result->inliers > 0 ? std::sqrt(r2 / static_cast<double>(result->inliers)) : 0.0;
 }
 
@@ -242,13 +239,16 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
     return sd * std::sqrt(std::max(0.0, 1.0 - static_cast<double>(n) / N));
   };
   // Iterates one level (or one size of the last level's growing sample) on `sample` from the current
-  // pose until the update falls below the tolerances; false with `failure` set when the fit breaks down.
+  // pose until the update falls below the tolerances (`small_update`: the last did); false with `failure`
+  // set when the fit breaks down.
   // With `may_grow`, it stops early, setting `grow_to`, as soon as the sample costs more accuracy than
   // target_pose_sd_fraction allows: converging on a sample about to grow would be wasted work.
   std::size_t grow_to = 0;
+  bool small_update = false;
   auto iterate = [&](std::size_t l, const std::vector<std::uint32_t>& sample, double rot_tol,
                      double trans_tol, bool may_grow, IcpLevelReport* report) {
     grow_to = 0;
+    small_update = false;
     const IcpLevel& level = levels[l];
     Rigid3 previous = T;
     Vector6 x_previous = Vector6::Zero();
@@ -297,7 +297,8 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
         }
       }
       const Rigid3 cycle = T * before_previous.inverse();
-      if ((RotationAngleDeg(dT.linear()) < rot_tol && dT.translation().norm() < trans_tol) ||
+      small_update = RotationAngleDeg(dT.linear()) < rot_tol && dT.translation().norm() < trans_tol;
+      if (small_update ||
           (it >= 2 && RotationAngleDeg(cycle.linear()) < rot_tol && cycle.translation().norm() < trans_tol)) {
         report->converged = true;
         break;
@@ -357,8 +358,15 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
   // Final figures on the finest sample at the final pose; a poor fit is a failure with its reason.
   const double reach =
       options.inlier_distance_mm > 0.0 ? options.inlier_distance_mm : levels.back().max_distance_mm;
-  // The last level's certificates still hold for its sample; they serve any reach up to their radius.
-  Evaluate(pb, *sample, T, reach, reach <= cache.radius ? &cache : nullptr, &pairs, &result);
+  // When the last iteration found its pairs within this reach and then moved the pose by less than the
+  // tolerances (1e-3 degrees and 2 um by default), those pairs are the final figures: at the final pose the
+  // RMS would differ by less than that movement, and a pair's inlier status only where its distance lies
+  // within it of the reach. Otherwise the pairs are found again at the final pose; the last level's
+  // certificates still hold for its sample and serve any reach up to their radius.
+  if (!(small_update && reach == levels.back().max_distance_mm && pairs.r.size() == sample->size())) {
+    FindPairs(pb, *sample, T, reach, reach <= cache.radius ? &cache : nullptr, &pairs);
+  }
+  Summarise(&pairs, sample->size(), &result);
   const std::vector<std::string> problems = Problems(result, options, levels.back().max_iterations, reach);
   result.success = problems.empty();
   std::string message;

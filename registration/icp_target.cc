@@ -22,7 +22,7 @@ void IcpTarget::Prepare(Points3 positions, const std::string& name) {
   origin_ = positions.colwise().mean().transpose();
   centred_ = std::move(positions);
   centred_.rowwise() -= origin_.transpose();
-  tree_ = std::make_unique<KdTree3>(centred_, 12, /*halves=*/true);  // built on two threads
+  tree_ = std::make_unique<KdTree3>(centred_, 12, /*parallel=*/true);  // built on two threads
   spacing_mm_ = MedianPointSpacing(centred_, *tree_);
   timings_s_.Add("prepare", Seconds(start));
 }

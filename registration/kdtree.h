@@ -16,25 +16,23 @@ namespace pectus {
 /// A static k-d tree over the rows of a #points by 3 matrix. The matrix is referenced, not copied: it
 /// must outlive the tree and stay unchanged. Queries are const and thread-safe.
 ///
-/// With `halves` and at least 2 kMinHalfPoints points the tree is built as two: the points are split at the
-/// median of their widest axis, copied half by half, and each half gets a nanoflann tree of its own,
-/// the two built side by side on two OpenMP threads (nanoflann 1.4 builds on one). A query searches the
-/// half on its side of the cut and the other only when the cut is nearer than what it has found: the
-/// same answers as one tree (ties in distance apart), whatever the number of threads.
+/// The tree is nanoflann's (its nodes, its searches), built by KdTree3 itself with nanoflann 1.4's rule
+/// (the cut in the middle of the box along the axis of widest spread, the points partitioned in
+/// place), so that it is the tree nanoflann's own build gives, node for node and in the same point order,
+/// hence the same answers. The build works on a contiguous copy of the coordinates, where nanoflann reads
+/// every point through its index at every level, and with `parallel` on two OpenMP threads (nanoflann 1.4
+/// builds on one): the subtrees below the top cuts are tasks.
 class KdTree3 {
  public:
-  /// A tree of fewer points is built whole (the split and the copy would cost more than they save).
-  static constexpr Eigen::Index kMinHalfPoints = 32768;
-
   /// @param[in] points     #points by 3 positions (mm)
-  /// @param[in] leaf_size  points per leaf (10 to 20 is fastest for 3D)
-  /// @param[in] halves     build two halves side by side (above), for a large tree built while the
+  /// @param[in] leaf_size  points per leaf (10 to 20 is fastest for 3D), at least 1
+  /// @param[in] parallel   build on two threads (if OpenMP allows two), for a large tree built while the
   ///                       other core is idle
-  explicit KdTree3(const Points3& points, int leaf_size = 12, bool halves = false);
+  explicit KdTree3(const Points3& points, int leaf_size = 12, bool parallel = false);
   ~KdTree3();
   KdTree3(const KdTree3&) = delete;
   KdTree3& operator=(const KdTree3&) = delete;
-  /// Movable: every nanoflann index lives on the heap with the point set it refers to.
+  /// Movable: the nanoflann index lives on the heap with the point set it refers to.
   KdTree3(KdTree3&&) noexcept;
   KdTree3& operator=(KdTree3&&) noexcept;
 
@@ -46,7 +44,6 @@ class KdTree3 {
     nanoflann::KNNResultSet<double, std::uint32_t> result(1);
     result.init(index, squared_distance);
     Search(&result, query, nanoflann::SearchParams(32, 0.0f, false));
-    *index = Row(*index);
     return true;
   }
 
@@ -59,7 +56,7 @@ class KdTree3 {
     BoundedNearest result(max_distance * max_distance);
     Search(&result, query, nanoflann::SearchParams(32, 0.0f, false));
     if (!result.found) return false;
-    *index = Row(result.index);
+    *index = result.index;
     *squared_distance = result.best;
     return true;
   }
@@ -74,7 +71,7 @@ class KdTree3 {
     BoundedTwoNearest result(max_distance * max_distance);
     Search(&result, query, nanoflann::SearchParams(32, 0.0f, false));
     for (int k = 0; k < result.count; ++k) {
-      indices[k] = Row(result.index[k]);
+      indices[k] = result.index[k];
       squared_distances[k] = result.dist[k];
     }
     return result.count;
@@ -90,7 +87,7 @@ class KdTree3 {
     BoundedKNearest result(max_distance * max_distance, std::min(k, kMaxBounded));
     Search(&result, query, nanoflann::SearchParams(32, 0.0f, false));
     for (int j = 0; j < result.count; ++j) {
-      indices[j] = Row(result.index[j]);
+      indices[j] = result.index[j];
       squared_distances[j] = result.dist[j];
     }
     return result.count;
@@ -104,7 +101,6 @@ class KdTree3 {
     result.init(indices, squared_distances);
     Search(&result, query, nanoflann::SearchParams());
     const int found = static_cast<int>(result.size());
-    for (int j = 0; j < found; ++j) indices[j] = Row(indices[j]);
     return found;
   }
 
@@ -124,7 +120,6 @@ class KdTree3 {
     Search(&result, query, nanoflann::SearchParams());
     indices->resize(result.size());
     squared_distances->resize(result.size());
-    for (std::uint32_t& i : *indices) i = Row(i);
   }
 
   /// Every point within `radius` (mm) of `query`: (row, squared distance) pairs, closest first when
@@ -135,66 +130,33 @@ class KdTree3 {
     if (size() == 0) return 0;
     nanoflann::RadiusResultSet<double, std::uint32_t> result(radius * radius, *matches);
     Search(&result, query, nanoflann::SearchParams(32, 0.0f, sorted));
-    for (auto& m : *matches) m.first = Row(m.first);
     if (sorted) std::sort(matches->begin(), matches->end(), nanoflann::IndexDist_Sorter());
     return matches->size();
   }
 
- private:
-  // Rows [begin, begin + count) of a matrix, as nanoflann sees a point set.
+  /// The rows of a matrix, as nanoflann sees a point set.
   struct Adaptor {
     const Points3* points;
-    Eigen::Index begin;
-    Eigen::Index count;
-    std::size_t kdtree_get_point_count() const { return static_cast<std::size_t>(count); }
+    std::size_t kdtree_get_point_count() const { return static_cast<std::size_t>(points->rows()); }
     double kdtree_get_pt(std::size_t i, std::size_t dim) const {
-      return (*points)(begin + static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(dim));
+      return (*points)(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(dim));
     }
     template <class BBox>
     bool kdtree_get_bbox(BBox&) const {
       return false;
     }
   };
+  /// The nanoflann index (public for the test that compares the build with nanoflann's own).
   using Index = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Adaptor>, Adaptor, 3,
                                                     std::uint32_t>;
-  // One tree over one part of the points (all of them, or a half). Built at once unless `build` is false.
-  struct Part {
-    Part(const Points3* points, Eigen::Index begin, Eigen::Index count, int leaf_size, bool build = true)
-        : adaptor{points, begin, count},
-          index(std::make_unique<Index>(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(leaf_size))) {
-      if (build && count > 0) index->buildIndex();
-    }
-    Part(const Part&) = delete;  // the index refers to `adaptor`
-    Part& operator=(const Part&) = delete;
-    Adaptor adaptor;
-    std::unique_ptr<Index> index;
-  };
-  // Passes a part's results on to a result set with the part's offset added to each index.
-  template <class ResultSet>
-  struct Shifted {
-    ResultSet* result;
-    std::uint32_t offset;
-    bool full() const { return result->full(); }
-    double worstDist() const { return result->worstDist(); }
-    bool addPoint(double d, std::uint32_t i) { return result->addPoint(d, i + offset); }
-  };
-  // Searches the part on the query's side of the cut, then the other if the cut is within reach.
+  const Index& index() const { return *index_; }
+
+ private:
   template <class ResultSet>
   void Search(ResultSet* result, const Eigen::Vector3d& query, const nanoflann::SearchParams& params) const {
-    if (parts_.size() == 1) {
-      parts_[0]->index->findNeighbors(*result, query.data(), params);
-      return;
-    }
-    const double off = query(axis_) - cut_;
-    const std::size_t near = off < 0.0 ? 0 : 1;  // the first half lies below the cut, the second not
-    for (const std::size_t k : {near, 1 - near}) {
-      if (k != near && off * off > result->worstDist()) break;
-      Shifted<ResultSet> shifted{result, static_cast<std::uint32_t>(parts_[k]->adaptor.begin)};
-      parts_[k]->index->findNeighbors(shifted, query.data(), params);
-    }
+    index_->findNeighbors(*result, query.data(), params);
   }
-  // The row of `points` of an index found by Search.
-  std::uint32_t Row(std::uint32_t i) const { return rows_.empty() ? i : rows_[i]; }
+  void Build(int leaf_size, bool parallel);
 
   // A nanoflann result set keeping the single nearest point under a squared-distance bound.
   struct BoundedNearest {
@@ -267,12 +229,9 @@ class KdTree3 {
     int count = 0;
   };
   const Points3* points_;
-  std::vector<std::unique_ptr<Part>> parts_;
-  // Two halves: their points in order (`ordered_`), the row of `points_` of each (`rows_`), and the cut.
-  std::unique_ptr<Points3> ordered_;
-  std::vector<std::uint32_t> rows_;
-  Eigen::Index axis_ = 0;
-  double cut_ = 0.0;
+  // On the heap, so that the index's reference to it survives a move.
+  std::unique_ptr<Adaptor> adaptor_;
+  std::unique_ptr<Index> index_;
 };
 
 }  // namespace pectus

@@ -128,7 +128,8 @@ std::int64_t FindPairs(const Problem& pb, const std::vector<std::uint32_t>& samp
   pairs->Resize(sample.size());
   const auto m = static_cast<std::int64_t>(sample.size());
   std::int64_t searches = 0;
-#pragma omp parallel for schedule(dynamic, kChunk) reduction(+ : searches) if (m >= kMinParallelPoints)
+  const std::int64_t chunk = std::clamp(m / kMinChunks, kMinChunk, kChunk);
+#pragma omp parallel for schedule(dynamic, chunk) reduction(+ : searches) if (m >= kMinParallelSearchPoints)
   for (std::int64_t k = 0; k < m; ++k) {
     const auto s = static_cast<std::size_t>(k);
     const std::uint32_t i = sample[s];

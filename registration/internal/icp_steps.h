@@ -19,14 +19,21 @@ constexpr std::uint32_t kNoMatch = std::numeric_limits<std::uint32_t>::max();
 // Correspondences are summed in blocks of this many, then the blocks in order: the same sums for any
 // number of threads.
 constexpr std::size_t kBlock = 512;
-// Steps 1 and 3 run on several threads only for at least this many sample points: a coarse level's few
-// thousand points take less time than waking the threads, and on a busy machine every fork and join may
-// wait for a time slice.
+// Step 3 runs on several threads only for at least this many sample points: it costs about 0.05 us a
+// point, so a coarse level's few thousand points take less time than waking the threads, and on a busy
+// machine every fork and join may wait for a time slice.
 constexpr std::int64_t kMinParallelPoints = 16384;
-// Steps 1 and 3 hand out their points in chunks of this many, to whichever thread is free: when the
-// machine is busy and a thread is not given a core, the others take its share instead of waiting for it
-// (with static shares, the thread that finished first waited for the other's whole share at every join).
+// Step 1 costs 1-5 us a point where it searches the tree (a sparse sample misses the caches at every
+// search), so it runs on several threads from this many points: a chest's 10000-point level gains (17 to
+// 11-14 ms), its 3000-point level did not (6-7 ms on one thread, 6-10 on two).
+constexpr std::int64_t kMinParallelSearchPoints = 8192;
+// Steps 1 and 3 hand out their points in chunks of at most this many, to whichever thread is free: when
+// the machine is busy and a thread is not given a core, the others take its share instead of waiting for
+// it (with static shares, the thread that finished first waited for the other's whole share at every
+// join). Step 1 cuts a small sample into at least kMinChunks chunks, of at least kMinChunk points.
 constexpr std::int64_t kChunk = 2048;
+constexpr std::int64_t kMinChunk = 128;
+constexpr std::int64_t kMinChunks = 8;
 // Step 1 searches this many times the gate, so that a certificate holds while a point moves a little.
 constexpr double kSearchRadiusOverGate = 1.5;
 // Step 2 estimates the robust scale from at most this many residuals.

@@ -15,6 +15,8 @@
 //           as programs (scripts/peers/open3d_icp.py; this program with --pcl-peer) from the same start
 //           on chest pairs (landmark start) and the bunny pairs: time and accuracy ratios per pair.
 //           --pectus-before PECTUS adds another build's `pectus` (before a change) to the same run.
+//           --process-runs N (default 3): every command runs N times, round robin, and its times are
+//           the medians (a single run of a 0.2 s process on a shared VM varies by a third).
 //
 // The chest scans come from the virtual scanner (pectus::datasets: merged sweeps of a population subject)
 // when that library is built, else from the analytic surface of tests/registration/synthetic_chest.h.
@@ -24,7 +26,8 @@
 //           (registration_benchmark_floor.h).
 //
 //   registration_benchmark [--speed] [--pairs] [--bunny] [--process] [--floor] [--trials N]
-//                          [--icp-only-trials N] [--repeat N] [--process-pairs N] [--floor-pairs N]
+//                          [--icp-only-trials N] [--repeat N] [--process-pairs N] [--process-runs N]
+//                          [--floor-pairs N]
 //                          [--pectus-before PECTUS] [--no-peers]
 //   (no part named: all but floor). Every time is given as wall and CPU seconds (the process's CPU time, all
 //   threads), with the load average before and after; "acceptance" at the end checks each line of issue 4.
@@ -160,7 +163,7 @@ json Acceptance(const json& out) {
 int Main(int argc, char** argv) {
   if (argc == 8 && std::string(argv[1]) == "--pcl-peer") return PclPeer(argv + 2);
   bool speed = false, pairs = false, bunny = false, peers = true, process = false, floor = false;
-  int trials = 200, icp_only_trials = 50, repeat = 5, process_pairs = 5, floor_pairs = 6;
+  int trials = 200, icp_only_trials = 50, repeat = 5, process_pairs = 5, process_runs = 3, floor_pairs = 6;
   std::string pectus_before;
   std::string command = "registration_benchmark";
   for (int i = 1; i < argc; ++i) command += std::string(" ") + argv[i];
@@ -184,6 +187,8 @@ int Main(int argc, char** argv) {
       floor_pairs = value();
     } else if (a == "--process-pairs") {
       process_pairs = value();
+    } else if (a == "--process-runs") {
+      process_runs = value();
     } else if (a == "--pectus-before") {
       if (i + 1 >= argc) throw std::runtime_error(a + " needs a value");
       pectus_before = argv[++i];
@@ -197,7 +202,7 @@ int Main(int argc, char** argv) {
       repeat = value();
     } else {
       std::cerr << "usage: registration_benchmark [--speed] [--pairs] [--bunny] [--process] [--floor] "
-                   "[--trials N] [--icp-only-trials N] [--repeat N] [--process-pairs N] [--floor-pairs N] "
+                   "[--trials N] [--icp-only-trials N] [--repeat N] [--process-pairs N] [--process-runs N] [--floor-pairs N] "
                    "[--pectus-before PECTUS] [--no-peers]\n";
       return 2;
     }
@@ -217,7 +222,7 @@ int Main(int argc, char** argv) {
   if (speed) out["speed"] = Speed(std::max(1, repeat), peers);
   if (bunny) out["bunny"] = Bunny(5, peers, &out["bunny_loop"]);
   if (pairs) out["pairs"] = Pairs(std::max(1, trials), std::max(0, icp_only_trials));
-  if (process) out["process"] = Process(std::max(0, process_pairs), true, pectus_before);
+  if (process) out["process"] = Process(std::max(0, process_pairs), true, pectus_before, std::max(1, process_runs));
   if (floor) out["floor"] = Floor(std::max(0, floor_pairs), peers);
   out["machine"]["loadavg_after"] = FirstLine("/proc/loadavg");
   out["total_seconds"] = Since(t0);

@@ -75,16 +75,25 @@ json ProcessFigures(const ProcessTime& t, const fs::path& transform, const Proce
           {"rms_displacement_mm", RmsDisplacement(c.moving, T, c.truth)}};
 }
 
-// Runs every process on the files in `dir` and compares the peers with pectus.
+// Runs every process on the files in `dir` `runs` times, round robin (every command once, then again), so
+// that a slow minute of the machine falls on all of them alike; each command's times are the medians of
+// its runs (its pose is the same in every run: each program is deterministic). Compares the peers with
+// pectus.
 json RunProcesses(const fs::path& dir, const ProcessCase& c, const std::string& pectus_args,
-                  const std::string& pectus_before) {
-  json out = {{"pair", c.name}, {"last_gate_mm", c.gate_mm}};
+                  const std::string& pectus_before, int runs) {
+  json out = {{"pair", c.name}, {"last_gate_mm", c.gate_mm}, {"runs", runs}};
   const std::string scans = (dir / "moving.ply").string() + " --to " + (dir / "fixed.ply").string();
+  struct Command {
+    std::string key, line;
+    fs::path transform;
+  };
+  std::vector<Command> commands;
   auto pectus = [&](const std::string& binary, const std::string& extra, const std::string& key) {
     const fs::path T = dir / (key + ".json");
-    const ProcessTime t = RunProcess(binary + " register " + scans + " " + pectus_args + extra +
-                                     " --transform " + T.string() + " > /dev/null 2>&1");
-    out[key] = ProcessFigures(t, T, c);
+    commands.push_back({key,
+                        binary + " register " + scans + " " + pectus_args + extra + " --transform " +
+                            T.string() + " > /dev/null 2>&1",
+                        T});
   };
   pectus(PectusCommandPath(), "", "pectus");
   // The same command with the last ICP sample fixed at 30000 points: AlignIcp before issue 13.
@@ -93,22 +102,42 @@ json RunProcesses(const fs::path& dir, const ProcessCase& c, const std::string& 
   const std::vector<Stage> plain = {{15.0, 0}}, staged = {{20.0, 0}, {5.0, 0}, {c.gate_mm, 0}};
   for (const auto& [key, stages, iterations] :
        {std::tuple{"open3d_plain", plain, 50}, std::tuple{"open3d_staged", staged, 30}}) {
-    const std::string T = (dir / (std::string(key) + ".json")).string();
-    const ProcessTime t =
-        RunProcess("/usr/bin/python3 " + std::string(PECTUS_SOURCE_DIR) + "/scripts/peers/open3d_icp.py " +
-                   (dir / "fixed.ply").string() + " " + (dir / "moving.ply").string() + " " +
-                   (dir / "init.json").string() + " --stages " + StagesText(stages) + " --max-iterations " +
-                   std::to_string(iterations) + " --transform-out " + T + " > /dev/null");
-    out[key] = ProcessFigures(t, T, c);
+    const fs::path T = dir / (std::string(key) + ".json");
+    commands.push_back(
+        {key,
+         "/usr/bin/python3 " + std::string(PECTUS_SOURCE_DIR) + "/scripts/peers/open3d_icp.py " +
+             (dir / "fixed.ply").string() + " " + (dir / "moving.ply").string() + " " +
+             (dir / "init.json").string() + " --stages " + StagesText(stages) + " --max-iterations " +
+             std::to_string(iterations) + " --transform-out " + T.string() + " > /dev/null",
+         T});
   }
   for (const auto& [key, stages, iterations] :
        {std::tuple{"pcl_plain", plain, 50}, std::tuple{"pcl_staged", staged, 30}}) {
-    const std::string T = (dir / (std::string(key) + ".json")).string();
-    const ProcessTime t =
-        RunProcess(fs::canonical("/proc/self/exe").string() + " --pcl-peer " + (dir / "fixed.ply").string() +
-                   " " + (dir / "moving.ply").string() + " " + (dir / "init.json").string() + " " + T + " " +
-                   StagesText(stages) + " " + std::to_string(iterations));
-    out[key] = ProcessFigures(t, T, c);
+    const fs::path T = dir / (std::string(key) + ".json");
+    commands.push_back({key,
+                        fs::canonical("/proc/self/exe").string() + " --pcl-peer " + (dir / "fixed.ply").string() +
+                            " " + (dir / "moving.ply").string() + " " + (dir / "init.json").string() + " " +
+                            T.string() + " " + StagesText(stages) + " " + std::to_string(iterations),
+                        T});
+  }
+  std::vector<std::vector<double>> wall(commands.size()), cpu(commands.size());
+  std::vector<int> status(commands.size(), 0);
+  for (int run = 0; run < runs; ++run) {
+    for (std::size_t k = 0; k < commands.size(); ++k) {
+      if (status[k] != 0) continue;  // a command that failed once is not run again
+      const ProcessTime t = RunProcess(commands[k].line);
+      status[k] = t.status;
+      wall[k].push_back(t.wall_s);
+      cpu[k].push_back(t.cpu_s);
+    }
+  }
+  for (std::size_t k = 0; k < commands.size(); ++k) {
+    ProcessTime t;
+    t.status = status[k];
+    t.wall_s = wall[k].empty() ? 0.0 : Median(wall[k]);
+    t.cpu_s = cpu[k].empty() ? 0.0 : Median(cpu[k]);
+    out[commands[k].key] = ProcessFigures(t, commands[k].transform, c);
+    if (t.status == 0) out[commands[k].key]["wall_s_runs"] = wall[k];
   }
   // Each peer over pectus: time ratios, and whether pectus is as accurate (as in the speed part: at most
   // the peer's error, or within 0.001 degrees and 0.005 mm of it).
@@ -135,7 +164,7 @@ json RunProcesses(const fs::path& dir, const ProcessCase& c, const std::string& 
   return out;
 }
 
-json Process(int chest_pairs, bool bunny, const std::string& pectus_before) {
+json Process(int chest_pairs, bool bunny, const std::string& pectus_before, int runs) {
   // PECTUS_PROCESS_DIR keeps each pair's files there (DIR/seed1000, ..., DIR/bun000_bun045, ...; each with
   // truth.json), to profile a process or try an option by hand.
   const char* keep = std::getenv("PECTUS_PROCESS_DIR");
@@ -165,7 +194,7 @@ json Process(int chest_pairs, bool bunny, const std::string& pectus_before) {
     rows.push_back(RunProcesses(at, c,
                                 "--moving-landmarks " + (at / "moving.csv").string() + " --fixed-landmarks " +
                                     (at / "fixed.csv").string(),
-                                pectus_before));
+                                pectus_before, runs));
     std::cerr << "process: " << c.name << "\n";
   }
   if (bunny) {
@@ -193,7 +222,7 @@ json Process(int chest_pairs, bool bunny, const std::string& pectus_before) {
       WriteScans(at, fixed.positions, moving.positions, &c);
       WriteTransformJson(at / "init.json", Similarity3::FromRigid(start));
       WriteTransformJson(at / "truth.json", c.truth);
-      rows.push_back(RunProcesses(at, c, "--initial " + (at / "init.json").string(), pectus_before));
+      rows.push_back(RunProcesses(at, c, "--initial " + (at / "init.json").string(), pectus_before, runs));
       std::cerr << "process: bunny " << c.name << "\n";
     }
   }

@@ -3,8 +3,10 @@
 #include "registration/kdtree.h"
 
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <limits>
 #include <random>
 #include <utility>
@@ -43,60 +45,85 @@ TEST(KdTree3, NearestWithinMatchesBruteForce) {
   }
 }
 
-// A tree built as two halves (side by side on two threads) answers every query as the whole tree does,
-// near the cut between the halves too, and the whole tree answers as a brute-force scan.
-TEST(KdTree3, TwoHalvesAnswerAsOneTree) {
+// The nodes of two nanoflann trees are equal, subtree for subtree: the same cuts (axis, and the bounds
+// either side) and the same leaves (ranges of the index array).
+void ExpectSameNodes(const KdTree3::Index::Node* a, const KdTree3::Index::Node* b, int* nodes) {
+  ASSERT_EQ(a->child1 == nullptr, b->child1 == nullptr);
+  ++*nodes;
+  if (a->child1 == nullptr) {
+    ASSERT_EQ(a->node_type.lr.left, b->node_type.lr.left);
+    ASSERT_EQ(a->node_type.lr.right, b->node_type.lr.right);
+    return;
+  }
+  ASSERT_EQ(a->node_type.sub.divfeat, b->node_type.sub.divfeat);
+  ASSERT_EQ(a->node_type.sub.divlow, b->node_type.sub.divlow);
+  ASSERT_EQ(a->node_type.sub.divhigh, b->node_type.sub.divhigh);
+  ExpectSameNodes(a->child1, b->child1, nodes);
+  ExpectSameNodes(a->child2, b->child2, nodes);
+}
+
+// KdTree3 builds the tree nanoflann's own buildIndex builds, node for node and with the points in the same
+// order, on one thread and on two, for points spread in a box, on a thin sheet with repeated coordinates
+// (ties at every cut), and all alike; and a moved tree answers as before.
+TEST(KdTree3, BuildsTheTreeNanoflannBuilds) {
   std::mt19937_64 rng(9);
   std::uniform_real_distribution<double> x(0.0, 100.0), y(0.0, 30.0), z(0.0, 10.0);
-  Points3 points(2 * KdTree3::kMinHalfPoints + 101, 3);
-  for (Eigen::Index i = 0; i < points.rows(); ++i) points.row(i) << x(rng), y(rng), z(rng);
-  const KdTree3 whole(points);
-  std::vector<KdTree3> moved;  // a tree moves with its halves' nanoflann indices and copied points
-  moved.emplace_back(points, 12, /*halves=*/true);
-  moved.reserve(moved.capacity() + 1);
-  const KdTree3& halves = moved.front();
-  ASSERT_EQ(halves.size(), points.rows());
-  // Queries anywhere, and within a millimetre of the median along x, where the cut lies.
-  std::normal_distribution<double> near_cut(50.0, 0.5);
-  for (int q = 0; q < 400; ++q) {
-    const Eigen::Vector3d query(q % 2 == 0 ? x(rng) : near_cut(rng), y(rng), z(rng));
-    std::uint32_t i1 = 0, i2 = 0;
-    double d1 = 0.0, d2 = 0.0;
-    ASSERT_TRUE(whole.Nearest(query, &i1, &d1));
-    ASSERT_TRUE(halves.Nearest(query, &i2, &d2));
-    EXPECT_EQ(i1, i2);
-    EXPECT_EQ(d1, d2);
-    double brute = std::numeric_limits<double>::infinity();
-    for (Eigen::Index i = 0; i < points.rows(); ++i)
-      brute = std::min(brute, (points.row(i).transpose() - query).squaredNorm());
-    EXPECT_NEAR(d1, brute, 1e-12);
-    for (const double radius : {0.2, 0.6, 2.0}) {
-      const bool f1 = whole.NearestWithin(query, radius, &i1, &d1);
-      ASSERT_EQ(f1, halves.NearestWithin(query, radius, &i2, &d2));
-      if (f1) {
-        EXPECT_EQ(i1, i2);
-      }
-      std::uint32_t a[KdTree3::kMaxBounded], b[KdTree3::kMaxBounded];
-      double da[KdTree3::kMaxBounded], db[KdTree3::kMaxBounded];
-      const int n1 = whole.NearestWithin(query, radius, 3, a, da);
-      ASSERT_EQ(n1, halves.NearestWithin(query, radius, 3, b, db));
-      for (int j = 0; j < n1; ++j) EXPECT_EQ(a[j], b[j]);
-      std::uint32_t two_a[2], two_b[2];
-      double two_da[2], two_db[2];
-      const int t1 = whole.NearestTwoWithin(query, radius, two_a, two_da);
-      ASSERT_EQ(t1, halves.NearestTwoWithin(query, radius, two_b, two_db));
-      for (int j = 0; j < t1; ++j) EXPECT_EQ(two_a[j], two_b[j]);
-      std::vector<std::pair<std::uint32_t, double>> ra, rb;
-      ASSERT_EQ(whole.Radius(query, radius, &ra), halves.Radius(query, radius, &rb));
-      EXPECT_EQ(ra, rb);
-    }
-    std::vector<std::uint32_t> ka, kb;
-    std::vector<double> kda, kdb;
-    whole.Knn(query, 10, &ka, &kda);
-    halves.Knn(query, 10, &kb, &kdb);
-    EXPECT_EQ(ka, kb);
-    EXPECT_EQ(kda, kdb);
+  std::uniform_int_distribution<int> grid(0, 40);
+  const Eigen::Index n = 40000;
+  Points3 box(n, 3), sheet(n, 3), alike(3000, 3);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    box.row(i) << x(rng), y(rng), z(rng);
+    sheet.row(i) << 0.5 * grid(rng), 0.25 * grid(rng), 1e-3 * grid(rng) * grid(rng);
   }
+  alike.rowwise() = Eigen::RowVector3d(1.0, -2.0, 3.0);
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(2);  // the parallel build uses two threads only where OpenMP allows two
+  for (const Points3* points : {&box, &sheet, &alike}) {
+    for (const int leaf : {1, 12, 30}) {
+      KdTree3::Adaptor adaptor{points};
+      const KdTree3::Index reference(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(leaf));
+      for (const bool parallel : {false, true}) {
+        std::vector<KdTree3> moved;
+        moved.emplace_back(*points, leaf, parallel);
+        moved.reserve(moved.capacity() + 1);  // the tree moves: its index and adaptor go with it
+        const KdTree3::Index& built = moved.front().index();
+        SCOPED_TRACE(::testing::Message() << points->rows() << " points, leaf " << leaf << ", parallel " << parallel);
+        ASSERT_EQ(built.vAcc, reference.vAcc);
+        ASSERT_EQ(built.m_size, reference.m_size);
+        for (int i = 0; i < 3; ++i) {
+          EXPECT_EQ(built.root_bbox[i].low, reference.root_bbox[i].low);
+          EXPECT_EQ(built.root_bbox[i].high, reference.root_bbox[i].high);
+        }
+        int nodes = 0;
+        ExpectSameNodes(built.root_node, reference.root_node, &nodes);
+        EXPECT_GE(nodes, 2 * static_cast<int>(points->rows()) / leaf - 1);  // every node was compared
+        // The moved tree answers queries as nanoflann's and as a brute-force scan.
+        for (int q = 0; q < 50; ++q) {
+          const Eigen::Vector3d query(x(rng), y(rng) / 3.0, z(rng) / 2.0);
+          std::uint32_t i1 = 0;
+          double d1 = 0.0;
+          ASSERT_TRUE(moved.front().Nearest(query, &i1, &d1));
+          double brute = std::numeric_limits<double>::infinity();
+          for (Eigen::Index i = 0; i < points->rows(); ++i)
+            brute = std::min(brute, (points->row(i).transpose() - query).squaredNorm());
+          EXPECT_NEAR(d1, brute, 1e-9);
+          std::vector<std::uint32_t> ka;
+          std::vector<double> kda;
+          moved.front().Knn(query, 10, &ka, &kda);
+          std::array<std::uint32_t, 10> kb{};
+          std::array<double, 10> kdb{};
+          nanoflann::KNNResultSet<double, std::uint32_t> result(10);
+          result.init(kb.data(), kdb.data());
+          reference.findNeighbors(result, query.data(), nanoflann::SearchParams());
+          for (std::size_t j = 0; j < ka.size(); ++j) {
+            EXPECT_EQ(ka[j], kb[j]);
+            EXPECT_EQ(kda[j], kdb[j]);
+          }
+        }
+      }
+    }
+  }
+  omp_set_num_threads(threads);
 }
 
 TEST(KdTree3, NearestWithinOnAnEmptyTreeFindsNothing) {
