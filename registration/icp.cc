@@ -213,6 +213,7 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
   std::vector<std::uint32_t> rest;
   const std::vector<std::vector<std::uint32_t>> samples =
       LevelSamples(source_positions, considered, levels, grow ? &rest : nullptr);
+  result.timings_s.Add("icp_samples", Seconds(start));
 
   const Problem pb{
       &target,
@@ -329,7 +330,9 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
       report.source_points = static_cast<std::int64_t>(sample->size());
       cache.Reset(sample->size(), kSearchRadiusOverGate * level.max_distance_mm, kept);
       const bool may_grow = grow && l + 1 == levels.size() && rest_used < rest.size();
+      const auto level_start = std::chrono::steady_clock::now();
       const bool ok = iterate(l, *sample, rot_tol, trans_tol, may_grow, &report);
+      report.seconds = Seconds(level_start);
       result.levels.push_back(report);
       if (!ok) {
         result.T_target_source = pose();
@@ -364,7 +367,9 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
   // within it of the reach. Otherwise the pairs are found again at the final pose; the last level's
   // certificates still hold for its sample and serve any reach up to their radius.
   if (!(small_update && reach == levels.back().max_distance_mm && pairs.r.size() == sample->size())) {
+    const auto final_start = std::chrono::steady_clock::now();
     FindPairs(pb, *sample, T, reach, reach <= cache.radius ? &cache : nullptr, &pairs);
+    result.timings_s.Add("icp_final_pairs", Seconds(final_start));
   }
   Summarise(&pairs, sample->size(), &result);
   const std::vector<std::string> problems = Problems(result, options, levels.back().max_iterations, reach);

@@ -138,6 +138,7 @@ struct IcpLevelReport {
   /// k-d tree searches at this level. A correspondence is searched again only when its source point has
   /// moved far enough that another target point could have become the nearest (exact, not approximate).
   std::int64_t searches = 0;
+  double seconds = 0.0;  ///< wall time of this level (s)
 };
 
 /// What AlignIcp found.

@@ -35,7 +35,8 @@ nlohmann::json IcpJson(const IcpResult& r) {
                       {"iterations", l.iterations},
                       {"converged", l.converged},
                       {"rms_mm", l.rms_mm},
-                      {"searches", l.searches}});
+                      {"searches", l.searches},
+                      {"seconds", l.seconds}});
   }
   return {{"rms_mm", r.rms_mm},
           {"inlier_fraction", r.inlier_fraction},

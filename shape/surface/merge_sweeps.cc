@@ -112,6 +112,8 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
                   std::to_string(start.size()) + " poses for " + std::to_string(clouds.size()) + " sweeps");
   }
   if (!names.empty() && names.size() != clouds.size()) ThrowUsage("merge: one name per sweep, or none");
+  if (!options.tracker_poses.empty() && options.tracker_poses.size() != clouds.size())
+    ThrowUsage("merge: one tracker reading per sweep, or none");
   if (options.anchor >= clouds.size())
     ThrowUsage("anchor sweep " + std::to_string(options.anchor) + " does not exist");
   const std::size_t n = clouds.size();
@@ -176,6 +178,10 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
       // The tracker's error at a sweep's centroid: its translation and its rotation about the far origin.
       prior.emplace();
       prior->T_world_sweep = P_start;
+      if (!options.tracker_poses.empty()) {
+        for (std::size_t s = 0; s < n; ++s)
+          prior->T_world_sweep[s] = T_centred_world * options.tracker_poses[s];
+      }
       for (const auto& w : sweeps) prior->centre.push_back(w.centroid);
       prior->rotation_sd_deg = std::max(options.tracker_deg, 1e-3);
       prior->translation_sd_mm = std::max(
@@ -263,8 +269,9 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
     for (int fit = 0; prior && options.fit_tracker_accuracy && fit < 6; ++fit) {
       double sum = 0.0;
       for (std::size_t s = 0; s < n; ++s) {
-        const Eigen::AngleAxisd turned(P[s].linear() * P_start[s].linear().transpose());
-        const Eigen::Vector3d moved = P[s] * sweeps[s].centroid - P_start[s] * sweeps[s].centroid;
+        const Rigid3& read = prior->T_world_sweep[s];
+        const Eigen::AngleAxisd turned(P[s].linear() * read.linear().transpose());
+        const Eigen::Vector3d moved = P[s] * sweeps[s].centroid - read * sweeps[s].centroid;
         sum += std::pow(turned.angle() * 180.0 / M_PI / prior->rotation_sd_deg, 2) +
                moved.squaredNorm() / std::pow(prior->translation_sd_mm, 2);
       }

@@ -30,6 +30,9 @@ struct SweepMergeOptions {
   double tracker_deg = 0.5;
   double tracker_mm = 1.5;
   double tracker_lever_mm = 200.0;  ///< distance from the tracker's origin to the skin (mm)
+  /// The tracker's readings (world from sweep), one per sweep, when the merge starts elsewhere (a
+  /// previous merge, a diagnostic start at the truth); empty: the starting poses are the readings.
+  std::vector<Rigid3> tracker_poses;
   /// Two sweeps overlap where a sample of one lies this close to the surface of the other (same side,
   /// normals within 45 degrees, not beyond its edge). 0: three standard deviations of two sweeps'
   /// relative tracker error at the skin (3 sqrt(2) hypot(tracker_mm, tracker_deg lever), 9.8 mm by

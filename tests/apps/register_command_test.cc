@@ -118,7 +118,7 @@ TEST_F(RegisterCommand, PoorFitAndUnusableLandmarksExitNonZeroAndWriteNothing) {
 
 // On two noisy 40000-point scans ICP's last sample grows to every point, and the report says what sampling
 // still adds to the pose's sd (nothing); --pose-sd-fraction 0 keeps it at 30000 points; a fraction outside
-// [0, 1) is a usage error.
+// [0, 1) is a usage error. Each level reports its wall time.
 TEST_F(RegisterCommand, PoseSdFractionDecidesHowFarTheLastSampleGrows) {
   std::mt19937_64 rng(5);
   const Rigid3 T_true = testing::RandomPose(&rng, 10.0, 30.0, Eigen::Vector3d(0, 100, 160));
@@ -134,6 +134,15 @@ TEST_F(RegisterCommand, PoseSdFractionDecidesHowFarTheLastSampleGrows) {
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_EQ(last_points().first, 40000);
   EXPECT_EQ(last_points().second, 0.0);
+  // Each level's wall time is reported; together they are part of ICP's.
+  const nlohmann::json report = Report();
+  double levels_s = 0.0;
+  for (const auto& level : report["icp"]["levels"]) {
+    EXPECT_GE(level["seconds"].get<double>(), 0.0);
+    levels_s += level["seconds"].get<double>();
+  }
+  EXPECT_GT(levels_s, 0.0);
+  EXPECT_LE(levels_s, report["timings_s"]["icp"].get<double>());
   r = run(" --pose-sd-fraction 0");
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_EQ(last_points().first, 30000);

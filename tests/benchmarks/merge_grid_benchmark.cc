@@ -14,7 +14,9 @@
 //   - the bound: the least expected shape RMS any overlap-based merge can reach on that scan (a Bayesian
 //     Cramer-Rao bound at the truth: every covered point's point-to-plane information with the measured
 //     noise, the tracker's error as drawn; merge_grid_benchmark_bound.h); with --model-bound also what the
-//     merge's own information at the truth predicts.
+//     merge's own information at the truth predicts; with --start-at-truth also the merge started at the
+//     true poses but held to the tracker's readings (`pectus_from_truth_tracker_prior`): what the start
+//     costs, apart from the prior.
 // JSON on stdout; a PNG of success and RMS over the grid (--png). The default grid runs in a few minutes;
 // --full runs skin {0, 2, 4, 6} mm x overlap {0.10, 0.15, 0.20, 0.30, 0.40} x sampling {grid, random} x
 // sweeps {3, 5, 8}.
@@ -25,7 +27,8 @@
 //       [--prior-deg D --prior-mm M --prior-lever L] [--min-overlap-fraction F] [--border-gap DEG]
 //       [--min-pinned-ratio R] [--final-pinned-ratio R] [--sample-spacings S] [--points-per-pair N]
 //       [--rounds N] [--fit-tracker 0|1] [--final-every-point 0|1] [--normal-neighbours K] [--model-bound]
-//       [--count-shared-points 0|1] [--max-view-angle DEG] [--sight-radius WIDTHS] [--plane-points K]
+//       [--start-at-truth] [--noise-mm SD] [--count-shared-points 0|1] [--max-view-angle DEG] [--sight-radius
+//       WIDTHS] [--plane-points K]
 // (the tracker prior, SweepMergeOptions::tracker_deg/tracker_mm/tracker_lever_mm, defaults MergeSweeps's;
 // the others override SweepMergeOptions::min_overlap_fraction, global_points_per_pair and global_rounds,
 // SweepSurfaceOptions::border_gap_deg and sample_spacings, and
@@ -140,11 +143,14 @@ Run Score(Run run, const std::vector<Points3>& inliers, const std::vector<Rigid3
 }
 
 Run RunPectus(const std::vector<PointCloud>& clouds, const std::vector<Rigid3>& start,
-              const std::vector<Points3>& inliers, const std::vector<Rigid3>& truth, const Flags& f) {
+              const std::vector<Points3>& inliers, const std::vector<Rigid3>& truth, const Flags& f,
+              const std::vector<Rigid3>& tracker_poses = {}) {
   Run run;
   const auto t0 = std::chrono::steady_clock::now();
   try {
-    const SweepMergeResult r = MergeSweeps(clouds, start, MergeOptions(f));
+    SweepMergeOptions options = MergeOptions(f);
+    options.tracker_poses = tracker_poses;
+    const SweepMergeResult r = MergeSweeps(clouds, start, options);
     run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     run.tracker_accuracy_factor = r.tracker_accuracy_factor;
     return Score(run, inliers, r.T_world_sweep, truth, f.success_mm);
@@ -240,6 +246,7 @@ int main(int argc, char** argv) {
           o.sweeps = static_cast<int>(count);
           o.overlap = overlap;
           o.spacing_mm = f.spacing_mm;
+          if (f.noise_mm >= 0.0) o.noise_mm = f.noise_mm;
           o.tracker_pivot = ds::TrackerPivot::kLever;
           o.tracker_lever_mm = f.lever_mm;
           if (skin > 0.0) {
@@ -290,6 +297,16 @@ int main(int argc, char** argv) {
             if (!pectus.threw) rms["pectus_shape"].push_back(pectus.figures.shape_rms_mm);
             const Run exact = RunPectus(clouds, truth, inliers, truth, f);
             one["pectus_from_exact_poses"] = exact.Json(constraints);
+            if (f.start_at_truth) {
+              // Diagnostic: started at the truth, held to the tracker's readings as the merge is.
+              const Run held = RunPectus(clouds, truth, inliers, truth, f, identity);
+              one["pectus_from_truth_tracker_prior"] = held.Json(constraints);
+              if (held.threw)
+                std::fprintf(stderr, "  from the truth, tracker prior: %s\n", held.error.c_str());
+              else
+                std::fprintf(stderr, "  from the truth, tracker prior: shape rms %.3f mm (max %.3f)\n",
+                             held.figures.shape_rms_mm, held.figures.shape_max_mm);
+            }
             if (f.open3d) {
               char name[96];
               std::snprintf(name, sizeof name, "skin%g_overlap%g_%s_%d_seed%llu", skin, overlap,

@@ -24,6 +24,8 @@ struct Flags {
   double sample_spacings = -1.0;                                    // < 0: MergeSweeps's default
   int normal_neighbours = -1;                                       // < 0: MergeSweeps's default
   bool model_bound = false;      // also the shape figure the merge's own information at the truth predicts
+  double noise_mm = -1.0;        // < 0: the scanner's default range noise
+  bool start_at_truth = false;   // also the merge started at the truth but held to the tracker's readings
   int points_per_pair = -1;      // < 0: MergeSweeps's default
   int rounds = -1;               // < 0: MergeSweeps's default
   int fit_tracker = -1;          // 0 / 1; < 0: MergeSweeps's default
@@ -101,6 +103,10 @@ inline Flags Parse(int argc, char** argv) {
       f.final_pinned_ratio = std::stod(value());
     else if (key == "--sample-spacings")
       f.sample_spacings = std::stod(value());
+    else if (key == "--noise-mm")
+      f.noise_mm = std::stod(value());
+    else if (key == "--start-at-truth")
+      f.start_at_truth = true;
     else if (key == "--model-bound")
       f.model_bound = true;
     else if (key == "--normal-neighbours")

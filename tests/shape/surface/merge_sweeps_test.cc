@@ -210,6 +210,41 @@ TEST(SweepMerge, PlaneStripKeepsTheTrackerAlongFreeDirectionsAndRemovesThePinned
   }
 }
 
+// The tracker's readings given apart from the start (SweepMergeOptions::tracker_poses): started at the
+// truth and held to readings off in all six directions, the same two plane strips keep the truth along
+// what the overlap pins and take the readings along what it leaves free (the prior is centred on the
+// readings, not on the start). A reading for each sweep or none.
+TEST(SweepMerge, TrackerReadingsApartFromTheStartHoldTheFreeDirections) {
+  auto plane = [](double u, double v) { return Eigen::Vector3d(u, v, 0.0); };
+  const std::vector<PointCloud> strips = {Patch(plane, 0, 100, 0, 100, true, 1),
+                                          Patch(plane, 70, 170, 0, 100, true, 2)};
+  Rigid3 D = Rigid3::Identity();
+  D.linear() = (Eigen::AngleAxisd(0.4 * M_PI / 180, Eigen::Vector3d::UnitZ()) *
+                Eigen::AngleAxisd(0.3 * M_PI / 180, Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  const Eigen::Vector3d c(85, 50, 0);
+  D.translation() = c - D.linear() * c + Eigen::Vector3d(1.2, -0.8, 0.9);
+  SweepMergeOptions options;
+  options.tracker_poses = {Rigid3::Identity(), D};
+  const SweepMergeResult r = MergeSweeps(strips, {Rigid3::Identity(), Rigid3::Identity()}, options);
+  for (const double x : {72.0, 85.0, 98.0}) {
+    for (const double y : {5.0, 50.0, 95.0}) {
+      const Eigen::Vector3d p(x, y, 0), read = RelativeMove({Rigid3::Identity(), D}, p);
+      const Eigen::Vector3d after = RelativeMove(r.T_world_sweep, p);
+      EXPECT_LT(std::abs(after.z()), 0.02) << "pinned: height at " << x << ", " << y;
+      EXPECT_LT((after - read).head<2>().norm(), 0.05) << "free: the slide at " << x << ", " << y;
+    }
+  }
+  options.tracker_poses = {D};
+  try {
+    MergeSweeps(strips, {Rigid3::Identity(), Rigid3::Identity()}, options);
+    ADD_FAILURE() << "one reading for two sweeps was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kUsage);
+    EXPECT_NE(e.message().find("one tracker reading per sweep"), std::string::npos) << e.message();
+  }
+}
+
 // The same on a cylinder (radius 150 mm, axis y): the slide along the axis and the turn about it are
 // free; the radial offset and the tilts are pinned.
 TEST(SweepMerge, CylinderStripKeepsTheTrackerAlongTheAxisAndAboutIt) {
