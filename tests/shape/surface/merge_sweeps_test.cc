@@ -187,27 +187,42 @@ Eigen::Vector3d RelativeMove(const std::vector<Rigid3>& P, const Eigen::Vector3d
 
 // Two strips of a plane (z = 0) overlapping in a 30 mm band, each sampled at random: the overlap pins
 // the height and the tilts of one strip on the other, not the slide within the plane or the turn about
-// its normal. A start off in all six directions: the pinned part is removed, the free part stays where
-// the tracker put it.
-TEST(SweepMerge, PlaneStripKeepsTheTrackerAlongFreeDirectionsAndRemovesThePinnedError) {
+// its normal.
+std::vector<PointCloud> PlaneStrips() {
   auto plane = [](double u, double v) { return Eigen::Vector3d(u, v, 0.0); };
-  const std::vector<PointCloud> strips = {Patch(plane, 0, 100, 0, 100, true, 1),
-                                          Patch(plane, 70, 170, 0, 100, true, 2)};
-  Rigid3 D = Rigid3::Identity();  // about the overlap's centre (85, 50, 0)
+  return {Patch(plane, 0, 100, 0, 100, true, 1), Patch(plane, 70, 170, 0, 100, true, 2)};
+}
+
+// A pose of the second plane strip off in all six directions, about the overlap's centre (85, 50, 0).
+Rigid3 PlaneStripOffInSixDirections() {
+  Rigid3 D = Rigid3::Identity();
   D.linear() = (Eigen::AngleAxisd(0.4 * M_PI / 180, Eigen::Vector3d::UnitZ()) *
                 Eigen::AngleAxisd(0.3 * M_PI / 180, Eigen::Vector3d::UnitX()))
                    .toRotationMatrix();
   const Eigen::Vector3d c(85, 50, 0);
   D.translation() = c - D.linear() * c + Eigen::Vector3d(1.2, -0.8, 0.9);
-  const SweepMergeResult r = MergeSweeps(strips, {Rigid3::Identity(), D});
+  return D;
+}
+
+// Over the overlap band: the height between the strips within 0.02 mm of none (pinned), and their slide
+// in the plane within `free_tolerance` of what `D` puts there (free).
+void ExpectPinnedHeightAndFreeSlide(const SweepMergeResult& r, const Rigid3& D, double free_tolerance) {
   for (const double x : {72.0, 85.0, 98.0}) {
     for (const double y : {5.0, 50.0, 95.0}) {
-      const Eigen::Vector3d p(x, y, 0), before = RelativeMove({Rigid3::Identity(), D}, p);
+      const Eigen::Vector3d p(x, y, 0), expected = RelativeMove({Rigid3::Identity(), D}, p);
       const Eigen::Vector3d after = RelativeMove(r.T_world_sweep, p);
       EXPECT_LT(std::abs(after.z()), 0.02) << "pinned: height at " << x << ", " << y;
-      EXPECT_LT((after - before).head<2>().norm(), 0.02) << "free: the slide at " << x << ", " << y;
+      EXPECT_LT((after - expected).head<2>().norm(), free_tolerance)
+          << "free: the slide at " << x << ", " << y;
     }
   }
+}
+
+// A start off in all six directions: the pinned part is removed, the free part stays where the tracker
+// put it.
+TEST(SweepMerge, PlaneStripKeepsTheTrackerAlongFreeDirectionsAndRemovesThePinnedError) {
+  const Rigid3 D = PlaneStripOffInSixDirections();
+  ExpectPinnedHeightAndFreeSlide(MergeSweeps(PlaneStrips(), {Rigid3::Identity(), D}), D, 0.02);
 }
 
 // The tracker's readings given apart from the start (SweepMergeOptions::tracker_poses): started at the
@@ -215,26 +230,12 @@ TEST(SweepMerge, PlaneStripKeepsTheTrackerAlongFreeDirectionsAndRemovesThePinned
 // what the overlap pins and take the readings along what it leaves free (the prior is centred on the
 // readings, not on the start). A reading for each sweep or none.
 TEST(SweepMerge, TrackerReadingsApartFromTheStartHoldTheFreeDirections) {
-  auto plane = [](double u, double v) { return Eigen::Vector3d(u, v, 0.0); };
-  const std::vector<PointCloud> strips = {Patch(plane, 0, 100, 0, 100, true, 1),
-                                          Patch(plane, 70, 170, 0, 100, true, 2)};
-  Rigid3 D = Rigid3::Identity();
-  D.linear() = (Eigen::AngleAxisd(0.4 * M_PI / 180, Eigen::Vector3d::UnitZ()) *
-                Eigen::AngleAxisd(0.3 * M_PI / 180, Eigen::Vector3d::UnitX()))
-                   .toRotationMatrix();
-  const Eigen::Vector3d c(85, 50, 0);
-  D.translation() = c - D.linear() * c + Eigen::Vector3d(1.2, -0.8, 0.9);
+  const std::vector<PointCloud> strips = PlaneStrips();
+  const Rigid3 D = PlaneStripOffInSixDirections();
   SweepMergeOptions options;
   options.tracker_poses = {Rigid3::Identity(), D};
-  const SweepMergeResult r = MergeSweeps(strips, {Rigid3::Identity(), Rigid3::Identity()}, options);
-  for (const double x : {72.0, 85.0, 98.0}) {
-    for (const double y : {5.0, 50.0, 95.0}) {
-      const Eigen::Vector3d p(x, y, 0), read = RelativeMove({Rigid3::Identity(), D}, p);
-      const Eigen::Vector3d after = RelativeMove(r.T_world_sweep, p);
-      EXPECT_LT(std::abs(after.z()), 0.02) << "pinned: height at " << x << ", " << y;
-      EXPECT_LT((after - read).head<2>().norm(), 0.05) << "free: the slide at " << x << ", " << y;
-    }
-  }
+  ExpectPinnedHeightAndFreeSlide(MergeSweeps(strips, {Rigid3::Identity(), Rigid3::Identity()}, options), D,
+                                 0.05);
   options.tracker_poses = {D};
   try {
     MergeSweeps(strips, {Rigid3::Identity(), Rigid3::Identity()}, options);
