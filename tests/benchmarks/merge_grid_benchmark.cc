@@ -14,9 +14,10 @@
 //   - the bound: the least expected shape RMS any overlap-based merge can reach on that scan (a Bayesian
 //     Cramer-Rao bound at the truth: every covered point's point-to-plane information with the measured
 //     noise, the tracker's error as drawn; merge_grid_benchmark_bound.h); with --model-bound also what the
-//     merge's own information at the truth predicts; with --start-at-truth also the merge started at the
-//     true poses but held to the tracker's readings (`pectus_from_truth_tracker_prior`): what the start
-//     costs, apart from the prior.
+//     merge's own information at the truth predicts, and the same bound over only the points the merge
+//     pairs at the truth (`paired_shape_rms_bound_mm`: what its coverage of the overlaps allows); with
+//     --start-at-truth also the merge started at the true poses but held to the tracker's readings
+//     (`pectus_from_truth_tracker_prior`): what the start costs, apart from the prior.
 // JSON on stdout; a PNG of success and RMS over the grid (--png). The default grid runs in a few minutes;
 // --full runs skin {0, 2, 4, 6} mm x overlap {0.10, 0.15, 0.20, 0.30, 0.40} x sampling {grid, random} x
 // sweeps {3, 5, 8}.
@@ -165,7 +166,7 @@ Run RunPectus(const std::vector<PointCloud>& clouds, const std::vector<Rigid3>& 
 // The merge's own information at the true poses (diagnostic): its sweeps prepared, linked and paired at
 // the truth with its finest gate, one tracker-adjustment step's joint normal matrix.
 Eigen::MatrixXd ModelInformation(const std::vector<PointCloud>& clouds, const std::vector<Rigid3>& truth,
-                                 const Flags& f) {
+                                 const Flags& f, std::vector<merge_grid::PairedPoint>* paired) {
   const SweepMergeOptions options = MergeOptions(f);
   std::vector<SweepSurface> sweeps;
   double spacing = 0.0;
@@ -181,6 +182,8 @@ Eigen::MatrixXd ModelInformation(const std::vector<PointCloud>& clouds, const st
       every_point ? AllCorrespondences(sweeps, truth, links, OverlapRows(sweeps, truth, links, 6.0 * spacing),
                                        3.0 * spacing)
                   : AllCorrespondences(sweeps, truth, links, options.global_points_per_pair, 3.0 * spacing);
+  paired->clear();
+  for (const auto& c : pairs) paired->push_back({c.j, c.i, c.p_row});
   PosePrior prior;
   prior.T_world_sweep = truth;
   for (const auto& w : sweeps) prior.centre.push_back(w.centroid);
@@ -282,10 +285,15 @@ int main(int argc, char** argv) {
             for (const ds::Sweep& s : scanned.scan.sweeps) skin_rms.push_back(s.truth.skin_rms_mm);
             one["tracker_skin_rms_mm"] = skin_rms;
             Eigen::MatrixXd model_information;
-            if (f.model_bound) model_information = ModelInformation(clouds, truth, f);
+            std::vector<merge_grid::PairedPoint> paired;
+            if (f.model_bound) model_information = ModelInformation(clouds, truth, f, &paired);
             const merge_grid::ShapeBound bound = merge_grid::BoundShapeError(
-                skin_surface, scanned.scan.sweeps, model_information.size() ? &model_information : nullptr);
-            if (model_information.size()) one["model_shape_rms_mm"] = bound.model_shape_rms_mm;
+                skin_surface, scanned.scan.sweeps, model_information.size() ? &model_information : nullptr,
+                model_information.size() ? &paired : nullptr);
+            if (model_information.size()) {
+              one["model_shape_rms_mm"] = bound.model_shape_rms_mm;
+              one["paired_shape_rms_bound_mm"] = bound.paired_shape_rms_mm;
+            }
             one["shape_rms_bound_mm"] = bound.shape_rms_mm;
             one["noise_along_normal_mm"] = bound.noise_along_normal_mm;
             one["true_overlap_fraction"] = bound.largest_overlap_fraction;

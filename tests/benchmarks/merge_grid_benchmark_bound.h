@@ -20,9 +20,18 @@ struct ShapeBound {
   double noise_along_normal_mm = 0.0;  ///< the range noise along the normal, RMS over every inlier (mm)
   double overlap_points = 0.0;         ///< points of a sweep that another sweep covers, counted per pair
   double model_shape_rms_mm = 0.0;     ///< the same figure from the merge's own information (if given)
+  /// The same bound over only the points the merge pairs at the truth (if given): what its coverage of
+  /// the overlaps allows an efficient estimator, apart from how it weighs them.
+  double paired_shape_rms_mm = 0.0;
   /// Per sweep, the largest fraction of its true inliers that one other sweep covers (a true point of it
   /// within 2 mm): the overlap the sweep really has, against which a merge's linking is judged.
   std::vector<double> largest_overlap_fraction;
+};
+
+/// A point of sweep `source` (its row) that a merge pairs with sweep `target`.
+struct PairedPoint {
+  std::size_t source = 0, target = 0;
+  std::uint32_t row = 0;
 };
 
 /// The expected shape RMS after a rigid fit (in the metric of the error along each point's normal) of
@@ -87,7 +96,8 @@ inline double ExpectedShapeRms(const std::vector<Points3>& points, const std::ve
 /// sweeps by their overlaps; it does not count a smoothness prior on the surface across sweeps.
 inline ShapeBound BoundShapeError(const datasets::ChestSurface& surface,
                                   const std::vector<datasets::Sweep>& sweeps,
-                                  const Eigen::MatrixXd* model_information = nullptr) {
+                                  const Eigen::MatrixXd* model_information = nullptr,
+                                  const std::vector<PairedPoint>* paired = nullptr) {
   using Mat = Eigen::MatrixXd;
   ShapeBound out;
   const std::size_t n = sweeps.size();
@@ -163,6 +173,35 @@ inline ShapeBound BoundShapeError(const datasets::ChestSurface& surface,
 
   if (!any_error) return out;
 
+  Mat F_paired;
+  if (paired) {
+    // The same information over the merge's own pairs: each paired point of a source sweep, its exact
+    // normal, with the variance of the bound's count.
+    F_paired = Mat::Zero(F.rows(), F.cols());
+    std::vector<std::vector<Eigen::Index>> kept_row(n);  // cloud row -> inlier index
+    for (std::size_t s = 0; s < n; ++s) {
+      const datasets::SweepTruth& t = sweeps[s].truth;
+      kept_row[s].assign(static_cast<std::size_t>(t.true_points.rows()), -1);
+      Eigen::Index k = 0;
+      for (Eigen::Index i = 0; i < t.true_points.rows(); ++i)
+        if (!t.outlier[static_cast<std::size_t>(i)]) kept_row[s][static_cast<std::size_t>(i)] = k++;
+    }
+    for (const PairedPoint& pp : *paired) {
+      const std::size_t s = pp.source, t = pp.target;
+      if (s >= n || t >= n || pp.row >= kept_row[s].size() || kept_row[s][pp.row] < 0) continue;
+      const Eigen::Vector3d p = points[s].row(kept_row[s][pp.row]).transpose();
+      const Eigen::Vector3d nrm = normals[s].row(kept_row[s][pp.row]).transpose();
+      Eigen::Matrix<double, 12, 1> J;
+      J << (p - centre[s]).cross(nrm), nrm, -(p - centre[t]).cross(nrm), -nrm;
+      const Eigen::Matrix<double, 12, 12> block = J * J.transpose() / (2.0 * (sigma2[s] + sigma2[t]));
+      const Eigen::Index a = 6 * Eigen::Index(s), b = 6 * Eigen::Index(t);
+      F_paired.block(a, a, 6, 6) += block.topLeftCorner(6, 6);
+      F_paired.block(a, b, 6, 6) += block.topRightCorner(6, 6);
+      F_paired.block(b, a, 6, 6) += block.bottomLeftCorner(6, 6);
+      F_paired.block(b, b, 6, 6) += block.bottomRightCorner(6, 6);
+    }
+  }
+
   // The tracker's prior: (w, t_pivot) isotropic, moved to the twist about the centroid, t = t_pivot -
   // [c - pivot]x w.
   for (std::size_t s = 0; s < n; ++s) {
@@ -178,7 +217,11 @@ inline ShapeBound BoundShapeError(const datasets::ChestSurface& surface,
     D.diagonal() << var_w, var_w, var_w, var_t, var_t, var_t;
     const Eigen::Matrix<double, 6, 6> C = M * D * M.transpose();
     F.block(6 * Eigen::Index(s), 6 * Eigen::Index(s), 6, 6) += C.inverse();
+    if (paired) F_paired.block(6 * Eigen::Index(s), 6 * Eigen::Index(s), 6, 6) += C.inverse();
   }
+  if (paired)
+    out.paired_shape_rms_mm = ExpectedShapeRms(
+        points, normals, centre, F_paired.ldlt().solve(Mat::Identity(F_paired.rows(), F_paired.cols())));
   const Mat Sigma = F.ldlt().solve(Mat::Identity(F.rows(), F.cols()));
   out.shape_rms_mm = ExpectedShapeRms(points, normals, centre, Sigma);
   if (model_information) {
