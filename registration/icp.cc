@@ -13,15 +13,12 @@
 #include "registration/random_sample.h"
 #include "registration/voxel_downsample.h"
 #include "shape/core/error.h"
+#include "shape/core/timings.h"
 
 namespace pectus {
 namespace {
 
 using namespace icp_detail;  // NOLINT: the steps of one iteration, internal to this library
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
 
 std::string Format(double value, int precision = 3) {
   std::ostringstream s;
@@ -181,7 +178,7 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
   result.T_target_source = T_target_source_initial;
   auto finish = [&](const std::string& message) {
     result.message = message;
-    result.timings_s.Add("icp", Seconds(start));
+    result.timings_s.Add("icp", SecondsSince(start));
     return result;
   };
 
@@ -213,7 +210,7 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
   std::vector<std::uint32_t> rest;
   const std::vector<std::vector<std::uint32_t>> samples =
       LevelSamples(source_positions, considered, levels, grow ? &rest : nullptr);
-  result.timings_s.Add("icp_samples", Seconds(start));
+  result.timings_s.Add("icp_samples", SecondsSince(start));
 
   const Problem pb{
       &target,
@@ -332,7 +329,7 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
       const bool may_grow = grow && l + 1 == levels.size() && rest_used < rest.size();
       const auto level_start = std::chrono::steady_clock::now();
       const bool ok = iterate(l, *sample, rot_tol, trans_tol, may_grow, &report);
-      report.seconds = Seconds(level_start);
+      report.seconds = SecondsSince(level_start);
       result.levels.push_back(report);
       if (!ok) {
         result.T_target_source = pose();
@@ -369,7 +366,7 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
   if (!(small_update && reach == levels.back().max_distance_mm && pairs.r.size() == sample->size())) {
     const auto final_start = std::chrono::steady_clock::now();
     FindPairs(pb, *sample, T, reach, reach <= cache.radius ? &cache : nullptr, &pairs);
-    result.timings_s.Add("icp_final_pairs", Seconds(final_start));
+    result.timings_s.Add("icp_final_pairs", SecondsSince(final_start));
   }
   Summarise(&pairs, sample->size(), &result);
   const std::vector<std::string> problems = Problems(result, options, levels.back().max_iterations, reach);

@@ -4,15 +4,9 @@
 #include "registration/icp.h"
 #include "registration/voxel_downsample.h"
 #include "shape/core/error.h"
+#include "shape/core/timings.h"
 
 namespace pectus {
-namespace {
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
-
-}  // namespace
 
 void IcpTarget::Prepare(Points3 positions, const std::string& name) {
   const auto start = std::chrono::steady_clock::now();
@@ -24,7 +18,7 @@ void IcpTarget::Prepare(Points3 positions, const std::string& name) {
   centred_.rowwise() -= origin_.transpose();
   tree_ = std::make_unique<KdTree3>(centred_, 12, /*parallel=*/true);  // built on two threads
   spacing_mm_ = MedianPointSpacing(centred_, *tree_);
-  timings_s_.Add("prepare", Seconds(start));
+  timings_s_.Add("prepare", SecondsSince(start));
 }
 
 void IcpTarget::SetNormals(Points3 normals, Eigen::Index positions, const std::string& name) {

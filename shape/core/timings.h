@@ -10,6 +10,11 @@
 
 namespace pectus {
 
+/// Seconds of wall time since `start` (steady clock).
+inline double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 /// Wall time per stage in seconds, in the order the stages first ran; a stage that runs again is summed.
 /// Every Result names its field `timings_s`.
 class Timings {

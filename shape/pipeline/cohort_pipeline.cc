@@ -18,6 +18,7 @@
 #include "registration/kdtree.h"
 #include "shape/core/atomic_file.h"
 #include "shape/core/error.h"
+#include "shape/core/timings.h"
 #include "shape/io/landmark_io.h"
 #include "shape/io/mesh_io.h"
 #include "shape/model/shape_grid.h"
@@ -29,8 +30,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-
-double Since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // True if `name` is `pattern` with its one '*' standing for any text.
 bool Matches(const std::string& name, const std::string& pattern) {
@@ -52,7 +51,7 @@ bool RunStage(SubjectOutcome* s, const std::string& stage, Fn fn) {
     s->failed_stage = stage;
     s->error = e.what();
   }
-  s->timings_s.Add(stage, Since(start));
+  s->timings_s.Add(stage, SecondsSince(start));
   return s->failed_stage.empty();
 }
 
@@ -125,7 +124,7 @@ void BuildModel(const PipelineOptions& options, TaskRunner& runner, const std::v
   const std::int64_t blocks = (n + per_block - 1) / per_block;
   auto rows_of = [&](int b) { return std::make_pair(b * per_block, std::min(n, (b + 1) * per_block)); };
   auto timed = [&](const char* step, Clock::time_point since) {
-    if (leader) result->timings_s.Add(step, Since(since));
+    if (leader) result->timings_s.Add(step, SecondsSince(since));
   };
   const double gap_mm = options.impute_gap_mm;
   const bool gaps = gap_mm > 0.0 && std::isfinite(gap_mm);
@@ -274,10 +273,10 @@ void BuildModel(const PipelineOptions& options, TaskRunner& runner, const std::v
   ShapeModel model = BuildShapeModel(shapes, options.model, "resampled subjects", &runner, [&] {
     const Clock::time_point begin = Clock::now();
     while_decomposing();
-    while_seconds = Since(begin);
+    while_seconds = SecondsSince(begin);
   }, &eig_seconds);
   if (leader) {
-    result->timings_s.Add("model pca", Since(start) - std::max(while_seconds, eig_seconds));
+    result->timings_s.Add("model pca", SecondsSince(start) - std::max(while_seconds, eig_seconds));
     result->timings_s.Add("model eig", eig_seconds);
     for (std::size_t k = 0; k < good.size(); ++k) result->subjects[good[k]].scores = model.scores.row(k).transpose();
   }
@@ -290,7 +289,7 @@ void BuildModel(const PipelineOptions& options, TaskRunner& runner, const std::v
   if (options.quality && good.size() >= 3) {
     start = Clock::now();
     result->quality = EvaluateModelQuality(shapes, options.quality_options);
-    result->timings_s.Add("quality", Since(start));
+    result->timings_s.Add("quality", SecondsSince(start));
   }
   start = Clock::now();
   LandmarkSet mean_landmarks;
@@ -306,7 +305,7 @@ void BuildModel(const PipelineOptions& options, TaskRunner& runner, const std::v
     result->mean_measures.message = e.what();
   }
   result->model.emplace(std::move(model));
-  result->timings_s.Add("mean measures", Since(start));
+  result->timings_s.Add("mean measures", SecondsSince(start));
 }
 
 // A subject's outcome for the run's report and tables, without the arrays only its own files need (the
@@ -481,7 +480,7 @@ double RemoveSubjectResultsOnFarm(TaskRunner& runner, const fs::path& work, cons
     }
   }, done.data());
   if (runner.IsLeader()) RemoveSubjectResults(work);  // what is left: the phases' folders, the mean
-  return Since(start);
+  return SecondsSince(start);
 }
 
 std::string PipelineResult::BriefReport() const {
@@ -642,14 +641,14 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
     if (s.ok && mean) {
       const Clock::time_point start = Clock::now();
       s.to_mean = ComputeDistanceMap(s.grid.mesh.vertices.positions, *mean, options.distance, "mean shape");
-      s.timings_s.Add("distance", Since(start));
+      s.timings_s.Add("distance", SecondsSince(start));
     }
     if (run.subject_files) {
       const Clock::time_point start = Clock::now();
       const fs::path folder = SubjectFilesFolder(run.work, s.name);
       fs::create_directories(folder);
       run.subject_files(s, folder);
-      s.timings_s.Add("files", Since(start));
+      s.timings_s.Add("files", SecondsSince(start));
     }
     if (in_memory) {
       result.subjects[i] = std::move(s);
@@ -674,7 +673,7 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
         } catch (...) {
           read_back_error = std::current_exception();
         }
-        return Since(start);
+        return SecondsSince(start);
       });
     }
     // 9. The files that need every subject's distances (the report's maps on one colour scale).
@@ -698,7 +697,7 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
         const SubjectOutcome s = in_memory ? result.subjects[i] : finished.Get(i);
         run.subject_pictures(s, scale, SubjectFilesFolder(run.work, s.name));
         const std::lock_guard<std::mutex> lock(seconds_mutex);
-        seconds += Since(start);
+        seconds += SecondsSince(start);
       });
       result.timings_s.Add("pictures", seconds);
     }
@@ -730,7 +729,7 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
       model_failed = true;
       if (runner.IsLeader()) model_error = std::current_exception();  // the leader reports it, below
     }
-    if (runner.IsLeader()) result.timings_s.Add("model", Since(start));
+    if (runner.IsLeader()) result.timings_s.Add("model", SecondsSince(start));
   }
   if (!subjects_done) finish_subjects();
   // 10. The files of the model alone (model.h5, its tables, the report's figures of it), one task each.
@@ -749,10 +748,10 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
       fs::create_directories(to.parent_path());
       files[j].write(to);
       const std::lock_guard<std::mutex> lock(seconds_mutex);
-      largest = std::max(largest, Since(begin));
+      largest = std::max(largest, SecondsSince(begin));
     });
     if (runner.IsLeader() && !files.empty()) {
-      result.timings_s.Add("model outputs", Since(start));
+      result.timings_s.Add("model outputs", SecondsSince(start));
       result.timings_s.Add("model outputs largest", largest);
     }
   }

@@ -12,6 +12,7 @@
 #include "shape/core/error.h"
 #include "shape/core/log.h"
 #include "shape/core/number_format.h"
+#include "shape/core/timings.h"
 #include "shape/surface/adjust_poses.h"
 #include "shape/surface/adjust_poses_to_tracker.h"
 #include "shape/surface/cloud_filter.h"
@@ -21,7 +22,6 @@ namespace pectus {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double Since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 double AngleDeg(const Eigen::Matrix3d& R) {
   return std::acos(std::clamp((R.trace() - 1.0) / 2.0, -1.0, 1.0)) * 180.0 / M_PI;
@@ -139,7 +139,7 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
   for (std::size_t s = 0; s < n; ++s) P[s] = P_start[s] = T_centred_world * start[s];
   const double radius = options.StartingRadiusMm();
   OrientSweeps(P, radius, options.anchor, &sweeps);
-  result.timings_s.Add("normals", Since(t0));
+  result.timings_s.Add("normals", SecondsSince(t0));
 
   // 2. Which sweeps overlap, on their surfaces within the starting radius (the tracker's error).
   t0 = Clock::now();
@@ -149,7 +149,7 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
   // both are linked, and the joint adjustment uses only the correspondences they really have (a sweep
   // that only touches keeps its tracker pose). A sweep with nothing within the radius is refused.
   std::vector<SweepLink> links = FindSweepLinks(sweeps, P, radius, options.min_overlap_fraction, radius);
-  result.timings_s.Add("overlap", Since(t0));
+  result.timings_s.Add("overlap", SecondsSince(t0));
   if (n > 1) {
     for (std::size_t s = 0; s < n; ++s) {
       if (std::any_of(links.begin(), links.end(), [&](const SweepLink& l) { return l.i == s || l.j == s; }))
@@ -201,7 +201,7 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
         progress.Advance();
       }
       PosesFromTree(links, relative, pairwise_ok, options.anchor, &P);
-      result.timings_s.Add("pairwise_icp", Since(t0));
+      result.timings_s.Add("pairwise_icp", SecondsSince(t0));
     }
 
     // 4. Joint point-to-plane adjustment of all poses, with fresh correspondences every round, the gate
@@ -300,7 +300,7 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
       adjustment.min_pinned_ratio = options.final_min_pinned_ratio;
       run_rounds(gate, options.global_rounds, false, options.final_every_point);
     }
-    result.timings_s.Add("global_adjustment", Since(t0));
+    result.timings_s.Add("global_adjustment", SecondsSince(t0));
   }
 
   // Back to the caller's world frame; corrections and overlap residuals.
@@ -354,7 +354,7 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
     merged.Append(c);
   }
   BlendAlongNormals(options.smoothing_mm, &merged);
-  result.timings_s.Add("blend", Since(t0));
+  result.timings_s.Add("blend", SecondsSince(t0));
 
   // 6. Statistical outlier removal, then decimation to the target spacing.
   t0 = Clock::now();
@@ -366,7 +366,7 @@ SweepMergeResult MergeSweeps(const std::vector<PointCloud>& clouds, const std::v
   result.merged = SelectRows(merged, keep);
   result.merged.positions.rowwise() += T_world_centred.translation().transpose();
   result.points_out = result.merged.size();
-  result.timings_s.Add("filter", Since(t0));
+  result.timings_s.Add("filter", SecondsSince(t0));
 
   double worst_after = 0;
   for (const auto& pr : result.pairs) worst_after = std::max(worst_after, pr.rms_after_mm);
