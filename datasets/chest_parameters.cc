@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "datasets/internal/validation.h"
 #include "shape/core/enum_names.h"
 #include "shape/core/error.h"
 
@@ -11,12 +12,8 @@ namespace {
 
 constexpr EnumNames<PectusType, 2> kTypeNames{{{PectusType::kSaucer, "saucer"}, {PectusType::kCup, "cup"}}};
 
-bool Fail(std::string* why, const std::string& message) {
-  if (why) *why = message;
-  return false;
-}
-
-bool InRange(double x, double lo, double hi) { return std::isfinite(x) && x >= lo && x <= hi; }
+using internal::Fail;
+using internal::InRange;
 
 // The named linear fields, in LinearPart order.
 struct NamedField {

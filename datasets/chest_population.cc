@@ -23,7 +23,7 @@ enum Field : int {
   kConcavity,
   kNotch,
   kClavicle,
-  kNamedCount
+  kNamedFieldCount
 };
 
 LatentFactor Factor(const char* name, const char* description,
@@ -41,7 +41,7 @@ PopulationModel PopulationModel::Default() {
   LatentFactor size{"size", "overall size: every length of the chest 7 % larger",
                     Eigen::VectorXd::Zero(kLinearParameterCount)};
   const Eigen::VectorXd mean = LinearPart(m.mean);
-  size.loading.head(kNamedCount) = 0.07 * mean.head(kNamedCount);
+  size.loading.head(kNamedFieldCount) = 0.07 * mean.head(kNamedFieldCount);
   m.factors = {
       size,
       Factor("breadth", "wide and flat against narrow and deep", {{kWidth, 18.0}, {kDepth, -12.0}}),

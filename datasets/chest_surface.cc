@@ -5,11 +5,10 @@
 #include <numbers>
 
 #include "shape/core/error.h"
+#include "shape/core/geometry.h"
 
 namespace pectus::datasets {
 namespace {
-
-constexpr double kDegree = std::numbers::pi / 180.0;
 
 // Deepest inward displacement of a depression shape along its lateral axis (b = 0 maximises the profile).
 double DeepestDisplacement(const formula::PectusShape& e) {

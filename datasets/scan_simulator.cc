@@ -8,17 +8,17 @@
 
 #include "datasets/internal/sweep_path.h"
 #include "datasets/internal/tracker_error.h"
+#include "datasets/internal/validation.h"
 #include "datasets/seeding.h"
 #include "datasets/surface_query.h"
 #include "shape/core/enum_names.h"
 #include "shape/core/error.h"
+#include "shape/core/geometry.h"
 
 namespace pectus::datasets {
 namespace {
 
-constexpr double kDegree = std::numbers::pi / 180.0;
-
-bool InRange(double x, double lo, double hi) { return std::isfinite(x) && x >= lo && x <= hi; }
+using internal::InRange;
 
 // A smooth random wander in [-1, 1] along the laser-line index: three sines of random period and phase.
 class Wander {

@@ -4,24 +4,19 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
-#include <numbers>
 #include <random>
 
 #include "datasets/chest_landmarks.h"
+#include "datasets/internal/validation.h"
 #include "datasets/seeding.h"
 #include "shape/core/error.h"
+#include "shape/core/geometry.h"
 
 namespace pectus::datasets {
 namespace {
 
-constexpr double kDegree = std::numbers::pi / 180.0;
-
-bool InRange(double x, double lo, double hi) { return std::isfinite(x) && x >= lo && x <= hi; }
-
-bool Fail(std::string* why, const std::string& message) {
-  if (why) *why = message;
-  return false;
-}
+using internal::Fail;
+using internal::InRange;
 
 // Streams of a subject's own draws beyond the population sample (kept apart so that turning pectus or pose
 // on does not change the shape).

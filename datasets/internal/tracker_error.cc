@@ -2,14 +2,12 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
-#include <numbers>
 
 #include "datasets/seeding.h"
+#include "shape/core/geometry.h"
 
 namespace pectus::datasets::internal {
 namespace {
-
-constexpr double kDegree = std::numbers::pi / 180.0;
 
 Rigid3 ErrorOf(const Eigen::Vector3d& axis, double angle_deg, const Eigen::Vector3d& shift,
                const Eigen::Vector3d& pivot) {

@@ -5,14 +5,12 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <numbers>
 
 #include "shape/core/error.h"
+#include "shape/core/geometry.h"
 
 namespace pectus::planner {
 namespace {
-
-constexpr double kDegree = std::numbers::pi / 180.0;
 
 Points3 Scaled(const Points3& p, const Eigen::Vector3d& scale) {
   Points3 out = p;

@@ -3,11 +3,9 @@
 #include <cmath>
 
 #include "shape/core/error.h"
+#include "shape/core/geometry.h"
 
 namespace pectus::trainer {
-namespace {
-constexpr double kDegree = 3.14159265358979323846 / 180.0;
-}  // namespace
 
 bool ScopeCameraOptions::IsValid(std::string* why) const {
   const bool ok = oblique_deg >= 0 && oblique_deg <= 70 && horizontal_fov_deg > 10 &&

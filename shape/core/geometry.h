@@ -6,11 +6,15 @@
 #include <cstdint>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace pectus {
+
+/// Radians per degree: `angle_deg * kDegree` is the angle in radians.
+inline constexpr double kDegree = std::numbers::pi / 180.0;
 
 /// #rows by 3 matrix of 3D vectors (positions in mm, or unit normals), one row per item.
 using Points3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
@@ -23,9 +27,9 @@ using Faces3 = Eigen::Matrix<std::int32_t, Eigen::Dynamic, 3, Eigen::RowMajor>;
 ///
 /// Invariant (checked by Validate): every optional attribute is either empty or has one row per point.
 struct PointCloud {
-  Points3 positions;                              ///< #points by 3, mm
-  Points3 normals;                                ///< empty, or #points by 3, unit length
-  Colors3 colors;                                 ///< empty, or #points by 3
+  Points3 positions;                               ///< #points by 3, mm
+  Points3 normals;                                 ///< empty, or #points by 3, unit length
+  Colors3 colors;                                  ///< empty, or #points by 3
   std::map<std::string, Eigen::VectorXd> scalars;  ///< name -> #points values (e.g. "confidence")
 
   Eigen::Index size() const { return positions.rows(); }

@@ -17,11 +17,6 @@
 namespace pectus {
 namespace {
 
-using pcd::Encoding;
-using pcd::Field;
-using pcd::Header;
-using pcd::Type;
-
 template <typename T>
 double Load(const std::uint8_t* p) {
   T v;
@@ -30,25 +25,25 @@ double Load(const std::uint8_t* p) {
 }
 
 // The value of one element at `p`, as a double.
-double LoadAsDouble(Type type, const std::uint8_t* p) {
+double LoadAsDouble(pcd::Type type, const std::uint8_t* p) {
   switch (type) {
-    case Type::kInt8: return Load<std::int8_t>(p);
-    case Type::kUint8: return Load<std::uint8_t>(p);
-    case Type::kInt16: return Load<std::int16_t>(p);
-    case Type::kUint16: return Load<std::uint16_t>(p);
-    case Type::kInt32: return Load<std::int32_t>(p);
-    case Type::kUint32: return Load<std::uint32_t>(p);
-    case Type::kInt64: return Load<std::int64_t>(p);
-    case Type::kUint64: return Load<std::uint64_t>(p);
-    case Type::kFloat32: return Load<float>(p);
-    case Type::kFloat64: return Load<double>(p);
+    case pcd::Type::kInt8: return Load<std::int8_t>(p);
+    case pcd::Type::kUint8: return Load<std::uint8_t>(p);
+    case pcd::Type::kInt16: return Load<std::int16_t>(p);
+    case pcd::Type::kUint16: return Load<std::uint16_t>(p);
+    case pcd::Type::kInt32: return Load<std::int32_t>(p);
+    case pcd::Type::kUint32: return Load<std::uint32_t>(p);
+    case pcd::Type::kInt64: return Load<std::int64_t>(p);
+    case pcd::Type::kUint64: return Load<std::uint64_t>(p);
+    case pcd::Type::kFloat32: return Load<float>(p);
+    case pcd::Type::kFloat64: return Load<double>(p);
   }
   return std::nan("");
 }
 
 // A field's values: point i's first element at base + i * stride.
 struct Column {
-  const Field* field = nullptr;
+  const pcd::Field* field = nullptr;
   const std::uint8_t* base = nullptr;
   std::size_t stride = 0;
 
@@ -67,25 +62,26 @@ bool ParseAs(std::string_view token, std::uint8_t* out) {
   return true;
 }
 
-bool ParseElement(Type type, std::string_view token, std::uint8_t* out) {
+bool ParseElement(pcd::Type type, std::string_view token, std::uint8_t* out) {
   switch (type) {
-    case Type::kInt8: return ParseAs<std::int8_t>(token, out);
-    case Type::kUint8: return ParseAs<std::uint8_t>(token, out);
-    case Type::kInt16: return ParseAs<std::int16_t>(token, out);
-    case Type::kUint16: return ParseAs<std::uint16_t>(token, out);
-    case Type::kInt32: return ParseAs<std::int32_t>(token, out);
-    case Type::kUint32: return ParseAs<std::uint32_t>(token, out);
-    case Type::kInt64: return ParseAs<std::int64_t>(token, out);
-    case Type::kUint64: return ParseAs<std::uint64_t>(token, out);
-    case Type::kFloat32: return ParseAs<float>(token, out);
-    case Type::kFloat64: return ParseAs<double>(token, out);
+    case pcd::Type::kInt8: return ParseAs<std::int8_t>(token, out);
+    case pcd::Type::kUint8: return ParseAs<std::uint8_t>(token, out);
+    case pcd::Type::kInt16: return ParseAs<std::int16_t>(token, out);
+    case pcd::Type::kUint16: return ParseAs<std::uint16_t>(token, out);
+    case pcd::Type::kInt32: return ParseAs<std::int32_t>(token, out);
+    case pcd::Type::kUint32: return ParseAs<std::uint32_t>(token, out);
+    case pcd::Type::kInt64: return ParseAs<std::int64_t>(token, out);
+    case pcd::Type::kUint64: return ParseAs<std::uint64_t>(token, out);
+    case pcd::Type::kFloat32: return ParseAs<float>(token, out);
+    case pcd::Type::kFloat64: return ParseAs<double>(token, out);
   }
   return false;
 }
 
 // ascii: one point a line (blank lines skipped), into binary points of header.point_bytes each. Lines
 // after the last point are not read, as PCL does not read them.
-std::vector<std::uint8_t> ReadAscii(std::string_view bytes, const Header& header, const std::string& name) {
+std::vector<std::uint8_t> ReadAscii(std::string_view bytes, const pcd::Header& header,
+                                    const std::string& name) {
   std::vector<std::uint8_t> data(header.points * header.point_bytes);
   text::LineReader lines(bytes.substr(header.data_offset));
   std::string_view line;
@@ -97,7 +93,7 @@ std::vector<std::uint8_t> ReadAscii(std::string_view bytes, const Header& header
     if (token.empty()) continue;
     std::uint8_t* point = data.data() + i * header.point_bytes;
     std::uint64_t values = 0;
-    for (const Field& f : header.fields) {
+    for (const pcd::Field& f : header.fields) {
       for (std::uint64_t c = 0; c < f.count; ++c, ++values, token = text::NextToken(&rest)) {
         if (token.empty()) {
           ThrowBadInput(name,
@@ -107,7 +103,7 @@ std::vector<std::uint8_t> ReadAscii(std::string_view bytes, const Header& header
         }
         std::uint8_t* out = point + f.offset + c * f.size;
         // PCL writes a float "rgb" as the integer of its bits (several opaque colours are NaN as floats).
-        const bool packed = f.name == "rgb" && f.type == Type::kFloat32;
+        const bool packed = f.name == "rgb" && f.type == pcd::Type::kFloat32;
         if ((packed && ParseAs<std::uint32_t>(token, out)) || ParseElement(f.type, token, out)) continue;
         ThrowBadInput(name,
                       "PCD point " + std::to_string(i) + ": " + text::Quoted(token) + " is not a " +
@@ -132,16 +128,16 @@ std::vector<std::uint8_t> ReadAscii(std::string_view bytes, const Header& header
 
 // The fields' columns over the data, read (ascii) or expanded (binary_compressed) into `storage` where
 // the file's bytes cannot be read in place.
-std::vector<Column> ReadColumns(std::string_view bytes, const Header& header, const std::string& name,
+std::vector<Column> ReadColumns(std::string_view bytes, const pcd::Header& header, const std::string& name,
                                 std::vector<std::uint8_t>* storage) {
   std::vector<Column> columns;
   if (header.points == 0) {
     // Nothing to read (and no offsets to add to an empty buffer's null pointer: found by fuzzing).
-    for (const Field& f : header.fields) columns.push_back(Column{&f, nullptr, 0});
+    for (const pcd::Field& f : header.fields) columns.push_back(Column{&f, nullptr, 0});
     return columns;
   }
   const auto* file = reinterpret_cast<const std::uint8_t*>(bytes.data());
-  if (header.encoding == Encoding::kBinaryCompressed) {
+  if (header.encoding == pcd::Encoding::kBinaryCompressed) {
     // Field after field, without the padding; the sizes were checked against the header and the file.
     storage->resize(header.uncompressed_bytes);
     if (header.uncompressed_bytes > 0 &&
@@ -151,18 +147,19 @@ std::vector<Column> ReadColumns(std::string_view bytes, const Header& header, co
                               std::to_string(header.uncompressed_bytes) + " bytes its header gives");
     }
     std::size_t start = 0;
-    for (const Field& f : header.fields) {
+    for (const pcd::Field& f : header.fields) {
       columns.push_back(Column{&f, storage->data() + start, f.bytes()});
       if (!f.is_padding()) start += header.points * f.bytes();
     }
     return columns;
   }
   const std::uint8_t* points = file + header.data_offset;
-  if (header.encoding == Encoding::kAscii) {
+  if (header.encoding == pcd::Encoding::kAscii) {
     *storage = ReadAscii(bytes, header, name);
     points = storage->data();
   }
-  for (const Field& f : header.fields) columns.push_back(Column{&f, points + f.offset, header.point_bytes});
+  for (const pcd::Field& f : header.fields)
+    columns.push_back(Column{&f, points + f.offset, header.point_bytes});
   return columns;
 }
 
@@ -177,7 +174,7 @@ const Column* FindColumn(const std::vector<Column>& columns, const std::string& 
 
 TriangleMesh ParsePcd(std::string_view bytes, const std::string& name, FileSummary* summary) {
   if (summary) *summary = FileSummary{};
-  const Header header = pcd::ParseHeader(bytes, name);
+  const pcd::Header header = pcd::ParseHeader(bytes, name);
   std::vector<std::uint8_t> storage;
   const std::vector<Column> columns = ReadColumns(bytes, header, name, &storage);
   const auto n = static_cast<std::size_t>(header.points);
@@ -237,11 +234,11 @@ TriangleMesh ParsePcd(std::string_view bytes, const std::string& name, FileSumma
 
   if (summary) {
     summary->format = "pcd";
-    summary->encoding = header.encoding == Encoding::kAscii    ? "ascii"
-                        : header.encoding == Encoding::kBinary ? "binary"
-                                                               : "binary_compressed";
+    summary->encoding = header.encoding == pcd::Encoding::kAscii    ? "ascii"
+                        : header.encoding == pcd::Encoding::kBinary ? "binary"
+                                                                    : "binary_compressed";
     ElementSummary vertex{"vertex", static_cast<std::int64_t>(n), {}};
-    for (const Field& f : header.fields) {
+    for (const pcd::Field& f : header.fields) {
       std::string property = pcd::TypeName(f.type) + " " + f.name;
       if (f.count != 1) property += "[" + std::to_string(f.count) + "]";
       vertex.properties.push_back(std::move(property));

@@ -12,17 +12,10 @@
 namespace pectus {
 namespace {
 
-using ply::Element;
-using ply::Encoding;
-using ply::Header;
-using ply::IsBlank;
-using ply::IsInteger;
-using ply::StoreLittleEndian;
-
 std::string ScalarPropertyName(const std::string& scalar) {
   std::string out = scalar.empty() ? std::string("scalar") : scalar;
   for (char& c : out) {
-    if (IsBlank(c) || c == '\n') c = '_';
+    if (ply::IsBlank(c) || c == '\n') c = '_';
   }
   static const char* const kReserved[] = {
       "x", "y", "z", "nx", "ny", "nz", "red", "green", "blue", "alpha", "vertex_indices"};
@@ -44,13 +37,13 @@ inline void AppendNumber(std::string* out, T v) {
 
 TriangleMesh ParsePly(std::string_view bytes, const std::string& name, FileSummary* summary) {
   if (summary != nullptr) *summary = FileSummary{};
-  const Header header = ply::ParseHeader(bytes, name, summary);
+  const ply::Header header = ply::ParseHeader(bytes, name, summary);
 
   // Which elements hold the vertices and the faces.
-  const Element* vertex = nullptr;
-  const Element* face = nullptr;
+  const ply::Element* vertex = nullptr;
+  const ply::Element* face = nullptr;
   int index_property = -1;
-  for (const Element& e : header.elements) {
+  for (const ply::Element& e : header.elements) {
     if (e.name == "vertex") vertex = &e;
     if (e.name == "face") face = &e;
   }
@@ -64,7 +57,7 @@ TriangleMesh ParsePly(std::string_view bytes, const std::string& name, FileSumma
     if (index_property < 0 || !face->properties[index_property].is_list) {
       ThrowBadInput(name, "the face element has no list property 'vertex_indices'", face->header_line);
     }
-    if (!IsInteger(face->properties[index_property].type)) {
+    if (!ply::IsInteger(face->properties[index_property].type)) {
       ThrowBadInput(name, "the face indices must have an integer type", face->header_line);
     }
   }
@@ -73,7 +66,7 @@ TriangleMesh ParsePly(std::string_view bytes, const std::string& name, FileSumma
   Faces3 faces;
   const std::string_view data = bytes.substr(header.data_offset);
   const ply::Layout layout{vertex, face, index_property};
-  if (header.encoding == Encoding::kAscii) {
+  if (header.encoding == ply::Encoding::kAscii) {
     ply::ReadAsciiData(data, header, layout, name, &mesh, &faces);
   } else {
     ply::ReadBinaryData(data, header, layout, name, &mesh, &faces);
@@ -141,18 +134,18 @@ void WritePly(std::ostream& out, const TriangleMesh& mesh, const WriteOptions& o
     char* r = buffer.get();
     for (Eigen::Index i = 0; i < n; ++i) {
       for (int k = 0; k < 3; ++k, r += wide ? 8 : 4) {
-        wide ? StoreLittleEndian(r, pos[3 * i + k])
-             : StoreLittleEndian(r, static_cast<float>(pos[3 * i + k]));
+        wide ? ply::StoreLittleEndian(r, pos[3 * i + k])
+             : ply::StoreLittleEndian(r, static_cast<float>(pos[3 * i + k]));
       }
       if (normals) {
-        for (int k = 0; k < 3; ++k, r += 4) StoreLittleEndian(r, static_cast<float>(nrm[3 * i + k]));
+        for (int k = 0; k < 3; ++k, r += 4) ply::StoreLittleEndian(r, static_cast<float>(nrm[3 * i + k]));
       }
       if (colors) {
         std::memcpy(r, rgb + 3 * i, 3);
         r += 3;
       }
       for (const double* values : scalar_values) {
-        StoreLittleEndian(r, static_cast<float>(values[i]));
+        ply::StoreLittleEndian(r, static_cast<float>(values[i]));
         r += 4;
       }
     }
@@ -160,7 +153,7 @@ void WritePly(std::ostream& out, const TriangleMesh& mesh, const WriteOptions& o
     r = buffer.get();
     for (Eigen::Index f = 0; f < num_faces; ++f, r += 13) {
       r[0] = 3;
-      for (int k = 0; k < 3; ++k) StoreLittleEndian(r + 1 + 4 * k, tri[3 * f + k]);
+      for (int k = 0; k < 3; ++k) ply::StoreLittleEndian(r + 1 + 4 * k, tri[3 * f + k]);
     }
     out.write(buffer.get(), static_cast<std::streamsize>(face_bytes));
   } else {

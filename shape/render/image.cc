@@ -17,7 +17,7 @@ namespace {
 
 // A cv::Mat header over the image's bytes (RGB order; OpenCV only draws, so the order does not matter
 // except on encoding, where it is swapped).
-cv::Mat View(Image* image) { return cv::Mat(image->height, image->width, CV_8UC3, image->rgb.data()); }
+cv::Mat MatOver(Image* image) { return cv::Mat(image->height, image->width, CV_8UC3, image->rgb.data()); }
 cv::Scalar Colour(Rgb c) { return cv::Scalar(c.r, c.g, c.b); }
 
 }  // namespace
@@ -46,7 +46,7 @@ void Image::Set(int x, int y, Rgb c) {
 
 void DrawText(Image* image, int x, int y, const std::string& text, double scale, Rgb colour, int thickness) {
   if (image->empty()) return;
-  cv::Mat m = View(image);
+  cv::Mat m = MatOver(image);
   cv::putText(m, text, cv::Point(x, y), cv::FONT_HERSHEY_SIMPLEX, scale, Colour(colour), thickness,
               cv::LINE_AA);
 }
@@ -60,13 +60,13 @@ void TextSize(const std::string& text, double scale, int thickness, int* width, 
 
 void DrawLine(Image* image, int x0, int y0, int x1, int y1, Rgb colour, int thickness) {
   if (image->empty()) return;
-  cv::Mat m = View(image);
+  cv::Mat m = MatOver(image);
   cv::line(m, cv::Point(x0, y0), cv::Point(x1, y1), Colour(colour), thickness, cv::LINE_AA);
 }
 
 void FillRect(Image* image, int x0, int y0, int x1, int y1, Rgb colour) {
   if (image->empty()) return;
-  cv::Mat m = View(image);
+  cv::Mat m = MatOver(image);
   cv::rectangle(m, cv::Point(std::min(x0, x1), std::min(y0, y1)),
                 cv::Point(std::max(x0, x1), std::max(y0, y1)), Colour(colour), cv::FILLED);
 }

@@ -13,21 +13,19 @@
 namespace pectus {
 namespace {
 
-const std::string kBunny = testing_support::BunnyDirectory();
-
 struct Sweep {
   std::string file;
   PointCloud cloud;  // mm, in the common frame
 };
 
 std::vector<Sweep> PlacedSweeps() {
-  std::vector<ScanPose> poses = ReadStanfordConf(kBunny + "bun.conf");
+  std::vector<ScanPose> poses = ReadStanfordConf(testing_support::BunnyDirectory() + "bun.conf");
   ScaleTranslations(1000.0, &poses);
   std::vector<Sweep> sweeps;
   ReadOptions options;
   options.input_units = LengthUnit::kMetre;
   for (const auto& p : poses) {
-    Sweep s{p.file, ReadPointCloud(kBunny + p.file, options)};
+    Sweep s{p.file, ReadPointCloud(testing_support::BunnyDirectory() + p.file, options)};
     TransformInPlace(Similarity3::FromRigid(p.T_common_scan), &s.cloud);
     sweeps.push_back(std::move(s));
   }
@@ -84,11 +82,13 @@ TEST(BunnyPlacement, OverlappingSweepsLieWithinSixTenthsOfAMillimetre) {
       if (3 * overlap < static_cast<std::size_t>(sweeps[a].cloud.size())) continue;
       ++pairs;
       worst = std::max(worst, median);
-      EXPECT_LE(median, 0.6) << sweeps[a].file << " vs " << sweeps[b].file << ", " << overlap << " overlapping points";
+      EXPECT_LE(median, 0.6) << sweeps[a].file << " vs " << sweeps[b].file << ", " << overlap
+                             << " overlapping points";
       EXPECT_GE(median, 0.05) << "suspiciously perfect: " << sweeps[a].file << " vs " << sweeps[b].file;
     }
   }
-  // 46 of the 90 ordered pairs overlap this much (bun000-bun045 on 94 % of its points, bun000-bun270 on 38 %).
+  // 46 of the 90 ordered pairs overlap this much (bun000-bun045 on 94 % of its points, bun000-bun270 on 38
+  // %).
   EXPECT_GE(pairs, 30);
   std::printf("%d overlapping ordered pairs, worst median %.3f mm\n", pairs, worst);
 }
@@ -96,12 +96,12 @@ TEST(BunnyPlacement, OverlappingSweepsLieWithinSixTenthsOfAMillimetre) {
 TEST(BunnyPlacement, PlainRotationConventionWouldBeWrong) {
   PECTUS_REQUIRE_SHARED_FILE(testing_support::kBunnyConf);
   // The convention matters: with R(q) instead of R(q)^T the sweeps stay tens of millimetres apart.
-  std::vector<ScanPose> poses = ReadStanfordConf(kBunny + "bun.conf");
+  std::vector<ScanPose> poses = ReadStanfordConf(testing_support::BunnyDirectory() + "bun.conf");
   ScaleTranslations(1000.0, &poses);
   ReadOptions options;
   options.input_units = LengthUnit::kMetre;
-  PointCloud a = ReadPointCloud(kBunny + "bun000.ply", options);
-  PointCloud b = ReadPointCloud(kBunny + "bun045.ply", options);
+  PointCloud a = ReadPointCloud(testing_support::BunnyDirectory() + "bun000.ply", options);
+  PointCloud b = ReadPointCloud(testing_support::BunnyDirectory() + "bun045.ply", options);
   ASSERT_EQ(poses[1].file, "bun045.ply");
   Rigid3 wrong = poses[1].T_common_scan;
   wrong.linear() = wrong.linear().transpose().eval();

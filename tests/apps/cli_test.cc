@@ -19,8 +19,6 @@ namespace fs = std::filesystem;
 
 using CliTest = testing_support::CommandTest;
 
-const std::string kBunny = testing_support::BunnyDirectory();
-
 const char* kSquare =
     "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
     "element face 2\nproperty list uchar int vertex_indices\nend_header\n"
@@ -28,7 +26,7 @@ const char* kSquare =
 
 TEST_F(CliTest, InfoReportsBunnyPointCount) {
   PECTUS_REQUIRE_SHARED_FILE(testing_support::kBunnyConf);
-  const CliRun r = Pectus("info " + kBunny + "bun000.ply --report " + P("r.json"));
+  const CliRun r = Pectus("info " + testing_support::BunnyDirectory() + "bun000.ply --report " + P("r.json"));
   ASSERT_EQ(r.code, 0) << r.output;
   std::ifstream in(P("r.json"));
   const auto j = nlohmann::json::parse(in);
@@ -150,8 +148,9 @@ TEST_F(CliTest, RunsTheScanCommandsItselfAndHandsTheRestToTheFullProgram) {
 
 TEST_F(CliTest, PlaceWritesOneCloudOfAllSweeps) {
   PECTUS_REQUIRE_SHARED_FILE(testing_support::kBunnyConf);
-  const CliRun r = Pectus("place --poses " + kBunny + "bun.conf --input-units m -o " + P("bunny.ply") +
-                          " --report " + P("r.json") + " --quiet");
+  const CliRun r =
+      Pectus("place --poses " + testing_support::BunnyDirectory() + "bun.conf --input-units m -o " +
+             P("bunny.ply") + " --report " + P("r.json") + " --quiet");
   ASSERT_EQ(r.code, 0) << r.output;
   std::ifstream in(P("r.json"));
   const auto j = nlohmann::json::parse(in);
@@ -163,7 +162,8 @@ TEST_F(CliTest, PlaceWritesOneCloudOfAllSweeps) {
   metres.input_units = LengthUnit::kMetre;
   const PointCloud placed = ReadPointCloud(P("bunny.ply"));
   ASSERT_EQ(placed.size(), 362272);
-  const PointCloud zipper = ReadPointCloud(kBunny + "reconstruction/bun_zipper.ply", metres);
+  const PointCloud zipper =
+      ReadPointCloud(testing_support::BunnyDirectory() + "reconstruction/bun_zipper.ply", metres);
   const KdTree3 tree(zipper.positions);
   std::vector<double> d;
   for (Eigen::Index i = 0; i < placed.size(); i += 7) {

@@ -23,8 +23,6 @@ namespace {
 namespace fs = std::filesystem;
 using testing_support::Pectus;
 
-const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
-
 class PlanCommandTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -41,8 +39,9 @@ class PlanCommandTest : public ::testing::Test {
 TEST_F(PlanCommandTest, Patient57GivesTwoScenariosTheBestPlacementAndAnHtmlReportWithPictures) {
   PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
   const auto run =
-      Pectus("plan --patient-table '" + kTable + "' --patient 57 --model " + Path("average.h5") +
-             " --bar-position 0.85 --force 1700 --out " + Path("plan57") + " --report " + Path("r.json") +
+      Pectus("plan --patient-table '" + testing_support::PatientTablePath() + "' --patient 57 --model " +
+             Path("average.h5") + " --bar-position 0.85 --force 1700 --out " + Path("plan57") + " --report " +
+             Path("r.json") +
              " --cell-mm 10 --search-positions 3 --search-forces 4 --search-refinements 3 --threads 1");
   ASSERT_EQ(run.code, 0) << run.output;
   // 1700 N (the example) is far beyond the force to lift for this model: the command says so,
@@ -100,8 +99,8 @@ TEST_F(PlanCommandTest, Patient57GivesTwoScenariosTheBestPlacementAndAnHtmlRepor
 
 TEST_F(PlanCommandTest, BadInputAndUsageHaveTheirExitCodesAndWriteNothing) {
   PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
-  const std::string common = "plan --patient-table '" + kTable + "' --model " + Path("average.h5") +
-                             " --out " + Path("out") + " --cell-mm 8 --no-search";
+  const std::string common = "plan --patient-table '" + testing_support::PatientTablePath() + "' --model " +
+                             Path("average.h5") + " --out " + Path("out") + " --cell-mm 8 --no-search";
   auto run = Pectus(common + " --patient nobody");  // an argument naming no patient of the table: usage
   EXPECT_EQ(run.code, 2) << run.output;
   EXPECT_NE(run.output.find("nobody"), std::string::npos) << run.output;
@@ -117,12 +116,13 @@ TEST_F(PlanCommandTest, BadInputAndUsageHaveTheirExitCodesAndWriteNothing) {
       << run.output;
   run = Pectus(common + " --patient 57 --bar-position 1.5");
   EXPECT_EQ(run.code, 2) << run.output;
-  run =
-      Pectus("plan --patient-table '" + kTable + "' --model " + Path("average.h5") + " --out " + Path("out") +
-             " --no-search --patient 57 --cell-mm 25");  // a mesh cell length outside what is tested
+  run = Pectus("plan --patient-table '" + testing_support::PatientTablePath() + "' --model " +
+               Path("average.h5") + " --out " + Path("out") +
+               " --no-search --patient 57 --cell-mm 25");  // a mesh cell length outside what is tested
   EXPECT_EQ(run.code, 2) << run.output;
   EXPECT_NE(run.output.find("rib_cell_length_mm must be 2 to 20 mm"), std::string::npos) << run.output;
-  run = Pectus("plan --patient-table '" + kTable + "' --patient 57 --out " + Path("out"));  // no --model
+  run = Pectus("plan --patient-table '" + testing_support::PatientTablePath() + "' --patient 57 --out " +
+               Path("out"));  // no --model
   EXPECT_EQ(run.code, 2) << run.output;
   EXPECT_FALSE(fs::exists(dir_ / "out"));
 }

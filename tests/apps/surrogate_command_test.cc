@@ -19,13 +19,11 @@ namespace {
 namespace fs = std::filesystem;
 using testing_support::Pectus;
 
-const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
-
 TEST(SurrogateCommand, CheckHoldsTheBasisToTheDirectSolveAndFailsALimitItCannotMeet) {
   PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
   const fs::path dir = fs::temp_directory_path() / ("pectus_surrogate_" + std::to_string(::getpid()));
   fs::create_directories(dir);
-  const std::string common = "surrogate check --patient-table '" + kTable +
+  const std::string common = "surrogate check --patient-table '" + testing_support::PatientTablePath() +
                              "' --patients 57 --random 6 --evaluations 20 --cell-mm 10 --threads 1";
   const auto run = Pectus(common + " --report '" + (dir / "r.json").string() + "'");
   ASSERT_EQ(run.code, 0) << run.output;
@@ -45,10 +43,12 @@ TEST(SurrogateCommand, CheckHoldsTheBasisToTheDirectSolveAndFailsALimitItCannotM
   EXPECT_EQ(strict.code, 1) << strict.output;
   EXPECT_NE(strict.output.find("does not reproduce the FE solve"), std::string::npos) << strict.output;
   // Bad input.
-  const auto none = Pectus("surrogate check --patient-table '" + kTable + "' --patients ,");
+  const auto none =
+      Pectus("surrogate check --patient-table '" + testing_support::PatientTablePath() + "' --patients ,");
   EXPECT_EQ(none.code, 2) << none.output;
   EXPECT_NE(none.output.find("names no patient"), std::string::npos) << none.output;
-  const auto unknown = Pectus("surrogate check --patient-table '" + kTable + "' --patients 999");
+  const auto unknown =
+      Pectus("surrogate check --patient-table '" + testing_support::PatientTablePath() + "' --patients 999");
   EXPECT_NE(unknown.code, 0) << unknown.output;
   EXPECT_NE(unknown.output.find("999"), std::string::npos) << unknown.output;
   fs::remove_all(dir);
@@ -113,7 +113,7 @@ TEST(SurrogateCommand, EvaluateLeavesEachPatientOutAndBeatsTheBaselines) {
       fs::temp_directory_path() / ("pectus_surrogate_evaluate_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const auto run =
-      Pectus("surrogate evaluate --patient-table '" + kTable +
+      Pectus("surrogate evaluate --patient-table '" + testing_support::PatientTablePath() +
              "' --patients 8,7,6,5,4,3,2,1 --cell-mm 20 --report '" + (dir / "e.json").string() + "'");
   ASSERT_EQ(run.code, 0) << run.output;
   EXPECT_NE(run.output.find("8 patients left out one at a time"), std::string::npos) << run.output;
@@ -142,7 +142,8 @@ TEST(SurrogateCommand, EvaluateLeavesEachPatientOutAndBeatsTheBaselines) {
     EXPECT_EQ(p["cases"].get<int>(), 24);
   }
   // Refused before any FE work: too few patients for the inputs, an unknown patient, one named twice.
-  const std::string head = "surrogate evaluate --patient-table '" + kTable + "' --patients ";
+  const std::string head =
+      "surrogate evaluate --patient-table '" + testing_support::PatientTablePath() + "' --patients ";
   const auto few = Pectus(head + "1,2,3,4,5,6,7");
   EXPECT_EQ(few.code, 2) << few.output;
   EXPECT_NE(few.output.find("needs at least 8"), std::string::npos) << few.output;

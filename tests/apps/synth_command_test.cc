@@ -27,7 +27,6 @@ std::string Slurp(const fs::path& p) {
 using SynthCommand = testing_support::CommandTest;
 
 const std::string kSmall = " --sweeps 3 --spacing 5 --truth-spacing 10 -q";
-const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
 
 TEST_F(SynthCommand, CohortIsByteIdenticalPerSeedWhateverTheThreads) {
   ASSERT_EQ(
@@ -71,7 +70,10 @@ TEST_F(SynthCommand, SubjectPairAndPatientWriteTheirFolders) {
   const SubjectFolder pre = ReadSubjectFolder(dir_ / "p/pre"), post = ReadSubjectFolder(dir_ / "p/post");
   EXPECT_NEAR(post.subject.parameters.growth.y(), 1.05 * 1.05, 1e-12);
   EXPECT_EQ(LinearPart(pre.subject.parameters), LinearPart(post.subject.parameters));
-  ASSERT_EQ(Pectus("synth patient --row 57 --row 3 --table " + kTable + " --out " + P("t") + kSmall).code, 0);
+  ASSERT_EQ(Pectus("synth patient --row 57 --row 3 --table " + testing_support::PatientTablePath() +
+                   " --out " + P("t") + kSmall)
+                .code,
+            0);
   const SubjectFolder t = ReadSubjectFolder(dir_ / "t/patient_57");
   EXPECT_EQ(t.subject.extra["patient_row"]["depression_mm"], 21.0);
   EXPECT_TRUE(fs::exists(dir_ / "t/patient_3/sweep_00.ply"));
@@ -117,7 +119,8 @@ TEST_F(SynthCommand, BadOptionsAndBadTableFailCleanly) {
   EXPECT_EQ(bad.code, 3);
   EXPECT_NE(bad.output.find("bad.csv"), std::string::npos);
   // A patient the table does not have: a usage error listing the patients it has.
-  const CliRun absent = Pectus("synth patient --row 99 --table " + kTable + " --out " + P("x") + kSmall);
+  const CliRun absent = Pectus("synth patient --row 99 --table " + testing_support::PatientTablePath() +
+                               " --out " + P("x") + kSmall);
   EXPECT_EQ(absent.code, 2);
   EXPECT_NE(absent.output.find("patient 99 is not in"), std::string::npos) << absent.output;
   EXPECT_NE(absent.output.find("(patients 1-62)"), std::string::npos) << absent.output;

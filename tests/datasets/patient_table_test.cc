@@ -13,8 +13,6 @@
 namespace pectus::datasets {
 namespace {
 
-const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
-
 struct SliceMeasure {
   double width = 0, depth = 0, depression = 0;
 };
@@ -62,7 +60,7 @@ SliceMeasure MeasureSlice(const ChestSurface& wall, double v) {
 // 57).
 TEST(PatientTable, SubjectFromARowGivesBackWidthDepthAndDepressionWithin2mm) {
   PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
-  const std::vector<PatientTableRow> rows = ReadPatientTable(kTable);
+  const std::vector<PatientTableRow> rows = ReadPatientTable(testing_support::PatientTablePath());
   std::vector<int> chosen = {57, 3};
   auto extreme = [&](auto key) {
     return std::min_element(rows.begin(), rows.end(),
@@ -73,7 +71,7 @@ TEST(PatientTable, SubjectFromARowGivesBackWidthDepthAndDepressionWithin2mm) {
   chosen.push_back(extreme([](const PatientTableRow& r) { return r.width_mm; }));
   chosen.push_back(extreme([](const PatientTableRow& r) { return -r.depth_mm; }));
   for (int number : chosen) {
-    const PatientTableRow& row = FindPatient(rows, number, kTable);
+    const PatientTableRow& row = FindPatient(rows, number, testing_support::PatientTablePath());
     const SyntheticSubject s = MakePatientSubject(row, 7, SubjectOptions{});
     const ChestSurface wall = s.ChestWall();
     // The slice of deepest depression over the sternal body (notch to xiphoid), every 0.5 % of the sternum.

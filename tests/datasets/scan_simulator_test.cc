@@ -11,11 +11,10 @@
 #include "datasets/chest_population.h"
 #include "datasets/surface_query.h"
 #include "shape/core/error.h"
+#include "tests/datasets/sample_chest.h"
 
 namespace pectus::datasets {
 namespace {
-
-ChestSurface Subject() { return ChestSurface(SampleSubject(PopulationModel::Default(), 11).parameters); }
 
 ScanOptions Options() {
   ScanOptions o;
@@ -58,7 +57,7 @@ Residuals Measure(const ChestSurface& surface, const Sweep& sweep) {
 }
 
 TEST(ScanSimulator, SweepsMappedByTheirTruePoseLieOnTheSurfaceWithinTheNoise) {
-  const ChestSurface surface = Subject();
+  const ChestSurface surface = SampleChest();
   const ScanOptions o = Options();
   const Scan scan = SimulateScan(surface, o, 5);
   ASSERT_EQ(scan.sweeps.size(), 4u);
@@ -93,7 +92,7 @@ TEST(ScanSimulator, NoiseFreePointsAreTheTrueHits) {
   ScanOptions o = Options();
   o.noise_mm = 0.0;
   o.outlier_fraction = 0.0;
-  const ChestSurface surface = Subject();
+  const ChestSurface surface = SampleChest();
   const Scan scan = SimulateScan(surface, o, 9);
   for (const Sweep& sweep : scan.sweeps) {
     for (Eigen::Index i = 0; i < sweep.cloud.size(); i += 7) {
@@ -109,7 +108,7 @@ TEST(ScanSimulator, BreathingSweepsLieOnTheirBreathingState) {
   ScanOptions o = Options();
   o.breathing_mm = 4.0;
   o.outlier_fraction = 0.0;
-  const ChestSurface surface = Subject();
+  const ChestSurface surface = SampleChest();
   const Scan scan = SimulateScan(surface, o, 21);
   double largest_breath = 0.0;
   for (const Sweep& sweep : scan.sweeps) {
@@ -122,7 +121,7 @@ TEST(ScanSimulator, BreathingSweepsLieOnTheirBreathingState) {
 }
 
 TEST(ScanSimulator, HolesStripsAndSpacingAreAsConfigured) {
-  const ChestSurface surface = Subject();
+  const ChestSurface surface = SampleChest();
   ScanOptions o = Options();
   o.subject_holes = 3;
   o.sweep_holes = 1;
@@ -161,7 +160,7 @@ TEST(ScanSimulator, HolesStripsAndSpacingAreAsConfigured) {
 }
 
 TEST(ScanSimulator, DeterministicPerSeed) {
-  const ChestSurface surface = Subject();
+  const ChestSurface surface = SampleChest();
   const ScanOptions o = Options();
   const Scan a = SimulateScan(surface, o, 77), b = SimulateScan(surface, o, 77),
              c = SimulateScan(surface, o, 78);
@@ -194,7 +193,7 @@ std::vector<double> NearestNeighbourDistances(const SweepTruth& t) {
 // Tolerances: mean within 12 % (the surface is curved and the fan's rays spread with incidence), CV within
 // [0.42, 0.62].
 TEST(ScanSimulator, RandomSamplingIsAPoissonProcessOfTheGridsDensity) {
-  const ChestSurface surface = Subject();
+  const ChestSurface surface = SampleChest();
   ScanOptions o = Options();
   o.sweeps = 3;
   o.noise_mm = 0.0;
@@ -227,7 +226,7 @@ TEST(ScanSimulator, RandomSamplingIsAPoissonProcessOfTheGridsDensity) {
 
 // Every pattern, sampling and tracker option: the same seed gives the same sweeps with 1 and 2 threads.
 TEST(ScanSimulator, DeterministicPerSeedWhateverTheThreads) {
-  const ChestSurface surface = Subject();
+  const ChestSurface surface = SampleChest();
   ScanOptions o = Options();
   o.sweeps = 3;
   o.spacing_mm = 3.0;
@@ -256,13 +255,13 @@ TEST(ScanSimulator, DeterministicPerSeedWhateverTheThreads) {
 TEST(ScanSimulator, RejectsInvalidOptions) {
   ScanOptions o;
   o.sweeps = 0;
-  EXPECT_THROW(SimulateScan(Subject(), o, 1), Error);
+  EXPECT_THROW(SimulateScan(SampleChest(), o, 1), Error);
   o = ScanOptions();
   o.noise_mm = -1.0;
-  EXPECT_THROW(SimulateScan(Subject(), o, 1), Error);
+  EXPECT_THROW(SimulateScan(SampleChest(), o, 1), Error);
   o = ScanOptions();
   o.tracker_lever_mm = 5.0;
-  EXPECT_THROW(SimulateScan(Subject(), o, 1), Error);
+  EXPECT_THROW(SimulateScan(SampleChest(), o, 1), Error);
   EXPECT_THROW(ParseSweepPattern("zigzag"), Error);
   EXPECT_EQ(ParseSweepPattern(ToString(SweepPattern::kSpiral)), SweepPattern::kSpiral);
 }

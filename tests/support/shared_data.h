@@ -45,6 +45,9 @@ inline std::string MissingSharedFile(const std::string& relative) {
 /// The bunny folder of the shared datasets, with a trailing slash.
 inline std::string BunnyDirectory() { return SharedPath("datasets/stanford_bunny/"); }
 
+/// The CT table of 62 patients (kPatientTable) in the shared folder.
+inline std::string PatientTablePath() { return SharedPath(kPatientTable); }
+
 /// For a benchmark's main(): true if `relative` is in the shared folder; else prints
 /// "PROGRAM: error: MESSAGE" (MissingSharedFile) to stderr and returns false; main then returns 3, the
 /// exit code of bad input (docs/errors.md).

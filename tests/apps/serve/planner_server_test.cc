@@ -33,8 +33,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
-
 class PlannerServerTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -42,7 +40,8 @@ class PlannerServerTest : public ::testing::Test {
     dir_ = fs::temp_directory_path() / ("pectus_planner_server_" + std::to_string(::getpid()));
     fs::create_directories(dir_);
     planner::testing::WriteAverageModel(dir_ / "average.h5", planner::testing::AnalyticChestGrid(31, 41));
-    PlannerServerOptions options = testing::TestServerOptions(kTable, dir_ / "average.h5");
+    PlannerServerOptions options =
+        testing::TestServerOptions(testing_support::PatientTablePath(), dir_ / "average.h5");
     options.max_body_bytes = 64 * 1024;
     server_ = new PlannerServer(options);
     server_->Start();
@@ -134,7 +133,7 @@ TEST_F(PlannerServerTest, ListsEveryPatientOfTheTable) {
   EXPECT_EQ(r->get_header_value("Content-Type"), "application/json; charset=utf-8");
   const json list = json::parse(r->body);
   // The table: a header and one row per patient (62, Rechowicz 2012, Appendix A).
-  std::ifstream in(kTable);
+  std::ifstream in(testing_support::PatientTablePath());
   std::string line;
   int rows = -1;
   while (std::getline(in, line)) rows += !line.empty() && line[0] != '#';

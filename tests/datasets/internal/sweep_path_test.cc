@@ -11,11 +11,10 @@
 
 #include "datasets/chest_population.h"
 #include "datasets/scan_simulator.h"
+#include "tests/datasets/sample_chest.h"
 
 namespace pectus::datasets::internal {
 namespace {
-
-ChestSurface Subject() { return ChestSurface(SampleSubject(PopulationModel::Default(), 11).parameters); }
 
 // Clean sweeps: no holes, outliers or thinning, so that a sweep's area is where its laser lines went.
 ScanOptions Clean(SweepPattern pattern, int sweeps, double overlap) {
@@ -107,7 +106,7 @@ double SharedFraction(const std::vector<const SweepTruth*>& a, const std::vector
 // wandering by up to 6 mm, included): within 0.02 of the requested fraction (0.03 for the outermost
 // vertical strips, whose outer edge lies on the flank where grazing rays go unreturned).
 TEST(SweepPath, NeighbouringStripsShareTheRequestedFractionOfTheirArea) {
-  const ChestSurface surface = Subject();
+  const ChestSurface surface = SampleChest();
   for (SweepPattern pattern : {SweepPattern::kVertical, SweepPattern::kHorizontal}) {
     const int axis = pattern == SweepPattern::kVertical ? 0 : 1;
     for (double overlap : {0.1, 0.2, 0.4}) {
@@ -129,7 +128,7 @@ TEST(SweepPath, NeighbouringStripsShareTheRequestedFractionOfTheirArea) {
 // row's height, within 0.03 as a mean over 4 seeds (a patch's ends, where the rows meet, are ragged by
 // +-0.02 in v each, drawn per patch: at overlap 0.1 that is +-40 % of the shared band in one scan).
 TEST(SweepPath, NeighbouringPatchesShareTheRequestedFractionOfTheirArea) {
-  const ChestSurface surface = Subject();
+  const ChestSurface surface = SampleChest();
   for (double overlap : {0.1, 0.2, 0.4}) {
     SCOPED_TRACE("overlap " + std::to_string(overlap));
     double across = 0.0, rows = 0.0;
@@ -152,7 +151,7 @@ TEST(SweepPath, NeighbouringPatchesShareTheRequestedFractionOfTheirArea) {
 // wider than its nominal band and 2 x 8 mm of wander, and the wand goes along u (the laser line's index
 // follows u, correlation > 0.98), every other strip back the other way.
 TEST(SweepPath, HorizontalStripsRunAcrossTheChest) {
-  const ChestSurface surface = Subject();
+  const ChestSurface surface = SampleChest();
   const Scan scan = SimulateScan(surface, Clean(SweepPattern::kHorizontal, 5, 0.2), 8);
   double previous_v = 2.0;
   for (std::size_t k = 0; k < scan.sweeps.size(); ++k) {
@@ -176,7 +175,7 @@ TEST(SweepPath, HorizontalStripsRunAcrossTheChest) {
 // neighbouring turns overlap (share at least half the requested fraction of the inner one's area; a
 // turn's band is cut where it leaves the chest, so the shared part is not exactly the fraction).
 TEST(SweepPath, SpiralTurnsGoOutwardFromTheSternum) {
-  const ChestSurface surface = Subject();
+  const ChestSurface surface = SampleChest();
   const Raster raster(surface);
   const ScanOptions o = Clean(SweepPattern::kSpiral, 4, 0.3);
   const Scan scan = SimulateScan(surface, o, 2);

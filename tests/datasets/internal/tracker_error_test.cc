@@ -11,11 +11,10 @@
 
 #include "datasets/chest_population.h"
 #include "datasets/surface_query.h"
+#include "tests/datasets/sample_chest.h"
 
 namespace pectus::datasets::internal {
 namespace {
-
-ChestSurface Subject() { return ChestSurface(SampleSubject(PopulationModel::Default(), 11).parameters); }
 
 ScanOptions Lever() {
   ScanOptions o;
@@ -41,7 +40,7 @@ double MeasuredSkinRms(const SweepTruth& t) {
 // (it lies 150-200 mm outside the skin, the skin curving away under it), and an exact draw turns the
 // sweep by exactly tracker_deg.
 TEST(TrackerError, LeverPivotLiesOutsideTheSkinAtTheLever) {
-  const ChestSurface surface = Subject();
+  const ChestSurface surface = SampleChest();
   ScanOptions o = Lever();
   o.tracker_deg = 0.8;
   o.tracker_mm = 0.0;
@@ -60,7 +59,7 @@ TEST(TrackerError, LeverPivotLiesOutsideTheSkinAtTheLever) {
 // 24 sweeps the mean of rms^2 / ((2/3) theta^2 mean |r|^2) is 1 within 0.3 (the ratio of one sweep lies
 // in [0, 1.5] with sd 0.45; 0.3 is 3.3 sd of the mean), and the RMS at the skin is about 2.8 mm.
 TEST(TrackerError, RotationAboutTheLeverDisplacesTheSkinByTheLeverTimesTheAngle) {
-  const ChestSurface surface = Subject();
+  const ChestSurface surface = SampleChest();
   ScanOptions o = Lever();
   o.tracker_deg = 0.8;
   o.tracker_mm = 0.0;
@@ -83,7 +82,7 @@ TEST(TrackerError, RotationAboutTheLeverDisplacesTheSkinByTheLeverTimesTheAngle)
 // tracker_skin_mm: every sweep's true points move by exactly that RMS (1e-6 mm), measured from the true
 // pose alone, for either pivot, with rotation and translation in the ratio tracker_deg : tracker_mm.
 TEST(TrackerError, SkinDisplacementIsTheRequestedRms) {
-  const ChestSurface surface = Subject();
+  const ChestSurface surface = SampleChest();
   for (TrackerPivot pivot : {TrackerPivot::kWand, TrackerPivot::kLever}) {
     for (double skin : {0.5, 2.0, 6.0}) {
       ScanOptions o = Lever();
@@ -101,7 +100,7 @@ TEST(TrackerError, SkinDisplacementIsTheRequestedRms) {
 // A uniform draw: magnitudes within [0, the given value], spread over it (24 sweeps: the smallest below
 // 0.35 and the largest above 0.65 of it, each failing with probability 0.65^24 = 3e-5).
 TEST(TrackerError, UniformDrawSpreadsTheMagnitudesUpToTheGivenValues) {
-  const ChestSurface surface = Subject();
+  const ChestSurface surface = SampleChest();
   ScanOptions o = Lever();
   o.tracker_draw = TrackerDraw::kUniform;
   o.tracker_deg = 2.0;

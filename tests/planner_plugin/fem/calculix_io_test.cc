@@ -19,7 +19,6 @@
 namespace pectus::planner {
 namespace {
 
-const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
 namespace fs = std::filesystem;
 
 // Runs ccx on `mesh` with `load` in a fresh temporary folder; returns its displacements.
@@ -100,8 +99,9 @@ TEST(Calculix, PatientRibcageMatchesCcxC3D10) {
   o.sternum_cells_along = 28;
   o.rib_cell_length_mm = 10.0;
   const GenericRibcage generic = BuildGenericRibcage(o);
-  const auto rows = ReadPatientTable(kTable);
-  const PatientRibcage patient = MakePatientRibcage(generic, MeasurementsOf(FindPatient(rows, 57, kTable)));
+  const auto rows = ReadPatientTable(testing_support::PatientTablePath());
+  const PatientRibcage patient =
+      MakePatientRibcage(generic, MeasurementsOf(FindPatient(rows, 57, testing_support::PatientTablePath())));
   const RibcageFem fem(patient);
   const BarLoad bar{0.85, false, 100.0};
   const LoadCase load{"bar", fem.NodalForces(bar), {}};

@@ -18,8 +18,6 @@ namespace pectus::planner {
 namespace {
 namespace fs = std::filesystem;
 
-const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
-
 TEST(NussPlan, TheSearchFindsTheKnownPlacementOfAnAverageChestMadeFromItAndTheFilesAreWritten) {
   PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
   const fs::path dir = fs::temp_directory_path() / ("pectus_nuss_plan_" + std::to_string(::getpid()));
@@ -30,7 +28,8 @@ TEST(NussPlan, TheSearchFindsTheKnownPlacementOfAnAverageChestMadeFromItAndTheFi
   options.sternum_cells_along = 28;
   options.skin_rows = 32;
   options.skin_columns = 48;
-  PlannerClient planner(plugin, ReadPlannerPatient(plugin, kTable, "57"), options);
+  PlannerClient planner(plugin, ReadPlannerPatient(plugin, testing_support::PatientTablePath(), "57"),
+                        options);
 
   // The "average chest": patient 57 under a bar at 0.78 of the sternum lifting the sternum by 80 % of its
   // depression, in the pectus scan frame (x across, y up, z anterior), 10 % larger, written as a statismo
@@ -122,8 +121,8 @@ TEST(NussPlan, TheSearchFindsTheKnownPlacementOfAnAverageChestMadeFromItAndTheFi
   EXPECT_FALSE(plan.search->from_basis);
   const PectusPlannerBasisSummary basis = planner.BuildBasis();
   EXPECT_GT(basis.rank, 0);
-  const PlacementSearchResult fast =
-      SearchBestPlacement(planner, average, plan.registration, plan_options.score, plan_options.search_options);
+  const PlacementSearchResult fast = SearchBestPlacement(planner, average, plan.registration,
+                                                         plan_options.score, plan_options.search_options);
   EXPECT_TRUE(fast.from_basis);
   ASSERT_EQ(fast.objective_mm.rows(), plan.search->objective_mm.rows());
   EXPECT_LT((fast.objective_mm - plan.search->objective_mm).cwiseAbs().maxCoeff(), 0.01);

@@ -25,8 +25,6 @@ extern "C" void pectus_planner_api_layout_from_c(size_t* out, int capacity);
 
 namespace {
 
-const std::string kTable = pectus::testing_support::SharedPath(pectus::testing_support::kPatientTable);
-
 using PluginEntry = pectus::testing_support::PluginTest;
 
 TEST_F(PluginEntry, ExportsOneVersionedTableThatCAndCppLayOutAlike) {
@@ -38,38 +36,38 @@ TEST_F(PluginEntry, ExportsOneVersionedTableThatCAndCppLayOutAlike) {
   size_t c[kItems] = {};
   pectus_planner_api_layout_from_c(c, kItems);
   const size_t cpp[kItems] = {sizeof(PectusPlannerStatus),
-                          sizeof(PectusPlannerPatient),
-                          sizeof(PectusPlannerOptions),
-                          sizeof(PectusPlannerMeasurements),
-                          sizeof(PectusPlannerMesh),
-                          sizeof(PectusPlannerLandmark),
-                          sizeof(PectusPlannerBar),
-                          sizeof(PectusPlannerCaseResult),
-                          sizeof(PectusPlannerForceToLift),
-                          sizeof(PectusPlannerDatasetSummary),
-                          sizeof(PectusPlannerBasisOptions),
-                          sizeof(PectusPlannerBasisSummary),
-                          offsetof(PectusPlannerInterface, deform),
-                          sizeof(PectusPlannerInterface),
-                          offsetof(PectusPlannerInterface, write_dataset),
-                          offsetof(PectusPlannerPatient, ct_haller_index),
-                          offsetof(PectusPlannerOptions, skin_columns),
-                          PECTUS_PLANNER_INTERFACE_VERSION,
-                          sizeof(PectusPlannerEmulatorOptions),
-                          sizeof(PectusPlannerEmulatorFigures),
-                          sizeof(PectusPlannerEmulatorPatient),
-                          sizeof(PectusPlannerEmulatorEvaluation),
-                          offsetof(PectusPlannerEmulatorFigures, worst_lift_patient),
-                          offsetof(PectusPlannerInterface, evaluate_emulator),
-                          offsetof(PectusPlannerInterface, basis_coefficients),
-                          sizeof(PectusPlannerDeviceState),
-                          sizeof(PectusPlannerDevice),
-                          sizeof(PectusPlannerTrainerTick),
-                          sizeof(PectusPlannerTunnel),
-                          sizeof(PectusPlannerTrainerScore),
-                          sizeof(PectusPlannerScopeView),
-                          offsetof(PectusPlannerInterface, trainer_scope_view),
-                          offsetof(PectusPlannerInterface, assemble_dataset)};
+                              sizeof(PectusPlannerPatient),
+                              sizeof(PectusPlannerOptions),
+                              sizeof(PectusPlannerMeasurements),
+                              sizeof(PectusPlannerMesh),
+                              sizeof(PectusPlannerLandmark),
+                              sizeof(PectusPlannerBar),
+                              sizeof(PectusPlannerCaseResult),
+                              sizeof(PectusPlannerForceToLift),
+                              sizeof(PectusPlannerDatasetSummary),
+                              sizeof(PectusPlannerBasisOptions),
+                              sizeof(PectusPlannerBasisSummary),
+                              offsetof(PectusPlannerInterface, deform),
+                              sizeof(PectusPlannerInterface),
+                              offsetof(PectusPlannerInterface, write_dataset),
+                              offsetof(PectusPlannerPatient, ct_haller_index),
+                              offsetof(PectusPlannerOptions, skin_columns),
+                              PECTUS_PLANNER_INTERFACE_VERSION,
+                              sizeof(PectusPlannerEmulatorOptions),
+                              sizeof(PectusPlannerEmulatorFigures),
+                              sizeof(PectusPlannerEmulatorPatient),
+                              sizeof(PectusPlannerEmulatorEvaluation),
+                              offsetof(PectusPlannerEmulatorFigures, worst_lift_patient),
+                              offsetof(PectusPlannerInterface, evaluate_emulator),
+                              offsetof(PectusPlannerInterface, basis_coefficients),
+                              sizeof(PectusPlannerDeviceState),
+                              sizeof(PectusPlannerDevice),
+                              sizeof(PectusPlannerTrainerTick),
+                              sizeof(PectusPlannerTunnel),
+                              sizeof(PectusPlannerTrainerScore),
+                              sizeof(PectusPlannerScopeView),
+                              offsetof(PectusPlannerInterface, trainer_scope_view),
+                              offsetof(PectusPlannerInterface, assemble_dataset)};
   for (int i = 0; i < kItems; ++i) EXPECT_EQ(c[i], cpp[i]) << "layout item " << i;
   // Nothing but the entry point is visible: not even the engine's functions (which this test binary
   // links itself, so the name below is the real one).
@@ -96,14 +94,17 @@ TEST_F(PluginEntry, FailuresComeBackAsStatusesNamingWhatIsWrong) {
   EXPECT_EQ(api_->read_patient("/nonexistent/table.csv", "57", &patient, &status), PECTUS_PLANNER_BAD_INPUT);
   EXPECT_NE(std::string(status.message).find("/nonexistent/table.csv"), std::string::npos) << status.message;
   // A patient that is not in the table: a usage error listing what there is.
-  EXPECT_EQ(api_->read_patient(kTable.c_str(), "999", &patient, &status), PECTUS_PLANNER_USAGE);
+  EXPECT_EQ(api_->read_patient(pectus::testing_support::PatientTablePath().c_str(), "999", &patient, &status),
+            PECTUS_PLANNER_USAGE);
   EXPECT_NE(std::string(status.message).find("999"), std::string::npos) << status.message;
   // NULL arguments.
   PectusPlanner* planner = nullptr;
   EXPECT_EQ(api_->create(nullptr, nullptr, &planner, &status), PECTUS_PLANNER_USAGE);
   EXPECT_EQ(api_->measurements(nullptr, nullptr, nullptr), PECTUS_PLANNER_USAGE);  // status may be NULL
   // A measurement out of range names the patient.
-  ASSERT_EQ(api_->read_patient(kTable.c_str(), "57", &patient, &status), PECTUS_PLANNER_OK) << status.message;
+  ASSERT_EQ(api_->read_patient(pectus::testing_support::PatientTablePath().c_str(), "57", &patient, &status),
+            PECTUS_PLANNER_OK)
+      << status.message;
   PectusPlannerPatient deep = patient;
   deep.depression_mm = 90;
   EXPECT_EQ(api_->create(&deep, nullptr, &planner, &status), PECTUS_PLANNER_BAD_INPUT);
@@ -129,7 +130,9 @@ TEST_F(PluginEntry, APlannerThroughTheBoundaryMeasuresLikeTheCtAndSolves) {
   PECTUS_REQUIRE_SHARED_FILE(pectus::testing_support::kPatientTable);
   PectusPlannerStatus status{};
   PectusPlannerPatient patient{};
-  ASSERT_EQ(api_->read_patient(kTable.c_str(), "57", &patient, &status), PECTUS_PLANNER_OK) << status.message;
+  ASSERT_EQ(api_->read_patient(pectus::testing_support::PatientTablePath().c_str(), "57", &patient, &status),
+            PECTUS_PLANNER_OK)
+      << status.message;
   EXPECT_DOUBLE_EQ(patient.ct_haller_index, 6.5);
   const PectusPlannerOptions options = Coarse();
   PectusPlanner* planner = nullptr;
@@ -200,7 +203,9 @@ TEST_F(PluginEntry, TheDeformCallGivesTheSolvesAnswerInRealTime) {
   PECTUS_REQUIRE_SHARED_FILE(pectus::testing_support::kPatientTable);
   PectusPlannerStatus status{};
   PectusPlannerPatient patient{};
-  ASSERT_EQ(api_->read_patient(kTable.c_str(), "57", &patient, &status), PECTUS_PLANNER_OK) << status.message;
+  ASSERT_EQ(api_->read_patient(pectus::testing_support::PatientTablePath().c_str(), "57", &patient, &status),
+            PECTUS_PLANNER_OK)
+      << status.message;
   const PectusPlannerOptions options = Coarse();
   PectusPlanner* planner = nullptr;
   ASSERT_EQ(api_->create(&patient, &options, &planner, &status), PECTUS_PLANNER_OK) << status.message;

@@ -27,22 +27,23 @@ namespace {
 namespace fs = std::filesystem;
 using namespace pectus::trainer;
 
-const std::string kTable = pectus::testing_support::SharedPath(pectus::testing_support::kPatientTable);
-
 class PluginTrainer : public pectus::testing_support::PluginTest {
  protected:
   static void SetUpTestSuite() {
     PluginTest::SetUpTestSuite();
-    if (!fs::exists(kTable)) return;
+    if (!fs::exists(pectus::testing_support::PatientTablePath())) return;
     PectusPlannerStatus status{};
-    ASSERT_EQ(api_->read_patient(kTable.c_str(), "57", &patient_, &status), PECTUS_PLANNER_OK) << status.message;
+    ASSERT_EQ(
+        api_->read_patient(pectus::testing_support::PatientTablePath().c_str(), "57", &patient_, &status),
+        PECTUS_PLANNER_OK)
+        << status.message;
     options_ = Coarse();
     ASSERT_EQ(api_->create(&patient_, &options_, &planner_, &status), PECTUS_PLANNER_OK) << status.message;
     // The same patient's scene made by the engine in this process, as the plugin makes it.
     const pectus::planner::PlannerSettings settings = pectus::planner::SettingsFrom(&options_);
-    scene_ = std::make_unique<TrainerScene>(BuildTrainerScene(pectus::planner::MakePatientRibcage(
-        pectus::planner::BuildGenericRibcage(settings.generic), pectus::planner::MeasurementsFrom(patient_),
-        settings.patient)));
+    scene_ = std::make_unique<TrainerScene>(BuildTrainerScene(
+        pectus::planner::MakePatientRibcage(pectus::planner::BuildGenericRibcage(settings.generic),
+                                            pectus::planner::MeasurementsFrom(patient_), settings.patient)));
   }
   static void TearDownTestSuite() {
     api_->destroy(planner_);
@@ -86,7 +87,8 @@ TEST_F(PluginTrainer, ASessionTickedThroughTheBoundaryIsTheEnginesSessionBitForB
 
   PectusPlannerStatus status{};
   PectusPlannerTrainer* trainer = nullptr;
-  ASSERT_EQ(api_->trainer_create(planner_, "medium", 0, &trainer, &status), PECTUS_PLANNER_OK) << status.message;
+  ASSERT_EQ(api_->trainer_create(planner_, "medium", 0, &trainer, &status), PECTUS_PLANNER_OK)
+      << status.message;
   // The scene the host draws is the engine's.
   PectusPlannerMesh pericardium{};
   ASSERT_EQ(api_->trainer_mesh(trainer, 1, &pericardium, &status), PECTUS_PLANNER_OK);
@@ -140,7 +142,8 @@ TEST_F(PluginTrainer, ASessionTickedThroughTheBoundaryIsTheEnginesSessionBitForB
   const fs::path dir = fs::path(::testing::TempDir()) / "plugin_trainer_record";
   fs::create_directories(dir);
   const std::string record = (dir / "session.txt").string();
-  ASSERT_EQ(api_->trainer_write_record(trainer, record.c_str(), &status), PECTUS_PLANNER_OK) << status.message;
+  ASSERT_EQ(api_->trainer_write_record(trainer, record.c_str(), &status), PECTUS_PLANNER_OK)
+      << status.message;
   PectusPlannerTrainerScore replayed{};
   ASSERT_EQ(api_->trainer_replay(trainer, record.c_str(), &replayed, &status), PECTUS_PLANNER_OK)
       << status.message;
@@ -177,13 +180,16 @@ struct ReplayingDevice {
     out->orientation_wxyz[3] = s.orientation.z();
     d->reads.fetch_add(1);
   }
-  static void SetForce(void* user, const double*, const double*) { static_cast<ReplayingDevice*>(user)->forces.fetch_add(1); }
+  static void SetForce(void* user, const double*, const double*) {
+    static_cast<ReplayingDevice*>(user)->forces.fetch_add(1);
+  }
 };
 
 TEST_F(PluginTrainer, ThePluginsServoThreadTicksTheHostsDeviceAndTheScopeLooksAtItsTargetWithTheHeadUp) {
   PectusPlannerStatus status{};
   PectusPlannerTrainer* trainer = nullptr;
-  ASSERT_EQ(api_->trainer_create(planner_, "small", 0, &trainer, &status), PECTUS_PLANNER_OK) << status.message;
+  ASSERT_EQ(api_->trainer_create(planner_, "small", 0, &trainer, &status), PECTUS_PLANNER_OK)
+      << status.message;
   const TrainerScene& scene = *scene_;
   const Trajectory target = MakeScriptedPath(scene, ScriptedPathOptions{});
   ReplayingDevice replaying{&target};
@@ -272,7 +278,8 @@ TEST_F(PluginTrainer, ThePluginsServoThreadTicksTheHostsDeviceAndTheScopeLooksAt
   EXPECT_EQ(api_->trainer_create(planner_, "huge", 0, &other, &status), PECTUS_PLANNER_BAD_INPUT);
   EXPECT_NE(std::string(status.message).find("huge"), std::string::npos) << status.message;
   EXPECT_EQ(other, nullptr);
-  EXPECT_EQ(api_->trainer_replay(trainer, "/nonexistent/record.txt", &score, &status), PECTUS_PLANNER_BAD_INPUT);
+  EXPECT_EQ(api_->trainer_replay(trainer, "/nonexistent/record.txt", &score, &status),
+            PECTUS_PLANNER_BAD_INPUT);
   EXPECT_NE(std::string(status.message).find("/nonexistent/record.txt"), std::string::npos) << status.message;
   api_->trainer_destroy(trainer);
 }

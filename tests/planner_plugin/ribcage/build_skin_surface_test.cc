@@ -9,16 +9,15 @@
 namespace pectus::planner {
 namespace {
 
-const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
-
 TEST(SkinSurface, LiesOverTheChestWallAndFollowsTheRibcage) {
   PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
   GenericRibcageOptions o;
   o.sternum_cells_along = 28;
   o.rib_cell_length_mm = 8.0;
   const GenericRibcage generic = BuildGenericRibcage(o);
-  const auto rows = ReadPatientTable(kTable);
-  const PatientRibcage patient = MakePatientRibcage(generic, MeasurementsOf(FindPatient(rows, 57, kTable)));
+  const auto rows = ReadPatientTable(testing_support::PatientTablePath());
+  const PatientRibcage patient =
+      MakePatientRibcage(generic, MeasurementsOf(FindPatient(rows, 57, testing_support::PatientTablePath())));
   SkinSurfaceOptions options;
   options.rows = 24;
   options.columns = 32;
@@ -38,7 +37,7 @@ TEST(SkinSurface, LiesOverTheChestWallAndFollowsTheRibcage) {
   // The depression shows on the skin: the same patient without a depression has the skin over the
   // xiphoid as far forward of the depressed one as the bone is, within 10 % (the skin keeps its
   // thickness; it follows a Gaussian-weighted neighbourhood of bone nodes, not one point).
-  PatientMeasurements flat = MeasurementsOf(FindPatient(rows, 57, kTable));
+  PatientMeasurements flat = MeasurementsOf(FindPatient(rows, 57, testing_support::PatientTablePath()));
   flat.depression_mm = 0;
   const PatientRibcage flat_patient = MakePatientRibcage(generic, flat);
   const SkinSurface flat_skin = BuildSkinSurface(flat_patient, options);

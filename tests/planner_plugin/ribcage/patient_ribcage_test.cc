@@ -11,8 +11,6 @@
 namespace pectus::planner {
 namespace {
 
-const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
-
 class PatientRibcageTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() { generic_ = new GenericRibcage(BuildGenericRibcage()); }
@@ -24,12 +22,12 @@ GenericRibcage* PatientRibcageTest::generic_ = nullptr;
 // Measuring the generated ribcage gives back the CT measurements it was made from.
 TEST_F(PatientRibcageTest, MeasuringTheRibcageGivesBackItsInputsWithinOneMillimetre) {
   PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
-  const std::vector<PatientTableRow> rows = ReadPatientTable(kTable);
+  const std::vector<PatientTableRow> rows = ReadPatientTable(testing_support::PatientTablePath());
   ASSERT_EQ(rows.size(), 62u);
   // The deepest (3, 40 mm), a flat chest (48, 0 mm), the validation case (57), the smallest ribcage (43)
   // and the widest (20).
   for (const int id : {3, 48, 57, 43, 20}) {
-    const PatientMeasurements t = MeasurementsOf(FindPatient(rows, id, kTable));
+    const PatientMeasurements t = MeasurementsOf(FindPatient(rows, id, testing_support::PatientTablePath()));
     const PatientRibcage r = MakePatientRibcage(*generic_, t);
     SCOPED_TRACE(r.message);
     EXPECT_NEAR(r.measured.width_mm, t.width_mm, 1.0);
@@ -53,7 +51,7 @@ TEST_F(PatientRibcageTest, MeasuringTheRibcageGivesBackItsInputsWithinOneMillime
 // (the spine is what only the Haller index measures). Without the CT's index the generic spine stays.
 TEST_F(PatientRibcageTest, EveryPatientGivesBackItsCtHallerIndex) {
   PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
-  const std::vector<PatientTableRow> rows = ReadPatientTable(kTable);
+  const std::vector<PatientTableRow> rows = ReadPatientTable(testing_support::PatientTablePath());
   // The coarse generic ribcage of the FE tests (10 mm cells): the fit and the measurements are the same
   // on any mesh, and 62 fits on the default one take minutes under the sanitizers.
   GenericRibcageOptions coarse;
@@ -80,7 +78,7 @@ TEST_F(PatientRibcageTest, EveryPatientGivesBackItsCtHallerIndex) {
   std::printf(
       "Haller index: largest difference from the CT over 62 patients %.4f; spine moved %+.1f to %+.1f mm\n",
       worst, least_shift, most_shift);
-  PatientMeasurements unknown = MeasurementsOf(FindPatient(rows, 57, kTable));
+  PatientMeasurements unknown = MeasurementsOf(FindPatient(rows, 57, testing_support::PatientTablePath()));
   unknown.haller_index = 0.0;
   const PatientRibcage generic_spine = MakePatientRibcage(generic, unknown);
   EXPECT_EQ(generic_spine.spine_shift_mm, 0.0);

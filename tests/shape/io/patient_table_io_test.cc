@@ -16,7 +16,6 @@
 namespace pectus {
 namespace {
 
-const std::string kTable = testing_support::SharedPath(testing_support::kPatientTable);
 const std::string kHeader = "patient,haller_index,width_mm,sternal_length_mm,depth_mm,depression_mm\n";
 
 // The error a table raises (fails the test if it raises none).
@@ -32,9 +31,9 @@ Error ErrorOf(const std::string& text) {
 
 TEST(PatientTableIo, ReadsTheSixtyTwoPatientsOfTheDissertation) {
   PECTUS_REQUIRE_SHARED_FILE(testing_support::kPatientTable);
-  const std::vector<PatientTableRow> rows = ReadPatientTable(kTable);
+  const std::vector<PatientTableRow> rows = ReadPatientTable(testing_support::PatientTablePath());
   ASSERT_EQ(rows.size(), 62u);
-  const PatientTableRow& p57 = FindPatient(rows, 57, kTable);
+  const PatientTableRow& p57 = FindPatient(rows, 57, testing_support::PatientTablePath());
   EXPECT_EQ(p57.width_mm, 231.0);
   EXPECT_EQ(p57.sternal_length_mm, 168.0);
   EXPECT_EQ(p57.depth_mm, 123.0);
@@ -42,7 +41,7 @@ TEST(PatientTableIo, ReadsTheSixtyTwoPatientsOfTheDissertation) {
   EXPECT_EQ(p57.haller_index, 6.5);
   EXPECT_EQ(p57.magnification, 1.0);
   EXPECT_EQ(p57.line, 58);  // the header is line 1
-  EXPECT_EQ(&FindPatient(rows, "57", kTable), &p57);
+  EXPECT_EQ(&FindPatient(rows, "57", testing_support::PatientTablePath()), &p57);
   EXPECT_EQ(rows.front().patient, 1);
   EXPECT_EQ(rows.front().sternal_length_mm, 180.0);  // the table's value (the text says 175)
   // The dissertation's Table 2, as SOURCE.md gives it: means and extremes.

@@ -14,8 +14,6 @@ namespace pectus {
 namespace {
 
 constexpr double kRadiusMm = 50.0;
-constexpr double kDegree = M_PI / 180.0;
-
 // A sector of the cylinder x^2 + z^2 = 50^2 (axis y), angles [from, to] degrees from +z toward +x and
 // y in [y0, y0 + 40] mm, sampled about 1 mm apart, stored in the sweep's own frame: the world points
 // moved by T_world_sweep^-1.
