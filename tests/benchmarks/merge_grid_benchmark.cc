@@ -117,6 +117,10 @@ struct Run {
             {"shape_max_mm", figures.shape_max_mm},
             {"interior_shape_rms_mm", figures.interior_shape_rms_mm},
             {"interior_shape_max_mm", figures.interior_shape_max_mm},
+            {"surface_fit_shape_rms_mm", figures.surface_fit_shape_rms_mm},
+            {"surface_fit_shape_max_mm", figures.surface_fit_shape_max_mm},
+            {"surface_fit_interior_shape_rms_mm", figures.surface_fit_interior_shape_rms_mm},
+            {"surface_fit_interior_shape_max_mm", figures.surface_fit_interior_shape_max_mm},
             {"seconds", seconds},
             {"tracker_accuracy_factor", tracker_accuracy_factor},
             {"sweeps", sweeps}};
@@ -137,6 +141,7 @@ Run Score(Run run, const std::vector<Points3>& inliers, const std::vector<Rigid3
     std::vector<Rigid3> placed;
     for (const Rigid3& T : estimate) placed.push_back(run.figures.G * T);
     merge_grid::EvaluateShape(*g_shape.surface, g_shape.true_inliers, placed, &run.figures);
+    merge_grid::EvaluateShapeAfterSurfaceFit(*g_shape.surface, g_shape.true_inliers, placed, &run.figures);
   }
   run.success = true;
   for (double r : run.figures.sweep_rms_mm) run.success = run.success && r <= success_mm;

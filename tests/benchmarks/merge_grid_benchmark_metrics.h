@@ -35,6 +35,12 @@ struct Figures {
   /// point that slid beyond the edge is measured there by its distance to the edge, along the surface,
   /// which is not shape (the max above is mostly such points on 8-sweep scans).
   double interior_shape_rms_mm = 0.0, interior_shape_max_mm = 0.0;
+  /// The shape after the rigid motion that best fits the placed points to the true surface itself (their
+  /// distances to it, least squares over the points whose foot is inside the patch): the fit a shape
+  /// comparison makes when the correspondences are not known. G above also weighs how far each sweep slid
+  /// along the surface, which is pose, not shape, and can tilt the whole to undo a slide.
+  double surface_fit_shape_rms_mm = 0.0, surface_fit_shape_max_mm = 0.0;
+  double surface_fit_interior_shape_rms_mm = 0.0, surface_fit_interior_shape_max_mm = 0.0;  ///< inside the patch
   Rigid3 G = Rigid3::Identity();  ///< the common rigid motion removed
 };
 
@@ -78,6 +84,51 @@ inline void EvaluateShape(const datasets::ChestSurface& surface, const std::vect
   }
   f->shape_rms_mm = std::sqrt(sum / std::max(1.0, count));
   f->interior_shape_rms_mm = std::sqrt(interior_sum / std::max(1.0, interior_count));
+}
+
+/// Adds Figures::surface_fit_shape_rms_mm and _max_mm: Gauss-Newton on the point-to-surface distances of
+/// every 7th noise-free point as placed, from `placed` (G already applied), a few steps.
+inline void EvaluateShapeAfterSurfaceFit(const datasets::ChestSurface& surface,
+                                         const std::vector<Points3>& true_inliers,
+                                         const std::vector<Rigid3>& placed, Figures* f) {
+  std::vector<Eigen::Vector3d> x;
+  for (std::size_t s = 0; s < true_inliers.size(); ++s)
+    for (Eigen::Index i = 0; i < true_inliers[s].rows(); i += 7)
+      x.push_back(placed[s] * Eigen::Vector3d(true_inliers[s].row(i).transpose()));
+  if (x.empty()) return;
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const auto& p : x) c += p;
+  c /= double(x.size());
+  Rigid3 H = Rigid3::Identity();
+  for (int iteration = 0; iteration < 6; ++iteration) {
+    Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
+    for (const auto& p0 : x) {
+      const Eigen::Vector3d p = H * p0;
+      const datasets::ClosestPointResult foot = datasets::ClosestPoint(surface, p);
+      if (foot.on_boundary) continue;
+      Eigen::Matrix<double, 6, 1> J;
+      J << (p - c).cross(foot.normal), foot.normal;
+      A += J * J.transpose();
+      b += J * foot.signed_distance;
+    }
+    const Eigen::Matrix<double, 6, 1> step = -A.ldlt().solve(b);
+    if (!step.allFinite()) break;
+    Rigid3 D = Rigid3::Identity();
+    const double angle = step.head<3>().norm();
+    if (angle > 0.0) D.linear() = Eigen::AngleAxisd(angle, step.head<3>() / angle).toRotationMatrix();
+    D.translation() = c - D.linear() * c + step.tail<3>();
+    H = D * H;
+    if (step.tail<3>().norm() < 1e-7 && angle < 1e-9) break;
+  }
+  std::vector<Rigid3> refit;
+  for (const Rigid3& T : placed) refit.push_back(H * T);
+  Figures g;
+  EvaluateShape(surface, true_inliers, refit, &g);
+  f->surface_fit_shape_rms_mm = g.shape_rms_mm;
+  f->surface_fit_shape_max_mm = g.shape_max_mm;
+  f->surface_fit_interior_shape_rms_mm = g.interior_shape_rms_mm;
+  f->surface_fit_interior_shape_max_mm = g.interior_shape_max_mm;
 }
 
 /// Inlier points (reported frame) of a sweep, #points by 3.
