@@ -84,8 +84,17 @@ void PrintError(const Command& command, int rank, const char* message) {
 // 100k-point scans. Here they come from the heap instead, which keeps freed memory for the next array,
 // grows 64 MiB at a time, and is given transparent huge pages where the kernel offers them on request
 // (`madvise` mode): 1600 page faults (docs/benchmarks/registration.md, "Where a pair's time goes").
-void TuneHeapForLargeArrays() {
+// `one_arena`: every thread allocates from that heap too. glibc gives each further thread an arena of its
+// own, mapped without the advice, where a pair's fixed scan is read and its k-d tree built (on the
+// second thread, register_command.cc): with one arena `pectus register` on two 127k-point chest scans
+// took 0.12 s instead of 0.19 s wall, its system time 0.07 s down to 0.01 s, on a VM whose page faults
+// are dear (AMD EPYC, 2 vCPU, 2026-11-29; docs/benchmarks/registration.md, "One heap for every thread").
+// For the light commands only, whose threads allocate a few large arrays each: the full program's
+// commands allocate small objects on many threads at once (Ceres, the task farm), which one arena's
+// lock would serialise.
+void TuneHeapForLargeArrays(bool one_arena) {
   constexpr int kMiB = 1 << 20;
+  if (one_arena) mallopt(M_ARENA_MAX, 1);  // before any other thread allocates
   mallopt(M_MMAP_THRESHOLD, 256 * kMiB);
   mallopt(M_TRIM_THRESHOLD, 512 * kMiB);
   mallopt(M_TOP_PAD, 64 * kMiB);
@@ -130,7 +139,11 @@ int Main(int argc, char** argv) {
 #ifdef PECTUS_FULL_PROGRAM
   if (!RunsHere(argc, argv)) return RunFullProgram(argv);
 #endif
-  TuneHeapForLargeArrays();
+#ifdef PECTUS_FULL_PROGRAM
+  TuneHeapForLargeArrays(/*one_arena=*/true);
+#else
+  TuneHeapForLargeArrays(/*one_arena=*/false);
+#endif
   // Under mpirun (or srun) every rank runs this same command: MPI is started once here, rank 0 hands out
   // the subjects of the commands that farm them out (Context::runner), prints, and writes the outputs.
 #ifdef PECTUS_HAVE_MPI
