@@ -138,9 +138,7 @@ int RunFullProgram(char** argv) {
 int Main(int argc, char** argv) {
 #ifdef PECTUS_FULL_PROGRAM
   if (!RunsHere(argc, argv)) return RunFullProgram(argv);
-#endif
-#ifdef PECTUS_FULL_PROGRAM
-  TuneHeapForLargeArrays(/*one_arena=*/true);
+  TuneHeapForLargeArrays(/*one_arena=*/true);  // the light program: its commands only
 #else
   TuneHeapForLargeArrays(/*one_arena=*/false);
 #endif
