@@ -251,15 +251,19 @@ struct LineTally {
   int met = 0, met_interior_max = 0, met_surface_fit = 0, met_surface_fit_interior_max = 0;
   double efficient = 0.0, efficient_paired = 0.0;
   double log_every = 0.0, log_every_paired = 0.0;  // the chance of meeting it on every scan, as a log
+  int paired = 0;                                   // scans with the paired chance (--model-bound)
   std::vector<double> ratio, ratio_surface_fit;
   void Add(const Run& r, const merge_grid::ShapeBound& b) {
     const double bound = b.shape_rms_mm;
     ++scans;
     bound_over += bound > 0.06;
     efficient += b.p_within_line;
-    efficient_paired += b.paired_p_within_line;
     log_every += std::log(b.p_within_line);
-    log_every_paired += std::log(b.paired_p_within_line);
+    if (std::isfinite(b.paired_p_within_line)) {
+      ++paired;
+      efficient_paired += b.paired_p_within_line;
+      log_every_paired += std::log(b.paired_p_within_line);
+    }
     if (r.threw || !r.success) return;
     ++success;
     const merge_grid::Figures& g = r.figures;
@@ -279,7 +283,7 @@ struct LineTally {
     return v[v.size() / 2];
   }
   json Json() const {
-    return {{"scans", scans},
+    json out = {{"scans", scans},
             {"success", success},
             {"line_met", met},
             {"line_met_interior_max", met_interior_max},
@@ -287,11 +291,14 @@ struct LineTally {
             {"line_met_surface_fit_interior_max", met_surface_fit_interior_max},
             {"bound_over_0_06_mm", bound_over},
             {"efficient_merge_meets_rms_expected", efficient},
-            {"efficient_on_pectus_pairs_meets_rms_expected", efficient_paired},
             {"efficient_merge_meets_rms_on_every_scan_probability", std::exp(log_every)},
-            {"efficient_on_pectus_pairs_meets_rms_on_every_scan_probability", std::exp(log_every_paired)},
             {"median_shape_over_bound", scans ? json(Median(ratio)) : json(nullptr)},
             {"median_surface_fit_shape_over_bound", scans ? json(Median(ratio_surface_fit)) : json(nullptr)}};
+    if (paired == scans) {
+      out["efficient_on_pectus_pairs_meets_rms_expected"] = efficient_paired;
+      out["efficient_on_pectus_pairs_meets_rms_on_every_scan_probability"] = std::exp(log_every_paired);
+    }
+    return out;
   }
 };
 
@@ -469,13 +476,16 @@ int main(int argc, char** argv) {
       {"load_average", load},
       {"line", line.Json()},
       {"cells", cells}};
+  char on_pairs[64] = "";
+  if (line.paired == line.scans)
+    std::snprintf(on_pairs, sizeof on_pairs, " (%.1f on pectus's pairs)", line.efficient_paired);
   if (line.scans > 0)
     std::fprintf(stderr,
                  "the line (2-4 mm, overlaps >= 15 %%): %d scans, success %d; met %d (%d with the interior max), "
                  "after the fit to the surface %d (%d); the bound alone over 0.06 mm in %d; an efficient merge "
-                 "meets the RMS part in %.1f on average (%.1f on pectus's pairs), on every scan with chance %.2g\n",
+                 "meets the RMS part in %.1f on average%s, on every scan with chance %.2g\n",
                  line.scans, line.success, line.met, line.met_interior_max, line.met_surface_fit,
-                 line.met_surface_fit_interior_max, line.bound_over, line.efficient, line.efficient_paired,
+                 line.met_surface_fit_interior_max, line.bound_over, line.efficient, on_pairs,
                  std::exp(line.log_every));
   std::printf("%s\n", report.dump(1).c_str());
   if (!f.png.empty())

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -26,8 +27,9 @@ struct ShapeBound {
   double paired_shape_rms_mm = 0.0;
   /// The chance that an efficient merge's shape RMS on this scan is at most the line's 0.06 mm: its pose
   /// errors drawn from the bound's posterior (ShapeRmsLaw), and from the paired bound's (if given). The
-  /// bound is an expected RMS; one scan's RMS scatters about it, since a few pose errors carry it.
-  double p_within_line = 0.0, paired_p_within_line = 0.0;
+  /// bound is an expected RMS; one scan's RMS scatters about it, since a few pose errors carry it. 1
+  /// where the bound is 0 (no tracker error, or one sweep); the paired chance is NaN when not computed.
+  double p_within_line = 1.0, paired_p_within_line = std::numeric_limits<double>::quiet_NaN();
   /// Per sweep, the largest fraction of its true inliers that one other sweep covers (a true point of it
   /// within 2 mm): the overlap the sweep really has, against which a merge's linking is judged.
   std::vector<double> largest_overlap_fraction;
@@ -211,7 +213,10 @@ inline ShapeBound BoundShapeError(const datasets::ChestSurface& surface,
     }
   }
 
-  if (!any_error) return out;
+  if (!any_error) {
+    if (paired) out.paired_p_within_line = 1.0;
+    return out;
+  }
 
   Mat F_paired;
   if (paired) {
