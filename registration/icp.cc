@@ -7,9 +7,11 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include "registration/internal/icp_steps.h"
+#include "registration/internal/radius_grid.h"
 #include "registration/random_sample.h"
 #include "registration/voxel_downsample.h"
 #include "shape/core/error.h"
@@ -212,16 +214,15 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
       LevelSamples(source_positions, considered, levels, grow ? &rest : nullptr);
   result.timings_s.Add("icp_samples", SecondsSince(start));
 
-  const Problem pb{
-      &target,
-      &source_positions,
-      &source_normals,
-      source_origin,
-      &options,
-      options.max_normal_angle_deg > 0.0 ? std::cos(options.max_normal_angle_deg / kDegPerRad) : -1.0,
-      options.max_tangential_spacings > 0.0 && target.spacing_mm() > 0.0
-          ? std::pow(options.max_tangential_spacings * target.spacing_mm(), 2)
-          : std::numeric_limits<double>::infinity()};
+  Problem pb{&target,
+             &source_positions,
+             &source_normals,
+             source_origin,
+             &options,
+             options.max_normal_angle_deg > 0.0 ? std::cos(options.max_normal_angle_deg / kDegPerRad) : -1.0,
+             options.max_tangential_spacings > 0.0 && target.spacing_mm() > 0.0
+                 ? std::pow(options.max_tangential_spacings * target.spacing_mm(), 2)
+                 : std::numeric_limits<double>::infinity()};
   Pairs pairs;
   NearestCache cache;
   BlockSum last_sum;
@@ -304,10 +305,31 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
     }
     return true;
   };
+  // The finer levels search a grid of the target instead of its tree (the same answers): from the first
+  // level whose search radius, and every later one's, is within kGridMaxSpacings target spacings, the grid's
+  // cell the largest of those radii (docs/registration.md, "A grid for the finer levels").
+  std::size_t grid_level = levels.size();
+  double grid_cell = 0.0;
+  if (target.spacing_mm() > 0.0) {
+    for (std::size_t l = levels.size(); l-- > 0;) {
+      const double radius = kSearchRadiusOverGate * levels[l].max_distance_mm;
+      if (!(radius <= kGridMaxSpacings * target.spacing_mm())) break;
+      grid_level = l;
+      grid_cell = std::max(grid_cell, radius);
+    }
+  }
+  std::optional<RadiusGrid> grid;
   std::vector<std::uint32_t> grown;  // the last level's sample once it grows
   const std::vector<std::uint32_t>* sample = &samples.front();
   for (std::size_t l = 0; l < levels.size(); ++l) {
     const IcpLevel& level = levels[l];
+    if (l == grid_level) {
+      const auto grid_start = std::chrono::steady_clock::now();
+      grid = RadiusGrid::Build(target.centred_positions(), grid_cell * (1.0 + 1e-6),
+                               kGridMaxCellsPerPoint * static_cast<std::size_t>(target.size()) + 4096);
+      pb.grid = grid ? &*grid : nullptr;
+      result.timings_s.Add("icp_grid", SecondsSince(grid_start));
+    }
     sample = &samples[l];
     // Coarser levels need only bring the pose into the next level's reach: tolerances ten times looser
     // per level above the last.

@@ -13,6 +13,7 @@
 #include "shape/core/error.h"
 #include "shape/core/log.h"
 #include "shape/core/number_format.h"
+#include "shape/core/task_runner.h"
 #include "shape/io/landmark_io.h"
 #include "shape/io/mesh_io.h"
 #include "shape/io/transform_io.h"
@@ -176,6 +177,9 @@ class RegisterCommand : public Command {
         // ICP's target takes over the scan's arrays; the scan itself is needed only without ICP.
         return prepare.refine ? PrepareTarget(std::move(fixed), prepare, fixed_) : nullptr;
       });
+      // Meanwhile this thread starts its OpenMP workers, which ICP's finer levels use: here the fixed
+      // scan's read hides the time they take to start (docs/registration.md, "The workers started early").
+      if (context->threads > 1) StartWorkerThreads();
       moving = ReadPointCloud(moving_, read_options_);
       if (!moving_landmarks_.empty()) {
         moving_lm = ReadLandmarks(moving_landmarks_, landmark_options_);

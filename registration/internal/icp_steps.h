@@ -13,6 +13,8 @@
 
 namespace pectus::icp_detail {
 
+class RadiusGrid;
+
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDegPerRad = 180.0 / kPi;
 constexpr std::uint32_t kNoMatch = std::numeric_limits<std::uint32_t>::max();
@@ -36,6 +38,13 @@ constexpr std::int64_t kMinChunk = 128;
 constexpr std::int64_t kMinChunks = 8;
 // Step 1 searches this many times the gate, so that a certificate holds while a point moves a little.
 constexpr double kSearchRadiusOverGate = 1.5;
+// The finer levels search a uniform grid of the target (internal/radius_grid.h) once their search radius is
+// at most this many target spacings: a cell of that size holds a few tens of a scan's points, where a
+// search scans a column or two; beyond it, the tree's search is cheaper.
+constexpr double kGridMaxSpacings = 5.0;
+// The grid is built only if its bounding box needs at most this many cells per target point (a few
+// outliers far off would otherwise make it mostly empty cells).
+constexpr std::size_t kGridMaxCellsPerPoint = 4;
 // Step 2 estimates the robust scale from at most this many residuals.
 constexpr std::size_t kScaleSamples = 16384;
 // Step 4a extrapolates when two successive steps have at least this cosine, by at most this factor.
@@ -77,8 +86,9 @@ struct Problem {
   const Points3* source_normals;  // may be empty
   Eigen::Vector3d source_origin;  // subtracted from source positions before the pose is applied
   const IcpOptions* options;
-  double cos_max_normal_angle;  // -1 when the normal test is off
-  double max_tangential2;       // squared tangential reach (mm^2); infinity when off
+  double cos_max_normal_angle;       // -1 when the normal test is off
+  double max_tangential2;            // squared tangential reach (mm^2); infinity when off
+  const RadiusGrid* grid = nullptr;  // the target binned for the finer levels' searches; may be null
 };
 
 // The correspondence certificates of one level: per sample point, where it was when last searched (`at`),

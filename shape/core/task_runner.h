@@ -51,6 +51,13 @@ class TaskRunner {
   bool BroadcastOutcome(bool ok, std::string* why);
 };
 
+/// Starts the calling thread's OpenMP worker threads now (an empty parallel region), so that its first
+/// parallel loop does not wait for them. Call it where the thread would otherwise wait for other work
+/// (a file read on another thread): on a virtual machine, the first region of a thread took 2-14 ms to
+/// create its workers and wake an idle core, most of a 10 000-point ICP level (docs/registration.md,
+/// "The workers started early").
+void StartWorkerThreads();
+
 /// Rows per block of a shared table of `rows` rows: an eighth of them (so that a small table is shared
 /// among processes too), at least 1 and at most `most`. It depends on the table, never on the processes.
 std::int64_t BlockRows(std::int64_t rows, std::int64_t most);

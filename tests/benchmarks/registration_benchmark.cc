@@ -15,8 +15,9 @@
 //           as programs (scripts/peers/open3d_icp.py; this program with --pcl-peer) from the same start
 //           on chest pairs (landmark start) and the bunny pairs: time and accuracy ratios per pair.
 //           --pectus-before PECTUS adds another build's `pectus` (before a change) to the same run.
-//           --process-runs N (default 3): every command runs N times, round robin, and its times are
-//           the medians (a single run of a 0.2 s process on a shared VM varies by a third).
+//           --process-runs N (default 3): every command runs N times, round robin (each round in its
+//           own seeded order, so that no program always follows the same one), and its times are the
+//           medians (a single run of a 0.2 s process on a shared VM varies by a third).
 //
 // The chest scans come from the virtual scanner (pectus::datasets: merged sweeps of a population subject)
 // when that library is built, else from the analytic surface of tests/registration/synthetic_chest.h.
@@ -202,7 +203,8 @@ int Main(int argc, char** argv) {
       repeat = value();
     } else {
       std::cerr << "usage: registration_benchmark [--speed] [--pairs] [--bunny] [--process] [--floor] "
-                   "[--trials N] [--icp-only-trials N] [--repeat N] [--process-pairs N] [--process-runs N] [--floor-pairs N] "
+                   "[--trials N] [--icp-only-trials N] [--repeat N] [--process-pairs N] [--process-runs N] "
+                   "[--floor-pairs N] "
                    "[--pectus-before PECTUS] [--no-peers]\n";
       return 2;
     }
@@ -222,7 +224,8 @@ int Main(int argc, char** argv) {
   if (speed) out["speed"] = Speed(std::max(1, repeat), peers);
   if (bunny) out["bunny"] = Bunny(5, peers, &out["bunny_loop"]);
   if (pairs) out["pairs"] = Pairs(std::max(1, trials), std::max(0, icp_only_trials));
-  if (process) out["process"] = Process(std::max(0, process_pairs), true, pectus_before, std::max(1, process_runs));
+  if (process)
+    out["process"] = Process(std::max(0, process_pairs), true, pectus_before, std::max(1, process_runs));
   if (floor) out["floor"] = Floor(std::max(0, floor_pairs), peers);
   out["machine"]["loadavg_after"] = FirstLine("/proc/loadavg");
   out["total_seconds"] = Since(t0);

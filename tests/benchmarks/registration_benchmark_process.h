@@ -13,8 +13,11 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <map>
+#include <numeric>
+#include <random>
 #include <sstream>
 #include <tuple>
 
@@ -76,8 +79,12 @@ json ProcessFigures(const ProcessTime& t, const fs::path& transform, const Proce
 }
 
 // Runs every process on the files in `dir` `runs` times, round robin (every command once, then again), so
-// that a slow minute of the machine falls on all of them alike; each command's times are the medians of
-// its runs (its pose is the same in every run: each program is deterministic). Compares the peers with
+// that a slow minute of the machine falls on all of them alike, each round in its own order (a seeded
+// shuffle): on a VM a process right after a heavy one runs slower (the first `pectus register` after
+// PCL's 2.5 s took 0.15 s where the next took 0.11, whichever build it was, with 0.06 s more system time),
+// and a fixed order put `pectus` after PCL in every round and Open3D after a light `pectus`
+// (docs/benchmarks/registration.md, "Which process runs after which"). Each command's times are the medians
+// of its runs (its pose is the same in every run: each program is deterministic). Compares the peers with
 // pectus.
 json RunProcesses(const fs::path& dir, const ProcessCase& c, const std::string& pectus_args,
                   const std::string& pectus_before, int runs) {
@@ -103,27 +110,32 @@ json RunProcesses(const fs::path& dir, const ProcessCase& c, const std::string& 
   for (const auto& [key, stages, iterations] :
        {std::tuple{"open3d_plain", plain, 50}, std::tuple{"open3d_staged", staged, 30}}) {
     const fs::path T = dir / (std::string(key) + ".json");
-    commands.push_back(
-        {key,
-         "/usr/bin/python3 " + std::string(PECTUS_SOURCE_DIR) + "/scripts/peers/open3d_icp.py " +
-             (dir / "fixed.ply").string() + " " + (dir / "moving.ply").string() + " " +
-             (dir / "init.json").string() + " --stages " + StagesText(stages) + " --max-iterations " +
-             std::to_string(iterations) + " --transform-out " + T.string() + " > /dev/null",
-         T});
+    commands.push_back({key,
+                        "/usr/bin/python3 " + std::string(PECTUS_SOURCE_DIR) +
+                            "/scripts/peers/open3d_icp.py " + (dir / "fixed.ply").string() + " " +
+                            (dir / "moving.ply").string() + " " + (dir / "init.json").string() +
+                            " --stages " + StagesText(stages) + " --max-iterations " +
+                            std::to_string(iterations) + " --transform-out " + T.string() + " > /dev/null",
+                        T});
   }
   for (const auto& [key, stages, iterations] :
        {std::tuple{"pcl_plain", plain, 50}, std::tuple{"pcl_staged", staged, 30}}) {
     const fs::path T = dir / (std::string(key) + ".json");
     commands.push_back({key,
-                        fs::canonical("/proc/self/exe").string() + " --pcl-peer " + (dir / "fixed.ply").string() +
-                            " " + (dir / "moving.ply").string() + " " + (dir / "init.json").string() + " " +
-                            T.string() + " " + StagesText(stages) + " " + std::to_string(iterations),
+                        fs::canonical("/proc/self/exe").string() + " --pcl-peer " +
+                            (dir / "fixed.ply").string() + " " + (dir / "moving.ply").string() + " " +
+                            (dir / "init.json").string() + " " + T.string() + " " + StagesText(stages) + " " +
+                            std::to_string(iterations),
                         T});
   }
   std::vector<std::vector<double>> wall(commands.size()), cpu(commands.size());
   std::vector<int> status(commands.size(), 0);
+  std::vector<std::size_t> order(commands.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::mt19937_64 shuffle(20261130);  // the same orders in every benchmark run
   for (int run = 0; run < runs; ++run) {
-    for (std::size_t k = 0; k < commands.size(); ++k) {
+    std::shuffle(order.begin(), order.end(), shuffle);
+    for (const std::size_t k : order) {
       if (status[k] != 0) continue;  // a command that failed once is not run again
       const ProcessTime t = RunProcess(commands[k].line);
       status[k] = t.status;
