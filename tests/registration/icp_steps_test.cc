@@ -7,30 +7,22 @@
 #include <random>
 #include <string>
 
-#include "synthetic_chest.h"
+#include "chest_pair_problem.h"
 
 namespace pectus::icp_detail {
 namespace {
+
+using testing::ChestPairProblem;
 
 // Along a path of poses such as ICP walks (large steps, then ever smaller ones, and a jump back), the
 // pairs found with certificates carried from pose to pose are those of a full search at every pose, and
 // most poses need few searches; so are the planes through the nearest four target points.
 TEST(FindPairs, CertifiedReuseEqualsSearchingEveryTime) {
-  const PointCloud target = testing::SampleChest(20000, 7, 0.2, -1.3, 0.9);
-  const PointCloud source = testing::SampleChest(20000, 8, 0.2, -0.9, 1.3);
-  const IcpTarget prepared(target.positions, target.normals, "chest");
-  IcpOptions options;
-  const Eigen::Vector3d origin = source.positions.colwise().mean().transpose();
-  const Points3 no_normals;
-  const Problem pb{&prepared,
-                   &source.positions,
-                   &no_normals,
-                   origin,
-                   &options,
-                   -1.0,
-                   std::pow(3.0 * prepared.spacing_mm(), 2)};
-  std::vector<std::uint32_t> sample(static_cast<std::size_t>(source.size()));
-  for (std::size_t k = 0; k < sample.size(); ++k) sample[k] = static_cast<std::uint32_t>(k);
+  ChestPairProblem chest;
+  const IcpTarget& prepared = chest.prepared;
+  IcpOptions& options = chest.options;
+  const Problem pb = chest.Make();
+  const std::vector<std::uint32_t> sample = chest.AllRows();
 
   // The nearest point's own plane, and the plane through the nearest four (exact certificates for all four).
   for (const int plane_points : {1, 4}) {
@@ -42,12 +34,11 @@ TEST(FindPairs, CertifiedReuseEqualsSearchingEveryTime) {
     Pairs reused, searched;
     std::mt19937_64 rng(11);
     // The source in the target's centred frame, then moved step by step.
-    Rigid3 T = Rigid3::Identity();
-    T.translation() = origin - prepared.origin();
+    Rigid3 T = chest.Start();
     std::int64_t reused_searches = 0, full_searches = 0, matched = 0;
     const double steps_mm[] = {1.0, 0.3, 0.1, 0.03, 0.01, 0.003, 0.001, 0.5, 0.01, 0.002};
     for (const double step : steps_mm) {
-      T = testing::RandomPose(&rng, step / 100.0, step, T.translation()) * T;  // 100 mm lever
+      T = pectus::testing::RandomPose(&rng, step / 100.0, step, T.translation()) * T;  // 100 mm lever
       reused_searches += FindPairs(pb, sample, T, gate, &cache, &reused);
       full_searches += FindPairs(pb, sample, T, gate, nullptr, &searched);
       ASSERT_EQ(reused.target, searched.target) << "step " << step << " mm";

@@ -8,17 +8,18 @@
 #include <random>
 #include <string>
 
-#include "registration/internal/icp_steps.h"
+#include "chest_pair_problem.h"
 #include "registration/kdtree.h"
-#include "synthetic_chest.h"
 
 namespace pectus::icp_detail {
 namespace {
 
+using testing::ChestPairProblem;
+
 // Queries on the surface, off it by up to 3 mm, in its holes and around and beyond its bounding box, for
 // radii up to the cell and k from 1 to 8: the grid answers as the tree does.
 TEST(RadiusGrid, AnswersAsTheTreeDoes) {
-  const PointCloud chest = testing::SampleChest(20000, 5, 0.2);
+  const PointCloud chest = pectus::testing::SampleChest(20000, 5, 0.2);
   const KdTree3 tree(chest.positions);
   const double cell = 8.0;  // about three spacings of this sample, as in ICP's finer levels
   const std::optional<RadiusGrid> grid = RadiusGrid::Build(chest.positions, cell, 4 * 20000);
@@ -64,7 +65,7 @@ TEST(RadiusGrid, AnswersAsTheTreeDoes) {
 // A grid it cannot build is refused, not built badly: no points, a cell that is not a length, or a box so
 // large for its points (one outlier a metre off) that it would be mostly empty cells.
 TEST(RadiusGrid, RefusesWhatItCannotBin) {
-  const PointCloud chest = testing::SampleChest(2000, 5, 0.2);
+  const PointCloud chest = pectus::testing::SampleChest(2000, 5, 0.2);
   EXPECT_FALSE(RadiusGrid::Build(Points3(0, 3), 1.0, 1000).has_value());
   EXPECT_FALSE(RadiusGrid::Build(chest.positions, 0.0, 1 << 20).has_value());
   EXPECT_FALSE(RadiusGrid::Build(chest.positions, std::nan(""), 1 << 20).has_value());
@@ -77,36 +78,24 @@ TEST(RadiusGrid, RefusesWhatItCannotBin) {
 // ICP's step 1 with the grid finds the pairs it finds with the tree, with certificates carried from pose
 // to pose and without, the grid's cell the search radius as in AlignIcp.
 TEST(RadiusGrid, FindPairsUnchanged) {
-  const PointCloud target = testing::SampleChest(20000, 7, 0.2, -1.3, 0.9);
-  const PointCloud source = testing::SampleChest(20000, 8, 0.2, -0.9, 1.3);
-  const IcpTarget prepared(target.positions, target.normals, "chest");
-  IcpOptions options;
-  const Eigen::Vector3d origin = source.positions.colwise().mean().transpose();
-  const Points3 no_normals;
-  Problem tree_only{&prepared,
-                    &source.positions,
-                    &no_normals,
-                    origin,
-                    &options,
-                    -1.0,
-                    std::pow(3.0 * prepared.spacing_mm(), 2)};
+  const ChestPairProblem chest;
+  const IcpTarget& prepared = chest.prepared;
+  const Problem tree_only = chest.Make();
   const double gate = 3.0 * prepared.spacing_mm();
   const std::optional<RadiusGrid> grid =
       RadiusGrid::Build(prepared.centred_positions(), kSearchRadiusOverGate * gate * (1.0 + 1e-6), 1 << 22);
   ASSERT_TRUE(grid.has_value());
   Problem with_grid = tree_only;
   with_grid.grid = &*grid;
-  std::vector<std::uint32_t> sample(static_cast<std::size_t>(source.size()));
-  for (std::size_t k = 0; k < sample.size(); ++k) sample[k] = static_cast<std::uint32_t>(k);
+  const std::vector<std::uint32_t> sample = chest.AllRows();
   NearestCache tree_cache, grid_cache;
   tree_cache.Reset(sample.size(), kSearchRadiusOverGate * gate);
   grid_cache.Reset(sample.size(), kSearchRadiusOverGate * gate);
   std::mt19937_64 rng(12);
-  Rigid3 T = Rigid3::Identity();
-  T.translation() = origin - prepared.origin();
+  Rigid3 T = chest.Start();
   std::int64_t matched = 0;
   for (const double step : {1.0, 0.1, 0.01, 0.5, 0.002}) {
-    T = testing::RandomPose(&rng, step / 100.0, step, T.translation()) * T;
+    T = pectus::testing::RandomPose(&rng, step / 100.0, step, T.translation()) * T;
     Pairs by_tree, by_grid, by_grid_uncached;
     const std::int64_t tree_searches = FindPairs(tree_only, sample, T, gate, &tree_cache, &by_tree);
     const std::int64_t grid_searches = FindPairs(with_grid, sample, T, gate, &grid_cache, &by_grid);
