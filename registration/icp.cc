@@ -318,11 +318,25 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
       grid_cell = std::max(grid_cell, radius);
     }
   }
+  // A target prepared for one alignment has a coarse sample: the levels before the grid's, whose search
+  // radius is beyond five spacings of every point, search it instead (docs/registration.md, "A coarse
+  // target for one alignment"); never the last level.
+  const CoarseTarget* coarse = target.coarse();
+  auto searches_coarse = [&](std::size_t l) {
+    return coarse != nullptr && coarse->spacing_mm > 0.0 && l < grid_level && l + 1 < levels.size() &&
+           kSearchRadiusOverGate * levels[l].max_distance_mm > kGridMaxSpacings * target.spacing_mm();
+  };
+  const double full_tangential2 = pb.max_tangential2;
   std::optional<RadiusGrid> grid;
   std::vector<std::uint32_t> grown;  // the last level's sample once it grows
   const std::vector<std::uint32_t>* sample = &samples.front();
   for (std::size_t l = 0; l < levels.size(); ++l) {
     const IcpLevel& level = levels[l];
+    pb.coarse = searches_coarse(l) ? coarse : nullptr;
+    // A point off the sample's nearest point along its plane by a sample spacing is not over a hole.
+    pb.max_tangential2 = pb.coarse != nullptr && std::isfinite(full_tangential2)
+                             ? std::pow(options.max_tangential_spacings * coarse->spacing_mm, 2)
+                             : full_tangential2;
     if (l == grid_level) {
       const auto grid_start = std::chrono::steady_clock::now();
       grid = RadiusGrid::Build(target.centred_positions(), grid_cell * (1.0 + 1e-6),
@@ -338,7 +352,9 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
     const double trans_tol = options.translation_tolerance_mm * looser;
     // Random levels are nested (each sample a prefix of the next): their certificates carry over.
     const std::vector<std::uint32_t>* coarser = l > 0 ? &samples[l - 1] : nullptr;
+    // (Not from the coarse sample's searches to every point's: a certificate speaks of the points searched.)
     const bool nested = coarser != nullptr && coarser->size() <= sample->size() &&
+                        searches_coarse(l - 1) == searches_coarse(l) &&
                         std::equal(coarser->begin(), coarser->end(), sample->begin());
     std::size_t kept = nested ? coarser->size() : 0;
     std::size_t rest_used = 0;
@@ -347,6 +363,7 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
       report.voxel_size_mm = level.voxel_size_mm;
       report.max_distance_mm = level.max_distance_mm;
       report.source_points = static_cast<std::int64_t>(sample->size());
+      report.target_points = pb.coarse != nullptr ? static_cast<std::int64_t>(pb.coarse->rows.size()) : target.size();
       cache.Reset(sample->size(), kSearchRadiusOverGate * level.max_distance_mm, kept);
       const bool may_grow = grow && l + 1 == levels.size() && rest_used < rest.size();
       const auto level_start = std::chrono::steady_clock::now();

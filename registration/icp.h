@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -132,6 +133,8 @@ struct IcpLevelReport {
   double voxel_size_mm = 0.0;
   double max_distance_mm = 0.0;
   std::int64_t source_points = 0;  ///< source points used at this level
+  /// Target points searched at this level: all of them, or the coarse sample's (TargetUse::kSingleAlignment)
+  std::int64_t target_points = 0;
   int iterations = 0;
   bool converged = false;  ///< the update fell below the tolerances
   double rms_mm = 0.0;     ///< weighted RMS residual at the last iteration (mm)
@@ -170,6 +173,28 @@ struct IcpResult {
   std::string BriefReport() const;
 };
 
+/// How an IcpTarget is prepared (docs/registration.md, "A coarse target for one alignment").
+enum class TargetUse {
+  /// Any number of alignments and searches (merging sweeps, a cohort's reference): the k-d tree over
+  /// every point is built at once.
+  kShared,
+  /// One alignment, at speed: ICP's coarse levels, whose search radius is beyond the grid's reach, search
+  /// a k-d tree over a random quarter of the points (CoarseTarget); the spacing comes from a grid; the tree
+  /// over every point is built only if something asks for it. Targets under kMinCoarsePoints points are
+  /// prepared as kShared.
+  kSingleAlignment,
+};
+
+/// A kSingleAlignment target's coarse sample: a random quarter of its points (in row order), their
+/// k-d tree and their median spacing.
+struct CoarseTarget {
+  static constexpr Eigen::Index kMinPoints = 16384;  ///< smaller targets get no coarse sample
+  Points3 positions;                                  ///< the sample's centred positions (mm)
+  std::vector<std::uint32_t> rows;                    ///< their rows in the target
+  std::unique_ptr<KdTree3> tree;                      ///< over `positions`
+  double spacing_mm = 0.0;                            ///< median spacing of the sample (mm)
+};
+
 /// A target surface prepared once for any number of alignments: positions centred on their centroid
 /// (so that a scanner frame far from the origin loses no precision), unit normals, a k-d tree.
 class IcpTarget {
@@ -178,10 +203,13 @@ class IcpTarget {
   /// @param[in] normals    #points by 3 unit normals (a zero row marks a point without a normal, never
   ///                       used as a correspondence)
   /// @param[in] name       names the target in error messages
+  /// @param[in] use        kSingleAlignment for a target aligned to once (TargetUse)
   /// Throws Error(kBadInput) naming `name` for mismatched sizes, too few points or non-finite values.
-  IcpTarget(const Points3& positions, const Points3& normals, const std::string& name = "target");
+  IcpTarget(const Points3& positions, const Points3& normals, const std::string& name = "target",
+            TargetUse use = TargetUse::kShared);
   /// The same, taking over both arrays instead of copying them (the positions are centred in place).
-  IcpTarget(Points3&& positions, Points3&& normals, const std::string& name = "target");
+  IcpTarget(Points3&& positions, Points3&& normals, const std::string& name = "target",
+            TargetUse use = TargetUse::kShared);
   /// The same, estimating the normals with EstimateNormals on the target's own k-d tree (their sign is
   /// irrelevant to ICP). timings_s() says what that cost.
   IcpTarget(const Points3& positions, const NormalOptions& normal_options,
@@ -196,20 +224,28 @@ class IcpTarget {
   /// #points by 3 positions minus origin() (mm).
   const Points3& centred_positions() const { return centred_; }
   const Points3& normals() const { return normals_; }
-  const KdTree3& tree() const { return *tree_; }
+  /// The k-d tree over every point. A kSingleAlignment target builds it on the first call (thread-safe;
+  /// callers meanwhile wait).
+  const KdTree3& tree() const;
+  /// A kSingleAlignment target's coarse sample, else null.
+  const CoarseTarget* coarse() const { return coarse_.get(); }
   /// Median distance between neighbouring target points (mm).
   double spacing_mm() const { return spacing_mm_; }
-  /// Wall time (s) of "prepare" (copy, centring, tree) and, when they were estimated, "normals".
+  /// Wall time (s) of "prepare" (copy, centring, tree or coarse sample, spacing) and, when they were
+  /// estimated, "normals".
   const Timings& timings_s() const { return timings_s_; }
 
  private:
   Eigen::Vector3d origin_;
   Points3 centred_;
   Points3 normals_;
-  std::unique_ptr<KdTree3> tree_;
+  mutable std::once_flag tree_once_;
+  mutable std::unique_ptr<KdTree3> tree_;
+  std::unique_ptr<CoarseTarget> coarse_;
   double spacing_mm_ = 0.0;
   Timings timings_s_;
-  void Prepare(Points3 positions, const std::string& name);
+  void Prepare(Points3 positions, const std::string& name, TargetUse use = TargetUse::kShared);
+  void PrepareCoarse();
   void SetNormals(Points3 normals, Eigen::Index positions, const std::string& name);
 };
 

@@ -7,6 +7,10 @@
 
 namespace pectus {
 
+/// SplitMix64's output for `x` (Steele, Lea and Flood 2014): a well-mixed 64-bit hash; a counter stepped
+/// by 0x9e3779b97f4a7c15 through it is the SplitMix64 generator.
+std::uint64_t SplitMix64(std::uint64_t x);
+
 /// The first `count` rows of a deterministic random permutation of `rows` (a partial Fisher-Yates
 /// shuffle driven by SplitMix64, so the same seed gives the same sample on every platform). Every prefix
 /// of the result is itself a uniform random sample, so nested coarse-to-fine levels take prefixes of one

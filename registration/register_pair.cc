@@ -177,7 +177,8 @@ std::string PairRegistrationResult::BriefReport() const {
 std::unique_ptr<IcpTarget> PrepareTarget(PointCloud fixed, const PairRegistrationOptions& options,
                                          const std::string& name) {
   if (!fixed.has_normals()) return std::make_unique<IcpTarget>(fixed.positions, options.normals, name);
-  return std::make_unique<IcpTarget>(std::move(fixed.positions), std::move(fixed.normals), name);
+  return std::make_unique<IcpTarget>(std::move(fixed.positions), std::move(fixed.normals), name,
+                                     TargetUse::kSingleAlignment);
 }
 
 PairRegistrationResult RegisterPair(const PointCloud& fixed, const PointCloud& moving,

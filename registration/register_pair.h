@@ -91,8 +91,9 @@ PairRegistrationResult RegisterPair(const PointCloud& fixed, const PointCloud& m
                                     const Similarity3& initial = {},
                                     const PairRegistrationOptions& options = {});
 
-/// The fixed scan prepared as ICP's target the way RegisterPair prepares it: centred, its k-d tree built,
-/// its own normals if it has them, else normals estimated with `options.normals`. Pass the scan with
+/// The fixed scan prepared as ICP's target the way RegisterPair prepares it, for one alignment: centred,
+/// with its own normals and a coarse sample (TargetUse::kSingleAlignment) if it has normals, else with
+/// normals estimated with `options.normals` on its k-d tree. Pass the scan with
 /// std::move when it is not needed afterwards: its arrays are then taken over, not copied. Throws
 /// Error(kBadInput) naming `name` for a scan ICP cannot use (fewer than 3 points, a non-finite value).
 std::unique_ptr<IcpTarget> PrepareTarget(PointCloud fixed, const PairRegistrationOptions& options,

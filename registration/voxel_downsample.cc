@@ -72,21 +72,12 @@ std::vector<std::uint32_t> VoxelDownsample(const Points3& points, double voxel_s
 }
 
 double MedianPointSpacing(const Points3& points, const KdTree3& tree, int samples) {
-  const Eigen::Index n = points.rows();
-  if (n < 2 || samples < 1) return 0.0;
-  const Eigen::Index m = std::min<Eigen::Index>(n, samples);
-  std::vector<double> spacing;
-  spacing.reserve(static_cast<std::size_t>(m));
-  std::uint32_t idx[2];
-  double d2[2];
-  for (Eigen::Index s = 0; s < m; ++s) {
-    const Eigen::Index i = s * n / m;
-    if (tree.Knn(points.row(i).transpose(), 2, idx, d2) == 2) spacing.push_back(std::sqrt(d2[1]));
-  }
-  if (spacing.empty()) return 0.0;
-  auto mid = spacing.begin() + static_cast<std::ptrdiff_t>(spacing.size() / 2);
-  std::nth_element(spacing.begin(), mid, spacing.end());
-  return *mid;
+  return MedianOverPickedRows(points.rows(), samples, [&](Eigen::Index i) {
+    std::uint32_t idx[2];
+    double d2[2];
+    tree.Knn(points.row(i).transpose(), 2, idx, d2);  // two found: there are at least two points
+    return std::sqrt(d2[1]);
+  });
 }
 
 }  // namespace pectus

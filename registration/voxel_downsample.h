@@ -1,6 +1,7 @@
 // pectus: voxel-grid subsampling and point spacing, the sampling steps of coarse-to-fine registration.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -24,5 +25,21 @@ std::vector<std::uint32_t> VoxelDownsample(const Points3& points, double voxel_s
 /// @param[in] points  #points by 3 positions (mm)
 /// @param[in] tree    k-d tree over `points`
 double MedianPointSpacing(const Points3& points, const KdTree3& tree, int samples = 256);
+
+/// The median of `spacing(i)` over the rows MedianPointSpacing picks: min(n, samples) rows, evenly spread
+/// over the n points (the element at index size / 2 once sorted). `spacing` may return +infinity for a
+/// row whose distance is only known to exceed every finite one; the result is then +infinity unless more
+/// than half are known. 0 for fewer than two points.
+template <class Spacing>
+double MedianOverPickedRows(Eigen::Index n, int samples, Spacing spacing) {
+  if (n < 2 || samples < 1) return 0.0;
+  const Eigen::Index m = std::min<Eigen::Index>(n, samples);
+  std::vector<double> values;
+  values.reserve(static_cast<std::size_t>(m));
+  for (Eigen::Index s = 0; s < m; ++s) values.push_back(spacing(s * n / m));
+  auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), mid, values.end());
+  return *mid;
+}
 
 }  // namespace pectus

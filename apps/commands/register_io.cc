@@ -32,6 +32,7 @@ nlohmann::json IcpJson(const IcpResult& r) {
     levels.push_back({{"voxel_size_mm", l.voxel_size_mm},
                       {"max_distance_mm", l.max_distance_mm},
                       {"source_points", l.source_points},
+                      {"target_points", l.target_points},
                       {"iterations", l.iterations},
                       {"converged", l.converged},
                       {"rms_mm", l.rms_mm},

@@ -13,32 +13,35 @@
 namespace pectus::icp_detail {
 namespace {
 
-// The k nearest target rows within `radius`: from the grid when there is one and the radius is within its
-// reach (the same answers, faster), else from the tree.
-int NearestWithin(const KdTree3& tree, const RadiusGrid* grid, const Eigen::Vector3d& p, double radius, int k,
-                  std::uint32_t* indices, double* squared_distances) {
-  if (grid != nullptr && radius <= grid->max_radius()) {
-    return grid->NearestWithin(p, radius, k, indices, squared_distances);
+// The k nearest target rows within `radius`: from the coarse sample's tree when the level searches it,
+// else from the grid when there is one and the radius is within its reach (the same answers as the tree,
+// faster), else from the tree over every point.
+int NearestWithin(const Problem& pb, const Eigen::Vector3d& p, double radius, int k, std::uint32_t* indices,
+                  double* squared_distances) {
+  if (pb.coarse != nullptr) {
+    const int found = pb.coarse->tree->NearestWithin(p, radius, k, indices, squared_distances);
+    for (int h = 0; h < found; ++h) indices[h] = pb.coarse->rows[indices[h]];
+    return found;
   }
-  return tree.NearestWithin(p, radius, k, indices, squared_distances);
+  if (pb.grid != nullptr && radius <= pb.grid->max_radius()) {
+    return pb.grid->NearestWithin(p, radius, k, indices, squared_distances);
+  }
+  return pb.target->tree().NearestWithin(p, radius, k, indices, squared_distances);
 }
 
 // The `want` nearest target rows of `p` within `gate`, nearest first, into `j` (their number into
 // `found`; the nearest may lie beyond the gate when searched through the cache, for the caller's test),
-// from the certificate when it still holds, else from the grid or the tree (renewing the certificate).
-// Returns true if it searched.
-bool Nearest(const KdTree3& tree, const RadiusGrid* grid, const Points3& target, const Eigen::Vector3d& p,
-             double gate, std::size_t s, NearestCache* cache, int want, std::uint32_t* j, int* found) {
+// from the certificate when it still holds, else from the coarse sample, the grid or the tree (renewing
+// the certificate). Returns true if it searched.
+bool Nearest(const Problem& pb, const Eigen::Vector3d& p, double gate, std::size_t s, NearestCache* cache,
+             int want, std::uint32_t* j, int* found) {
   constexpr int kMax = NearestCache::kMaxCandidates;
   static_assert(kMax + 1 <= KdTree3::kMaxBounded,
                 "a certificate's search finds one more than its candidates");
+  const Points3& target = pb.target->centred_positions();
   if (cache == nullptr) {
     double d2[kMax];
-    if (want == 1) {
-      *found = tree.NearestWithin(p, gate, j, d2) ? 1 : 0;
-    } else {
-      *found = NearestWithin(tree, grid, p, gate, want, j, d2);
-    }
+    *found = NearestWithin(pb, p, gate, want, j, d2);
     return true;
   }
   const int C = NearestCache::Candidates(want);
@@ -99,7 +102,7 @@ bool Nearest(const KdTree3& tree, const RadiusGrid* grid, const Points3& target,
   }
   std::uint32_t idx[kMax + 1];
   double d2[kMax + 1];
-  const int hits = NearestWithin(tree, grid, p, cache->radius, C + 1, idx, d2);
+  const int hits = NearestWithin(pb, p, cache->radius, C + 1, idx, d2);
   cache->valid[s] = 1;
   cache->at[s] = p;
   cache->count[s] = static_cast<std::uint8_t>(std::min(hits, C));
@@ -148,7 +151,7 @@ std::int64_t FindPairs(const Problem& pb, const std::vector<std::uint32_t>& samp
     std::uint32_t near[NearestCache::kMaxCandidates];
     int found = 0;
     searches +=
-        Nearest(pb.target->tree(), pb.grid, tp, p, gate, s, cache, plane_points, near, &found) ? 1 : 0;
+        Nearest(pb, p, gate, s, cache, plane_points, near, &found) ? 1 : 0;
     pairs->target[s] = kNoMatch;
     if (found == 0) continue;
     const std::uint32_t j = near[0];

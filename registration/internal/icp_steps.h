@@ -89,6 +89,9 @@ struct Problem {
   double cos_max_normal_angle;       // -1 when the normal test is off
   double max_tangential2;            // squared tangential reach (mm^2); infinity when off
   const RadiusGrid* grid = nullptr;  // the target binned for the finer levels' searches; may be null
+  // The target's coarse sample when this level searches it instead of every point (found rows are the
+  // target's); null otherwise.
+  const CoarseTarget* coarse = nullptr;
 };
 
 // The correspondence certificates of one level: per sample point, where it was when last searched (`at`),

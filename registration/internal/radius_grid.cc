@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace pectus::icp_detail {
 
@@ -56,47 +57,32 @@ int RadiusGrid::NearestWithin(const Eigen::Vector3d& query, double radius, int k
         c.y() < static_cast<double>(ny_ + 1) && c.z() < static_cast<double>(nz_ + 1))) {
     return 0;
   }
-  const auto ix = static_cast<std::int64_t>(std::floor(c.x()));
-  const auto iy = static_cast<std::int64_t>(std::floor(c.y()));
-  const auto iz = static_cast<std::int64_t>(std::floor(c.z()));
-  // The squared gap from the query to cell j along one axis (0 inside it), in mm^2.
-  auto gap2 = [&](double coordinate, double low, std::int64_t j) {
-    const double below = low + static_cast<double>(j) * cell_ - coordinate;
-    const double above = coordinate - (low + static_cast<double>(j + 1) * cell_);
-    // Less a margin for rounding: a point binned in cell j may lie an ulp outside its box.
-    const double g = std::max(std::max(below, above) - 1e-9 * cell_, 0.0);
-    return g * g;
-  };
-  // The up to 27 non-empty cells around the query's that may hold a point within the radius, nearest first.
-  struct Cell {
-    double gap2;
-    std::uint32_t begin, end;
-  };
-  Cell cells[27];
-  int m = 0;
-  const std::int64_t z0 = std::max<std::int64_t>(iz - 1, 0), z1 = std::min(iz + 1, nz_ - 1);
-  double gz[3] = {0.0, 0.0, 0.0};
-  for (std::int64_t z = z0; z <= z1; ++z) gz[z - z0] = gap2(query.z(), low_.z(), z);
-  for (std::int64_t x = std::max<std::int64_t>(ix - 1, 0); x <= std::min(ix + 1, nx_ - 1); ++x) {
-    const double gx = gap2(query.x(), low_.x(), x);
-    for (std::int64_t y = std::max<std::int64_t>(iy - 1, 0); y <= std::min(iy + 1, ny_ - 1); ++y) {
-      const double gxy = gx + gap2(query.y(), low_.y(), y);
-      if (!(gxy < bound)) continue;
-      const std::int64_t base = (x * ny_ + y) * nz_;
-      for (std::int64_t z = z0; z <= z1; ++z) {
-        const Cell cell{gxy + gz[z - z0], start_[static_cast<std::size_t>(base + z)],
-                        start_[static_cast<std::size_t>(base + z) + 1]};
-        if (cell.begin == cell.end || !(cell.gap2 < bound)) continue;
-        int at = m++;
-        for (; at > 0 && cells[at - 1].gap2 > cell.gap2; --at) cells[at] = cells[at - 1];
-        cells[at] = cell;
-      }
-    }
+  // The query's cell (-1 or n along an axis when it lies just outside the grid).
+  const std::int64_t own[3] = {static_cast<std::int64_t>(c.x() + 1.0) - 1, static_cast<std::int64_t>(c.y() + 1.0) - 1,
+                               static_cast<std::int64_t>(c.z() + 1.0) - 1};
+  const std::int64_t size[3] = {nx_, ny_, nz_};
+  // Along each axis, the squared gap from the query to the cells before, at and after its own (mm^2;
+  // infinite outside the grid), less a margin for rounding: a point binned in a cell may lie an ulp
+  // outside its box.
+  double gap2[3][3];
+  for (int a = 0; a < 3; ++a) {
+    const double margin = 1e-9 * cell_;
+    const double below = std::max(query[a] - (low_[a] + static_cast<double>(own[a]) * cell_) - margin, 0.0);
+    const double above = std::max(low_[a] + static_cast<double>(own[a] + 1) * cell_ - query[a] - margin, 0.0);
+    auto inside = [&](std::int64_t j) { return j >= 0 && j < size[a]; };
+    constexpr double kOutside = std::numeric_limits<double>::infinity();
+    gap2[a][0] = inside(own[a] - 1) ? below * below : kOutside;
+    gap2[a][1] = inside(own[a]) ? 0.0 : kOutside;
+    gap2[a][2] = inside(own[a] + 1) ? above * above : kOutside;
   }
   int count = 0;
   double worst = bound;  // a point must be nearer than this to count: the bound, then the k-th nearest
-  for (int j = 0; j < m && cells[j].gap2 < worst; ++j) {
-    for (std::uint32_t p = cells[j].begin; p < cells[j].end; ++p) {
+  // Scans the cell at offsets (ox, oy, oz) in {0, 1, 2} from the one before the query's, unless its
+  // box lies beyond the current k-th nearest.
+  auto scan = [&](int ox, int oy, int oz) {
+    if (!(gap2[0][ox] + gap2[1][oy] + gap2[2][oz] < worst)) return;
+    const auto cell = static_cast<std::size_t>(((own[0] + ox - 1) * ny_ + own[1] + oy - 1) * nz_ + own[2] + oz - 1);
+    for (std::uint32_t p = start_[cell], end = start_[cell + 1]; p < end; ++p) {
       const Point& v = points_[p];
       const double dx = v.x - query.x(), dy = v.y - query.y(), dz = v.z - query.z();
       const double d = dx * dx + dy * dy + dz * dz;
@@ -109,6 +95,26 @@ int RadiusGrid::NearestWithin(const Eigen::Vector3d& query, double radius, int k
       squared_distances[at] = d;
       indices[at] = v.row;
       if (count == k) worst = squared_distances[k - 1];
+    }
+  };
+  // The query's own cell first: on a surface a few times denser than the cell it holds the k nearest
+  // points, so that the bound falls to their distance and most of the 26 others are skipped unread. Then
+  // the six sharing a face, the nearer of each pair first, then the twelve sharing an edge and the eight
+  // sharing a corner. The order changes which cells are read, never the answer.
+  scan(1, 1, 1);
+  for (int a = 0; a < 3; ++a) {
+    const int nearer = gap2[a][0] <= gap2[a][2] ? 0 : 2;
+    int o[3] = {1, 1, 1};
+    o[a] = nearer;
+    scan(o[0], o[1], o[2]);
+    o[a] = 2 - nearer;
+    scan(o[0], o[1], o[2]);
+  }
+  for (int ox = 0; ox < 3; ++ox) {
+    for (int oy = 0; oy < 3; ++oy) {
+      for (int oz = 0; oz < 3; ++oz) {
+        if ((ox != 1) + (oy != 1) + (oz != 1) >= 2) scan(ox, oy, oz);
+      }
     }
   }
   return count;
