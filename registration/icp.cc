@@ -363,7 +363,8 @@ IcpResult AlignIcp(const IcpTarget& target, const Points3& source_positions, con
       report.voxel_size_mm = level.voxel_size_mm;
       report.max_distance_mm = level.max_distance_mm;
       report.source_points = static_cast<std::int64_t>(sample->size());
-      report.target_points = pb.coarse != nullptr ? static_cast<std::int64_t>(pb.coarse->rows.size()) : target.size();
+      report.target_points =
+          pb.coarse != nullptr ? static_cast<std::int64_t>(pb.coarse->rows.size()) : target.size();
       cache.Reset(sample->size(), kSearchRadiusOverGate * level.max_distance_mm, kept);
       const bool may_grow = grow && l + 1 == levels.size() && rest_used < rest.size();
       const auto level_start = std::chrono::steady_clock::now();

@@ -189,10 +189,10 @@ enum class TargetUse {
 /// k-d tree and their median spacing.
 struct CoarseTarget {
   static constexpr Eigen::Index kMinPoints = 16384;  ///< smaller targets get no coarse sample
-  Points3 positions;                                  ///< the sample's centred positions (mm)
-  std::vector<std::uint32_t> rows;                    ///< their rows in the target
-  std::unique_ptr<KdTree3> tree;                      ///< over `positions`
-  double spacing_mm = 0.0;                            ///< median spacing of the sample (mm)
+  Points3 positions;                                 ///< the sample's centred positions (mm)
+  std::vector<std::uint32_t> rows;                   ///< their rows in the target
+  std::unique_ptr<KdTree3> tree;                     ///< over `positions`
+  double spacing_mm = 0.0;                           ///< median spacing of the sample (mm)
 };
 
 /// A target surface prepared once for any number of alignments: positions centred on their centroid

@@ -74,10 +74,11 @@ void IcpTarget::PrepareCoarse() {
         icp_detail::kGridMaxCellsPerPoint * static_cast<std::size_t>(centred_.rows()) + 4096;
     const Eigen::Vector3d extent = centred_.colwise().maxCoeff() - centred_.colwise().minCoeff();
     double cell = 2.0 * coarse->spacing_mm;
-    while ((extent / cell + Eigen::Vector3d::Ones()).prod() > 0.5 * static_cast<double>(max_cells)) cell *= 1.25;
-    const std::optional<icp_detail::RadiusGrid> grid = icp_detail::RadiusGrid::Build(centred_, cell, max_cells);
+    while ((extent / cell + Eigen::Vector3d::Ones()).prod() > 0.5 * static_cast<double>(max_cells))
+      cell *= 1.25;
+    const std::optional<icp_detail::RadiusGrid> grid =
+        icp_detail::RadiusGrid::Build(centred_, cell, max_cells);
     if (grid) spacing_mm_ = GridMedianSpacing(centred_, *grid).value_or(0.0);
-
   }
   coarse_ = std::move(coarse);
 }
@@ -98,7 +99,8 @@ void IcpTarget::SetNormals(Points3 normals, Eigen::Index positions, const std::s
   normals_ = std::move(normals);
 }
 
-IcpTarget::IcpTarget(const Points3& positions, const Points3& normals, const std::string& name, TargetUse use) {
+IcpTarget::IcpTarget(const Points3& positions, const Points3& normals, const std::string& name,
+                     TargetUse use) {
   SetNormals(normals, positions.rows(), name);
   Prepare(positions, name, use);
 }

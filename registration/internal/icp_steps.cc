@@ -150,8 +150,7 @@ std::int64_t FindPairs(const Problem& pb, const std::vector<std::uint32_t>& samp
     const Eigen::Vector3d p = R * (pb.source->row(i).transpose() - pb.source_origin) + t;
     std::uint32_t near[NearestCache::kMaxCandidates];
     int found = 0;
-    searches +=
-        Nearest(pb, p, gate, s, cache, plane_points, near, &found) ? 1 : 0;
+    searches += Nearest(pb, p, gate, s, cache, plane_points, near, &found) ? 1 : 0;
     pairs->target[s] = kNoMatch;
     if (found == 0) continue;
     const std::uint32_t j = near[0];

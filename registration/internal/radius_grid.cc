@@ -58,7 +58,8 @@ int RadiusGrid::NearestWithin(const Eigen::Vector3d& query, double radius, int k
     return 0;
   }
   // The query's cell (-1 or n along an axis when it lies just outside the grid).
-  const std::int64_t own[3] = {static_cast<std::int64_t>(c.x() + 1.0) - 1, static_cast<std::int64_t>(c.y() + 1.0) - 1,
+  const std::int64_t own[3] = {static_cast<std::int64_t>(c.x() + 1.0) - 1,
+                               static_cast<std::int64_t>(c.y() + 1.0) - 1,
                                static_cast<std::int64_t>(c.z() + 1.0) - 1};
   const std::int64_t size[3] = {nx_, ny_, nz_};
   // Along each axis, the squared gap from the query to the cells before, at and after its own (mm^2;
@@ -81,7 +82,8 @@ int RadiusGrid::NearestWithin(const Eigen::Vector3d& query, double radius, int k
   // box lies beyond the current k-th nearest.
   auto scan = [&](int ox, int oy, int oz) {
     if (!(gap2[0][ox] + gap2[1][oy] + gap2[2][oz] < worst)) return;
-    const auto cell = static_cast<std::size_t>(((own[0] + ox - 1) * ny_ + own[1] + oy - 1) * nz_ + own[2] + oz - 1);
+    const auto cell =
+        static_cast<std::size_t>(((own[0] + ox - 1) * ny_ + own[1] + oy - 1) * nz_ + own[2] + oz - 1);
     for (std::uint32_t p = start_[cell], end = start_[cell + 1]; p < end; ++p) {
       const Point& v = points_[p];
       const double dx = v.x - query.x(), dy = v.y - query.y(), dz = v.z - query.z();

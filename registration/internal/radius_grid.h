@@ -14,10 +14,10 @@ namespace pectus::icp_detail {
 /// The points binned in cubic cells of side `cell()`, each cell's points contiguous (a counting sort).
 /// Every point within `cell()` of a query lies in the 3 x 3 x 3 cells around the query's, so a search
 /// with a radius up to `cell()` is exact after scanning at most those: the query's own cell first, then
-/// the others, each skipped when its box lies beyond the current k-th nearest. On a scanned surface whose spacing is a few
-/// times smaller than the cell this costs a fraction of a k-d tree's search (its root-to-leaf descent and
-/// backtracking miss the caches), and it gives the same answers: the same points, the same squared
-/// distances, nearest first (docs/registration.md, "A grid for the finer levels").
+/// the others, each skipped when its box lies beyond the current k-th nearest. On a scanned surface whose
+/// spacing is a few times smaller than the cell this costs a fraction of a k-d tree's search (its
+/// root-to-leaf descent and backtracking miss the caches), and it gives the same answers: the same points,
+/// the same squared distances, nearest first (docs/registration.md, "A grid for the finer levels").
 class RadiusGrid {
  public:
   /// Bins `points` in cells of `cell` mm. Empty when `cell` is not positive and finite, when there are no

@@ -248,7 +248,8 @@ TEST(AlignIcp, GrownSampleRecoversPoseToItsStatisticalFloorBothDirections) {
 TEST(AlignIcp, SingleAlignmentTargetGivesTheSharedTargetsPose) {
   ForBothDirections(MakePair(23, 60000), [](const Pair* pair) {
     const IcpTarget shared(pair->target.positions, pair->target.normals);
-    const IcpTarget single(pair->target.positions, pair->target.normals, "target", TargetUse::kSingleAlignment);
+    const IcpTarget single(pair->target.positions, pair->target.normals, "target",
+                           TargetUse::kSingleAlignment);
     ASSERT_NE(single.coarse(), nullptr);
     const Rigid3 start = Disturbed(*pair, 8.0, 25.0, 24);
     const IcpResult a = AlignIcp(shared, pair->source.positions, Points3(), start);
@@ -264,9 +265,9 @@ TEST(AlignIcp, SingleAlignmentTargetGivesTheSharedTargetsPose) {
     EXPECT_EQ(a.levels.front().target_points, shared.size());
     EXPECT_EQ(b.levels.front().target_points, static_cast<std::int64_t>(single.coarse()->rows.size()));
     EXPECT_EQ(b.levels.back().target_points, single.size());
-    const PoseError d = ComparePoses(Similarity3::FromRigid(b.T_target_source),
-                                     Similarity3::FromRigid(a.T_target_source),
-                                     pair->source.positions.colwise().mean().transpose());
+    const PoseError d =
+        ComparePoses(Similarity3::FromRigid(b.T_target_source), Similarity3::FromRigid(a.T_target_source),
+                     pair->source.positions.colwise().mean().transpose());
     // Measured: 2 % and 0.7 % of the spread forward, 1 % and 0.4 % backward.
     EXPECT_LT(d.rotation_deg, 0.1 * a.rotation_sd_deg) << a.BriefReport() << " | " << b.BriefReport();
     EXPECT_LT(d.translation_mm, 0.1 * a.translation_sd_mm) << a.BriefReport() << " | " << b.BriefReport();
