@@ -274,6 +274,29 @@ TEST(AlignIcp, SingleAlignmentTargetGivesTheSharedTargetsPose) {
   });
 }
 
+// A target prepared for one alignment with a far outlier: its box would need too many cells for the finer
+// levels' grid, so those levels search the tree over every point, built when step 1 first asks for it (from
+// its threads). The spacing is still the tree's, and the pose is recovered.
+TEST(AlignIcp, SingleAlignmentTargetWithoutAGridBuildsItsTreeWhenAsked) {
+  Pair p = MakePair(29, 30000);
+  p.target.positions.row(0) += Eigen::RowVector3d(5000.0, 5000.0, 5000.0);
+  const IcpTarget shared(p.target.positions, p.target.normals);
+  const IcpTarget single(p.target.positions, p.target.normals, "target", TargetUse::kSingleAlignment);
+  ASSERT_NE(single.coarse(), nullptr);
+  EXPECT_EQ(single.spacing_mm(), shared.spacing_mm());
+  const Rigid3 start = Disturbed(p, 8.0, 25.0, 30);
+  const IcpResult a = AlignIcp(shared, p.source.positions, Points3(), start);
+  const IcpResult b = AlignIcp(single, p.source.positions, Points3(), start);
+  ExpectRecovered(p, b);
+  EXPECT_EQ(b.levels.front().target_points, static_cast<std::int64_t>(single.coarse()->rows.size()));
+  EXPECT_EQ(b.levels.back().target_points, single.size());
+  const PoseError d =
+      ComparePoses(Similarity3::FromRigid(b.T_target_source), Similarity3::FromRigid(a.T_target_source),
+                   p.source.positions.colwise().mean().transpose());
+  EXPECT_LT(d.rotation_deg, 0.1 * a.rotation_sd_deg) << a.BriefReport() << " | " << b.BriefReport();
+  EXPECT_LT(d.translation_mm, 0.1 * a.translation_sd_mm) << a.BriefReport() << " | " << b.BriefReport();
+}
+
 // On exact data (the source is the target's own points, moved) the residuals vanish, sampling costs no
 // accuracy and the sample stays at its 30000 points; with 0.2 mm noise it grows; with the rule off
 // (target_pose_sd_fraction = 0) it does not.
