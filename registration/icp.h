@@ -179,14 +179,14 @@ enum class TargetUse {
   /// every point is built at once.
   kShared,
   /// One alignment, at speed: ICP's coarse levels, whose search radius is beyond the grid's reach, search
-  /// a k-d tree over a random quarter of the points (CoarseTarget); the spacing comes from a grid; the tree
-  /// over every point is built only if something asks for it. Targets under kMinCoarsePoints points are
-  /// prepared as kShared.
+  /// a k-d tree over a quarter of the points, each row kept on a hash of its row (CoarseTarget); the
+  /// spacing comes from a grid; the tree over every point is built only if something asks for it. Targets
+  /// under CoarseTarget::kMinPoints points are prepared as kShared.
   kSingleAlignment,
 };
 
-/// A kSingleAlignment target's coarse sample: a random quarter of its points (in row order), their
-/// k-d tree and their median spacing.
+/// A kSingleAlignment target's coarse sample: a quarter of its points, chosen by a hash of their rows (in
+/// row order), their k-d tree and their median spacing.
 struct CoarseTarget {
   static constexpr Eigen::Index kMinPoints = 16384;  ///< smaller targets get no coarse sample
   Points3 positions;                                 ///< the sample's centred positions (mm)
