@@ -17,8 +17,6 @@ namespace pectus {
 
 namespace {
 
-constexpr int kSpacingSamples = 256;  // MedianPointSpacing's default
-
 // The median spacing of `points` as MedianPointSpacing(points, tree) gives it, from a grid instead of a
 // tree over every point: each picked point's nearest neighbour is searched within the grid's cell, so it
 // is exact where it lies within a cell and known to be farther otherwise; the median is exact while more

@@ -20,11 +20,14 @@ namespace pectus {
 std::vector<std::uint32_t> VoxelDownsample(const Points3& points, double voxel_size_mm,
                                            const std::vector<std::uint32_t>* subset = nullptr);
 
+/// How many points MedianPointSpacing picks by default.
+inline constexpr int kSpacingSamples = 256;
+
 /// The typical distance between neighbouring points (mm): the median distance from up to `samples`
 /// evenly picked points to their nearest other point. 0 for fewer than two points.
 /// @param[in] points  #points by 3 positions (mm)
 /// @param[in] tree    k-d tree over `points`
-double MedianPointSpacing(const Points3& points, const KdTree3& tree, int samples = 256);
+double MedianPointSpacing(const Points3& points, const KdTree3& tree, int samples = kSpacingSamples);
 
 /// The median of `spacing(i)` over the rows MedianPointSpacing picks: min(n, samples) rows, evenly spread
 /// over the n points (the element at index size / 2 once sorted). `spacing` may return +infinity for a

@@ -11,6 +11,8 @@
 //     direction, "pinned" the norm along the other five, with the smallest eigenvalue / largest;
 //   - wall time of the merge;
 //   - from the exact poses: how far the merge moves each sweep (RMS displacement, mm, after the fit);
+//   - the tracker's readings, unmerged, scored the same way (`tracker_readings`): what the merge starts
+//     from, per sweep along its weak and pinned directions too;
 //   - the bound: the least expected shape RMS any overlap-based merge can reach on that scan (a Bayesian
 //     Cramer-Rao bound at the truth: every covered point's point-to-plane information with the measured
 //     noise, the tracker's error as drawn; merge_grid_benchmark_bound.h); with --model-bound also what the
@@ -251,7 +253,7 @@ struct LineTally {
   int met = 0, met_interior_max = 0, met_surface_fit = 0, met_surface_fit_interior_max = 0;
   double efficient = 0.0, efficient_paired = 0.0;
   double log_every = 0.0, log_every_paired = 0.0;  // the chance of meeting it on every scan, as a log
-  int paired = 0;                                   // scans with the paired chance (--model-bound)
+  int paired = 0;                                  // scans with the paired chance (--model-bound)
   std::vector<double> ratio, ratio_surface_fit;
   void Add(const Run& r, const merge_grid::ShapeBound& b) {
     const double bound = b.shape_rms_mm;
@@ -283,17 +285,18 @@ struct LineTally {
     return v[v.size() / 2];
   }
   json Json() const {
-    json out = {{"scans", scans},
-            {"success", success},
-            {"line_met", met},
-            {"line_met_interior_max", met_interior_max},
-            {"line_met_surface_fit", met_surface_fit},
-            {"line_met_surface_fit_interior_max", met_surface_fit_interior_max},
-            {"bound_over_0_06_mm", bound_over},
-            {"efficient_merge_meets_rms_expected", efficient},
-            {"efficient_merge_meets_rms_on_every_scan_probability", std::exp(log_every)},
-            {"median_shape_over_bound", scans ? json(Median(ratio)) : json(nullptr)},
-            {"median_surface_fit_shape_over_bound", scans ? json(Median(ratio_surface_fit)) : json(nullptr)}};
+    json out = {
+        {"scans", scans},
+        {"success", success},
+        {"line_met", met},
+        {"line_met_interior_max", met_interior_max},
+        {"line_met_surface_fit", met_surface_fit},
+        {"line_met_surface_fit_interior_max", met_surface_fit_interior_max},
+        {"bound_over_0_06_mm", bound_over},
+        {"efficient_merge_meets_rms_expected", efficient},
+        {"efficient_merge_meets_rms_on_every_scan_probability", std::exp(log_every)},
+        {"median_shape_over_bound", scans ? json(Median(ratio)) : json(nullptr)},
+        {"median_surface_fit_shape_over_bound", scans ? json(Median(ratio_surface_fit)) : json(nullptr)}};
     if (paired == scans) {
       out["efficient_on_pectus_pairs_meets_rms_expected"] = efficient_paired;
       out["efficient_on_pectus_pairs_meets_rms_on_every_scan_probability"] = std::exp(log_every_paired);
@@ -381,6 +384,9 @@ int main(int argc, char** argv) {
             if (skin >= 2.0 && skin <= 4.0 && overlap >= 0.15) line.Add(pectus, bound);
             if (!pectus.threw) rms["pectus"].push_back(pectus.figures.rms_mm);
             if (!pectus.threw) rms["pectus_shape"].push_back(pectus.figures.shape_rms_mm);
+            if (!pectus.threw) rms["pectus_surface_shape"].push_back(pectus.figures.surface_fit_shape_rms_mm);
+            // The tracker's readings as they are (no merge), scored the same way: what the merge starts from.
+            one["tracker_readings"] = Score(Run{}, inliers, identity, truth, f.success_mm).Json(constraints);
             const Run exact = RunPectus(clouds, truth, inliers, truth, f);
             one["pectus_from_exact_poses"] = exact.Json(constraints);
             if (f.start_at_truth) {
@@ -402,6 +408,7 @@ int main(int argc, char** argv) {
               success["open3d"].push_back(peer.success);
               if (!peer.threw) rms["open3d"].push_back(peer.figures.rms_mm);
               if (!peer.threw) rms["open3d_shape"].push_back(peer.figures.shape_rms_mm);
+              if (!peer.threw) rms["open3d_surface_shape"].push_back(peer.figures.surface_fit_shape_rms_mm);
             }
             runs.push_back(one);
           }
@@ -424,14 +431,22 @@ int main(int argc, char** argv) {
             const auto shapes = rms[method + "_shape"].size();
             c.shape_rms_mm = shapes ? shape / double(shapes) : NAN;
             cell[method + "_shape_rms_mm_mean"] = shapes ? json(c.shape_rms_mm) : json(nullptr);
+            const std::vector<double>& surface = rms[method + "_surface_shape"];
+            double surface_sum = 0.0;
+            for (double x : surface) surface_sum += x;
+            c.surface_fit_shape_rms_mm = surface.empty() ? NAN : surface_sum / double(surface.size());
+            cell[method + "_surface_fit_shape_rms_mm_mean"] =
+                surface.empty() ? json(nullptr) : json(c.surface_fit_shape_rms_mm);
             picture.push_back(c);
           }
           std::string summary;
           for (const merge_grid::CellFigure& c : picture) {
             if (c.skin_mm == skin && c.overlap == overlap && c.sampling == sampling && c.sweeps == o.sweeps) {
               char text[128];
-              std::snprintf(text, sizeof text, "  %s success %.2f pose rms %.3f mm, shape rms %.3f mm",
-                            c.method.c_str(), c.success, c.rms_mm, c.shape_rms_mm);
+              std::snprintf(
+                  text, sizeof text,
+                  "  %s success %.2f pose rms %.3f mm, shape rms %.3f mm (fitted to the surface %.3f)",
+                  c.method.c_str(), c.success, c.rms_mm, c.shape_rms_mm, c.surface_fit_shape_rms_mm);
               summary += text;
             }
           }
@@ -480,13 +495,14 @@ int main(int argc, char** argv) {
   if (line.paired == line.scans)
     std::snprintf(on_pairs, sizeof on_pairs, " (%.1f on pectus's pairs)", line.efficient_paired);
   if (line.scans > 0)
-    std::fprintf(stderr,
-                 "the line (2-4 mm, overlaps >= 15 %%): %d scans, success %d; met %d (%d with the interior max), "
-                 "after the fit to the surface %d (%d); the bound alone over 0.06 mm in %d; an efficient merge "
-                 "meets the RMS part in %.1f on average%s, on every scan with chance %.2g\n",
-                 line.scans, line.success, line.met, line.met_interior_max, line.met_surface_fit,
-                 line.met_surface_fit_interior_max, line.bound_over, line.efficient, on_pairs,
-                 std::exp(line.log_every));
+    std::fprintf(
+        stderr,
+        "the line (2-4 mm, overlaps >= 15 %%): %d scans, success %d; met %d (%d with the interior max), "
+        "after the fit to the surface %d (%d); the bound alone over 0.06 mm in %d; an efficient merge "
+        "meets the RMS part in %.1f on average%s, on every scan with chance %.2g\n",
+        line.scans, line.success, line.met, line.met_interior_max, line.met_surface_fit,
+        line.met_surface_fit_interior_max, line.bound_over, line.efficient, on_pairs,
+        std::exp(line.log_every));
   std::printf("%s\n", report.dump(1).c_str());
   if (!f.png.empty())
     merge_grid::WriteGridFigure(picture, f.png,
