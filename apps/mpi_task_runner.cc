@@ -21,7 +21,8 @@ constexpr int kTaskTag = 18;     // rank 0 -> worker: a task index, or -1: no mo
 // their blocks, or rank 0 working alone) leaves its core to them, which matters whenever ranks share cores.
 void WaitGently(MPI_Request* request) {
   int finished = 0;
-  for (MPI_Test(request, &finished, MPI_STATUS_IGNORE); !finished; MPI_Test(request, &finished, MPI_STATUS_IGNORE))
+  for (MPI_Test(request, &finished, MPI_STATUS_IGNORE); !finished;
+       MPI_Test(request, &finished, MPI_STATUS_IGNORE))
     std::this_thread::sleep_for(std::chrono::microseconds(200));
 }
 
@@ -135,7 +136,8 @@ void MpiTaskRunner::ComputeBlocks(const std::vector<std::int64_t>& offsets,
                           ? table + offsets[static_cast<std::size_t>(mine_begin)]
                           : own.data();
   try {
-    TaskRunner::ComputeBlocks(mine, [&](int b, double* out) { compute(mine_begin + b, out); }, run);
+    TaskRunner::ComputeBlocks(
+        mine, [&](int b, double* out) { compute(mine_begin + b, out); }, run);
   } catch (const std::exception& e) {
     error = e.what();
     if (error.empty()) error = "a block of a shared table failed";
@@ -158,11 +160,11 @@ void MpiTaskRunner::ComputeBlocks(const std::vector<std::int64_t>& offsets,
     counts[r] = static_cast<int>(offsets[static_cast<std::size_t>(first(r + 1))]) - displacements[r];
   }
   if (!leader_only) {
-    MPI_Iallgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, table, counts.data(), displacements.data(), MPI_DOUBLE,
-                    MPI_COMM_WORLD, &request);
+    MPI_Iallgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, table, counts.data(), displacements.data(),
+                    MPI_DOUBLE, MPI_COMM_WORLD, &request);
   } else if (rank_ == 0) {
-    MPI_Igatherv(MPI_IN_PLACE, counts[0], MPI_DOUBLE, table, counts.data(), displacements.data(), MPI_DOUBLE, 0,
-                 MPI_COMM_WORLD, &request);
+    MPI_Igatherv(MPI_IN_PLACE, counts[0], MPI_DOUBLE, table, counts.data(), displacements.data(), MPI_DOUBLE,
+                 0, MPI_COMM_WORLD, &request);
   } else {
     MPI_Igatherv(run, counts[rank_], MPI_DOUBLE, nullptr, nullptr, nullptr, MPI_DOUBLE, 0, MPI_COMM_WORLD,
                  &request);

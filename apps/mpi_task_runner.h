@@ -45,8 +45,9 @@ class MpiTaskRunner : public TaskRunner {
   std::string Describe() const override;
   /// Each rank computes its run of blocks in its threads, then MPI_Allgatherv (MPI_Gatherv to rank 0 if
   /// `leader_only`); every rank learns the first block error (MPI_Allreduce, then the failed rank's text).
-  void ComputeBlocks(const std::vector<std::int64_t>& offsets, const std::function<void(int, double*)>& compute,
-                     double* table, bool leader_only = false) override;
+  void ComputeBlocks(const std::vector<std::int64_t>& offsets,
+                     const std::function<void(int, double*)>& compute, double* table,
+                     bool leader_only = false) override;
   void Broadcast(void* data, std::int64_t bytes) override;
 
  private:

@@ -59,14 +59,18 @@ ProcrustesResult GeneralisedProcrustes(const std::vector<Points3>& X, const Proc
   const Eigen::Index p = X[0].rows();
   auto sum_of = [&](const std::function<Points3(std::size_t)>& term) {
     std::vector<double> parts(static_cast<std::size_t>(blocks * 3 * p));
-    farm.ComputeBlocks(BlockOffsets(blocks, 1, 3 * p), [&](int b, double* out) {
-      Eigen::Map<Points3> part(out, p, 3);
-      part.setZero();
-      const std::int64_t end = std::min(count, (b + 1) * per_block);
-      for (std::int64_t i = b * per_block; i < end; ++i) part += term(static_cast<std::size_t>(i));
-    }, parts.data());
+    farm.ComputeBlocks(
+        BlockOffsets(blocks, 1, 3 * p),
+        [&](int b, double* out) {
+          Eigen::Map<Points3> part(out, p, 3);
+          part.setZero();
+          const std::int64_t end = std::min(count, (b + 1) * per_block);
+          for (std::int64_t i = b * per_block; i < end; ++i) part += term(static_cast<std::size_t>(i));
+        },
+        parts.data());
     Points3 sum = Points3::Zero(p, 3);
-    for (std::int64_t b = 0; b < blocks; ++b) sum += Eigen::Map<const Points3>(parts.data() + b * 3 * p, p, 3);
+    for (std::int64_t b = 0; b < blocks; ++b)
+      sum += Eigen::Map<const Points3>(parts.data() + b * 3 * p, p, 3);
     return sum;
   };
 
@@ -92,16 +96,19 @@ ProcrustesResult GeneralisedProcrustes(const std::vector<Points3>& X, const Proc
   // squared distance to the mean.
   constexpr int kWidth = 14;
   std::vector<double> last(static_cast<std::size_t>(count * kWidth));
-  farm.ComputeBlocks(BlockOffsets(count, per_block, kWidth), [&](int b, double* out) {
-    const std::int64_t end = std::min(count, (b + 1) * per_block);
-    for (std::int64_t i = b * per_block; i < end; ++i, out += kWidth) {
-      const Similarity3 T = align(static_cast<std::size_t>(i), mean);
-      out[0] = T.scale;
-      Eigen::Map<Eigen::Matrix3d>(out + 1) = T.rotation;
-      Eigen::Map<Eigen::Vector3d>(out + 10) = T.translation;
-      out[13] = (T.Apply(X[static_cast<std::size_t>(i)]) - mean).squaredNorm();
-    }
-  }, last.data());
+  farm.ComputeBlocks(
+      BlockOffsets(count, per_block, kWidth),
+      [&](int b, double* out) {
+        const std::int64_t end = std::min(count, (b + 1) * per_block);
+        for (std::int64_t i = b * per_block; i < end; ++i, out += kWidth) {
+          const Similarity3 T = align(static_cast<std::size_t>(i), mean);
+          out[0] = T.scale;
+          Eigen::Map<Eigen::Matrix3d>(out + 1) = T.rotation;
+          Eigen::Map<Eigen::Vector3d>(out + 10) = T.translation;
+          out[13] = (T.Apply(X[static_cast<std::size_t>(i)]) - mean).squaredNorm();
+        }
+      },
+      last.data());
   double sum = 0.0;
   for (std::int64_t i = 0; i < count; ++i) {
     const double* row = last.data() + i * kWidth;

@@ -194,10 +194,10 @@ Node* CopyToPool(const Node* node, Index* index) {
 KdTree3::KdTree3(const Points3& points, int leaf_size, bool parallel)
     : points_(&points),
       adaptor_(std::make_unique<Adaptor>(Adaptor{&points})),
-      index_(std::make_unique<Index>(
-          3, *adaptor_,
-          nanoflann::KDTreeSingleIndexAdaptorParams(static_cast<std::size_t>(std::max(leaf_size, 1)),
-                                                    nanoflann::KDTreeSingleIndexAdaptorFlags::SkipInitialBuildIndex))) {
+      index_(std::make_unique<Index>(3, *adaptor_,
+                                     nanoflann::KDTreeSingleIndexAdaptorParams(
+                                         static_cast<std::size_t>(std::max(leaf_size, 1)),
+                                         nanoflann::KDTreeSingleIndexAdaptorFlags::SkipInitialBuildIndex))) {
   Build(std::max(leaf_size, 1), parallel);
 }
 

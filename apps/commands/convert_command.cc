@@ -10,7 +10,9 @@ namespace {
 class ConvertCommand : public Command {
  public:
   std::string Name() const override { return "convert"; }
-  std::string Summary() const override { return "Convert between PLY, OBJ, STL, PCD, XYZ and CSV (units, transform)"; }
+  std::string Summary() const override {
+    return "Convert between PLY, OBJ, STL, PCD, XYZ and CSV (units, transform)";
+  }
   std::string Example() const override {
     return "  pectus convert ../shared/datasets/stanford_bunny/bun000.ply bun000_mm.ply --input-units m\n"
            "  pectus convert scan.stl scan.ply --transform T.json --ascii";
@@ -18,8 +20,10 @@ class ConvertCommand : public Command {
   void Configure(CLI::App* app) override {
     app->add_option("input", input_, "File to read")->required();
     app->add_option("output", output_, "File to write; the format comes from the extension")->required();
-    app->add_option("--input-units", units_, "Unit of the input's coordinates: mm, cm, m, in")->default_val("mm");
-    app->add_option("--transform", transform_, "JSON with \"T_target_source\" (4x4, mm) applied after unit scaling");
+    app->add_option("--input-units", units_, "Unit of the input's coordinates: mm, cm, m, in")
+        ->default_val("mm");
+    app->add_option("--transform", transform_,
+                    "JSON with \"T_target_source\" (4x4, mm) applied after unit scaling");
     app->add_flag("--ascii", ascii_, "Write ASCII PLY/STL instead of binary");
   }
   std::vector<std::filesystem::path> Inputs() const override {

@@ -11,7 +11,9 @@ namespace {
 class InfoCommand : public Command {
  public:
   std::string Name() const override { return "info"; }
-  std::string Summary() const override { return "Show what a geometry file holds: elements, properties, bounds, likely units"; }
+  std::string Summary() const override {
+    return "Show what a geometry file holds: elements, properties, bounds, likely units";
+  }
   std::string Example() const override {
     return "  pectus info ../shared/datasets/stanford_bunny/bun000.ply --report r.json\n"
            "  (the report carries \"points\": 40256, \"faces\", \"elements\", \"bounds\", \"likely_units\")";
@@ -60,7 +62,8 @@ class InfoCommand : public Command {
       std::printf("  element   %-12s %lld", e.name.c_str(), static_cast<long long>(e.count));
       if (!e.properties.empty()) {
         std::printf("  (");
-        for (std::size_t i = 0; i < e.properties.size(); ++i) std::printf("%s%s", i ? ", " : "", e.properties[i].c_str());
+        for (std::size_t i = 0; i < e.properties.size(); ++i)
+          std::printf("%s%s", i ? ", " : "", e.properties[i].c_str());
         std::printf(")");
       }
       std::printf("\n");
@@ -70,16 +73,17 @@ class InfoCommand : public Command {
     std::printf("  normals   %s\n  colours   %s\n", mesh.vertices.has_normals() ? "yes" : "no",
                 mesh.vertices.has_colors() ? "yes" : "no");
     if (!b.empty()) {
-      std::printf("  bounds    [%.6g %.6g %.6g] .. [%.6g %.6g %.6g]\n  extent    %.6g x %.6g x %.6g\n", b.min.x(),
-                  b.min.y(), b.min.z(), b.max.x(), b.max.y(), b.max.z(), b.extent().x(), b.extent().y(),
-                  b.extent().z());
+      std::printf("  bounds    [%.6g %.6g %.6g] .. [%.6g %.6g %.6g]\n  extent    %.6g x %.6g x %.6g\n",
+                  b.min.x(), b.min.y(), b.min.z(), b.max.x(), b.max.y(), b.max.z(), b.extent().x(),
+                  b.extent().y(), b.extent().z());
     }
-    std::printf("  units     %s\n", unit ? (ToString(*unit) + (*unit == LengthUnit::kMillimetre
-                                                                  ? " (likely)"
-                                                                  : " (likely; pass --input-units " +
-                                                                        ToString(*unit) + " to other commands)"))
-                                                 .c_str()
-                                           : "unknown");
+    std::printf("  units     %s\n",
+                unit ? (ToString(*unit) +
+                        (*unit == LengthUnit::kMillimetre
+                             ? " (likely)"
+                             : " (likely; pass --input-units " + ToString(*unit) + " to other commands)"))
+                           .c_str()
+                     : "unknown");
   }
 
  private:

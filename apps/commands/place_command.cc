@@ -17,22 +17,27 @@ namespace {
 class PlaceCommand : public Command {
  public:
   std::string Name() const override { return "place"; }
-  std::string Summary() const override { return "Place sweeps by the poses of a .conf file and write one merged cloud"; }
+  std::string Summary() const override {
+    return "Place sweeps by the poses of a .conf file and write one merged cloud";
+  }
   std::string Example() const override {
     return "  pectus place --poses ../shared/datasets/stanford_bunny/bun.conf --input-units m \\\n"
            "      -o bunny_placed.ply --report placed.json\n"
            "  (reads every file the .conf lists, beside it; each point gets a 'sweep' scalar)";
   }
   void Configure(CLI::App* app) override {
-    app->add_option("--poses", conf_, "Stanford .conf: bmesh FILE tx ty tz qx qy qz qw per sweep")->required();
+    app->add_option("--poses", conf_, "Stanford .conf: bmesh FILE tx ty tz qx qy qz qw per sweep")
+        ->required();
     app->add_option("sweeps", sweeps_, "Only these sweeps (file names as in the .conf); default all");
     app->add_option("-o,--output", output_, "Merged cloud to write (.ply keeps the sweep index)")->required();
-    app->add_option("--input-units", units_, "Unit of the sweeps and of the .conf translations: mm, cm, m, in")
+    app->add_option("--input-units", units_,
+                    "Unit of the sweeps and of the .conf translations: mm, cm, m, in")
         ->default_val("mm");
   }
   std::vector<std::filesystem::path> Inputs() const override {
     std::vector<std::filesystem::path> in{conf_};
-    for (const auto& p : ReadStanfordConf(conf_)) in.push_back(std::filesystem::path(conf_).parent_path() / p.file);
+    for (const auto& p : ReadStanfordConf(conf_))
+      in.push_back(std::filesystem::path(conf_).parent_path() / p.file);
     return in;
   }
 
@@ -45,7 +50,8 @@ class PlaceCommand : public Command {
       std::vector<ScanPose> chosen;
       for (const auto& s : sweeps_) {
         auto it = std::find_if(poses.begin(), poses.end(), [&](const ScanPose& p) {
-          return p.file == s || std::filesystem::path(p.file).filename() == std::filesystem::path(s).filename();
+          return p.file == s ||
+                 std::filesystem::path(p.file).filename() == std::filesystem::path(s).filename();
         });
         if (it == poses.end()) ThrowBadInput(conf_, "has no pose for sweep '" + s + "'");
         chosen.push_back(*it);
@@ -92,8 +98,10 @@ class PlaceCommand : public Command {
     context->report["sweeps"] = sweeps;
     context->report["points"] = merged.size();
     context->report["output"] = output_;
-    context->report["bounds_mm"] = {{"min", {b.min.x(), b.min.y(), b.min.z()}}, {"max", {b.max.x(), b.max.y(), b.max.z()}}};
-    Info("placed " + std::to_string(poses.size()) + " sweeps, " + std::to_string(merged.size()) + " points -> " + output_);
+    context->report["bounds_mm"] = {{"min", {b.min.x(), b.min.y(), b.min.z()}},
+                                    {"max", {b.max.x(), b.max.y(), b.max.z()}}};
+    Info("placed " + std::to_string(poses.size()) + " sweeps, " + std::to_string(merged.size()) +
+         " points -> " + output_);
   }
 
  private:

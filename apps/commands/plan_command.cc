@@ -89,7 +89,8 @@ class PlanCommand : public Command {
            "    (scenario B is 20 mm nearer the notch unless --compare-position is given; the best placement "
            "is\n"
            "     searched unless --no-search; open plan57/report.html)\n"
-           "  pectus plan --patient-table nuss_ct_parameters.csv --patient 57 --model average.h5 --out plan57/ \\\n"
+           "  pectus plan --patient-table nuss_ct_parameters.csv --patient 57 --model average.h5 --out "
+           "plan57/ \\\n"
            "      --basis bases.h5\n"
            "    (the search on the patient's stored response basis: `pectus surrogate build`)\n"
            "  pectus plan --patient-table nuss_ct_parameters.csv --dataset fem_dataset.h5 --report d.json\n"
@@ -229,7 +230,8 @@ void PlanCommand::Plan(const PlannerPlugin& plugin, Context* context) {
   if (search_ && !search_direct_) {
     // The exact response basis, for the search: every position it tries costs a product, not a solve.
     auto t = report.Stage("response_basis");
-    const PectusPlannerBasisSummary basis = basis_.empty() ? planner->BuildBasis() : planner->LoadBasis(basis_);
+    const PectusPlannerBasisSummary basis =
+        basis_.empty() ? planner->BuildBasis() : planner->LoadBasis(basis_);
     report["response_basis"] = {{"rank", basis.rank},
                                 {"contact_nodes", basis.contact_nodes},
                                 {"points", basis.points},

@@ -15,16 +15,20 @@ namespace {
 class RenderCommand : public Command {
  public:
   std::string Name() const override { return "render"; }
-  std::string Summary() const override { return "Draw a mesh or point cloud to a PNG, coloured by a scalar if asked"; }
+  std::string Summary() const override {
+    return "Draw a mesh or point cloud to a PNG, coloured by a scalar if asked";
+  }
   std::string Example() const override {
     return "  pectus render surface.ply -o surface.png --view front\n"
-           "  pectus render distance.ply -o distance.png --scalar distance_mm --range -5,5 --colormap diverging\n"
+           "  pectus render distance.ply -o distance.png --scalar distance_mm --range -5,5 --colormap "
+           "diverging\n"
            "  pectus render ../shared/datasets/stanford_bunny/bun000.ply -o bun000.png --input-units m";
   }
   void Configure(CLI::App* app) override {
     app->add_option("file", input_, "PLY, OBJ, STL, PCD, XYZ or CSV file")->required();
     app->add_option("-o,--output", output_, "PNG to write")->required();
-    app->add_option("--view", view_, "front (look along -z, y up), side (along -x), back, top, or yaw,pitch in degrees")
+    app->add_option("--view", view_,
+                    "front (look along -z, y up), side (along -x), back, top, or yaw,pitch in degrees")
         ->default_val("front");
     app->add_option("--size", size_, "Picture width and height in pixels")->default_val(800);
     app->add_option("--scalar", scalar_, "Colour by this per-vertex scalar (see `pectus info`)");
@@ -32,7 +36,8 @@ class RenderCommand : public Command {
         ->delimiter(',')
         ->expected(2);
     app->add_option("--colormap", colormap_, "viridis, diverging or turbo")->default_val("viridis");
-    app->add_option("--input-units", units_, "Unit of the file's coordinates: mm, cm, m, in")->default_val("mm");
+    app->add_option("--input-units", units_, "Unit of the file's coordinates: mm, cm, m, in")
+        ->default_val("mm");
     app->add_option("--point-radius", point_radius_, "Pixels, for point clouds")->default_val(1);
   }
   std::vector<std::filesystem::path> Inputs() const override { return {input_}; }
@@ -58,7 +63,8 @@ class RenderCommand : public Command {
       if (it == mesh.vertices.scalars.end()) {
         std::string names;
         for (const auto& [name, v] : mesh.vertices.scalars) names += (names.empty() ? "" : ", ") + name;
-        ThrowBadInput(input_, "no per-vertex scalar '" + scalar_ + "' (it has: " + (names.empty() ? "none" : names) + ")");
+        ThrowBadInput(input_, "no per-vertex scalar '" + scalar_ +
+                                  "' (it has: " + (names.empty() ? "none" : names) + ")");
       }
       double lo = std::numeric_limits<double>::infinity(), hi = -lo;
       if (range_.size() == 2) {
@@ -101,8 +107,8 @@ class RenderCommand : public Command {
     const auto comma = view_.find(',');
     if (comma != std::string::npos) {
       try {
-        return render::View::Oblique(std::stod(view_.substr(0, comma)), std::stod(view_.substr(comma + 1)), size_,
-                                     size_);
+        return render::View::Oblique(std::stod(view_.substr(0, comma)), std::stod(view_.substr(comma + 1)),
+                                     size_, size_);
       } catch (const std::exception&) {
       }
     }

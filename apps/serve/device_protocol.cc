@@ -105,8 +105,8 @@ bool DecodeDeviceForce(const unsigned char* data, std::size_t size, DeviceForceM
   return true;
 }
 
-DeviceProtocolServer::DeviceProtocolServer(TrainerSessions* sessions, std::string token, const std::string& host,
-                                           int port)
+DeviceProtocolServer::DeviceProtocolServer(TrainerSessions* sessions, std::string token,
+                                           const std::string& host, int port)
     : sessions_(sessions), token_(std::move(token)) {
   fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
   if (fd_ < 0) ThrowFailure("the device protocol: cannot make a UDP socket");
@@ -153,10 +153,10 @@ void DeviceProtocolServer::Serve() {
     } else {
       PectusPlannerTrainerTick tick{};
       const Eigen::Vector3d position(state.position_mm[0], state.position_mm[1], state.position_mm[2]);
-      const Eigen::Quaterniond q(state.orientation_wxyz[0], state.orientation_wxyz[1], state.orientation_wxyz[2],
-                                 state.orientation_wxyz[3]);
-      reply.status = sessions_->DriverMove(std::to_string(state.session), position, q.normalized(), state.buttons,
-                                           &tick);
+      const Eigen::Quaterniond q(state.orientation_wxyz[0], state.orientation_wxyz[1],
+                                 state.orientation_wxyz[2], state.orientation_wxyz[3]);
+      reply.status = sessions_->DriverMove(std::to_string(state.session), position, q.normalized(),
+                                           state.buttons, &tick);
       if (reply.status == kDeviceOk) {
         for (int k = 0; k < 3; ++k) {
           reply.force_n[k] = tick.force_n[k];

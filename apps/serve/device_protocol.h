@@ -11,8 +11,8 @@
 //   44  u32     sequence (the driver's count)    16  f64[3]  force, N (scene frame)
 //   48  f64[3]  tip position, mm (scene frame)   40  f64[3]  torque, N mm
 //   72  f64[4]  orientation w, x, y, z           64  f64[3]  the proxy (the tip as drawn), mm
-//   104 u32     buttons (bit i: button i)        88  u32     organs touched (bit 0 bone, 1 pericardium, 2 lung)
-//   108 u32     0                                92  u32     status (below)
+//   104 u32     buttons (bit i: button i)        88  u32     organs touched (bit 0 bone, 1 pericardium, 2
+//   lung) 108 u32     0                                92  u32     status (below)
 //
 // The state becomes the session's device at once (no gliding: the driver sends at its own servo rate, up
 // to 1 kHz); the force is that of the servo loop's latest tick. Status: 0 ok, 1 no such session, 2 wrong

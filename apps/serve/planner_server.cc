@@ -21,8 +21,8 @@
 #include <utility>
 #include <vector>
 
-#include "apps/serve/planner_page_files.h"
 #include "apps/serve/device_protocol.h"
+#include "apps/serve/planner_page_files.h"
 #include "apps/serve/trainer_sessions.h"
 #include "planner_plugin/host/average_chest.h"
 #include "planner_plugin/host/chest_registration.h"
@@ -259,10 +259,10 @@ struct PlannerServer::State {
   std::list<std::pair<std::string, std::shared_ptr<PatientSession>>> cache;  // most recent first
   httplib::Server http;
   std::thread thread;
-  std::vector<std::string> ids;  // the table's, in its order
-  std::thread prepare;           // Prepare()'s
-  std::string prepare_failure;   // its reason if it could not (read after prepare is joined)
-  std::unique_ptr<TrainerSessions> trainers;  // the trainer's sessions (issue 16)
+  std::vector<std::string> ids;                   // the table's, in its order
+  std::thread prepare;                            // Prepare()'s
+  std::string prepare_failure;                    // its reason if it could not (read after prepare is joined)
+  std::unique_ptr<TrainerSessions> trainers;      // the trainer's sessions (issue 16)
   std::unique_ptr<DeviceProtocolServer> devices;  // their outside drivers (--device-port)
   int port = 0;
   std::mutex run_mutex;
@@ -681,19 +681,17 @@ json PlannerServer::State::BarOutcome(const std::string& id, double level_z_mm) 
   const double force = p.measurements().depression_mm / per_n;
   const std::vector<PlannedCase> cases = p.Deform({{mm, true, force}}, false);
   const PlanScore score = s->scorer->Score(cases[0].skin);
-  return {{"position_mm", mm},
-          {"position", mm / length},
-          {"force_n", force},
-          {"sternum_lift_mm", cases[0].figures.sternum_lift_mm},
-          {"score", score.ToJson()},
-          {"before", s->before.ToJson()}};
+  return {{"position_mm", mm},       {"position", mm / length},
+          {"force_n", force},        {"sternum_lift_mm", cases[0].figures.sternum_lift_mm},
+          {"score", score.ToJson()}, {"before", s->before.ToJson()}};
 }
 
 void PlannerServer::State::TrainerRoutes() {
   http.Post("/api/trainer/start", [this](const httplib::Request& req, httplib::Response& res) {
     const json body = ParseBody(req);
     const auto id = body.find("patient");
-    if (id == body.end() || !id->is_string()) throw HttpError(400, "patient must be a string (an id of the table)");
+    if (id == body.end() || !id->is_string())
+      throw HttpError(400, "patient must be a string (an id of the table)");
     std::string introducer = "medium";
     if (body.contains("introducer")) {
       const json& i = body.at("introducer");

@@ -25,10 +25,10 @@ struct PlannerServerOptions {
   std::filesystem::path patient_table;    ///< CSV of CT measurements (required)
   std::filesystem::path model;            ///< the average chest: a statismo model .h5 (required)
   std::filesystem::path model_landmarks;  ///< its landmarks, if the model has none (optional)
-  std::filesystem::path basis;           ///< bases.h5 of `pectus surrogate build`: load, not build (optional)
-  std::filesystem::path plugin;          ///< the planner plugin (empty: beside pectus)
-  std::string host = "127.0.0.1";        ///< address bound; loopback only unless asked otherwise
-  int port = 8765;                       ///< 0: a free port, told by port() and url()
+  std::filesystem::path basis;     ///< bases.h5 of `pectus surrogate build`: load, not build (optional)
+  std::filesystem::path plugin;    ///< the planner plugin (empty: beside pectus)
+  std::string host = "127.0.0.1";  ///< address bound; loopback only unless asked otherwise
+  int port = 8765;                 ///< 0: a free port, told by port() and url()
   /// UDP port of the trainer's device protocol for outside drivers (device_protocol.h): -1 none (the
   /// default), 0 a free one, told by device_port()
   int device_port = -1;

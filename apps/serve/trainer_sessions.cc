@@ -75,8 +75,11 @@ json TrainerScoreJson(const PectusPlannerTrainerScore& s, const PectusPlannerTun
 // ---- the device ----------------------------------------------------------------------------------------
 
 PointerDevice::PointerDevice(const Eigen::Vector3d& start_mm, const Eigen::Vector3d& axis)
-    : from_(start_mm), to_(start_mm), anchor_(start_mm - 20.0 * axis.normalized()),
-      moved_at_(Clock::now()), previous_move_(moved_at_) {
+    : from_(start_mm),
+      to_(start_mm),
+      anchor_(start_mm - 20.0 * axis.normalized()),
+      moved_at_(Clock::now()),
+      previous_move_(moved_at_) {
   last_ = StateAt(moved_at_);
 }
 
@@ -116,9 +119,9 @@ PectusPlannerDeviceState PointerDevice::StateAt(Clock::time_point now) {
   const Eigen::Vector3d p = from_ + s * (to_ - from_);
   Eigen::Vector3d axis = p - anchor_;
   if (axis.norm() < 1e-6) axis = Eigen::Vector3d::UnitX();
-  const Eigen::Quaterniond q = has_orientation_ ? orientation_
-                                                : Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(),
-                                                                                     axis.normalized());
+  const Eigen::Quaterniond q =
+      has_orientation_ ? orientation_
+                       : Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), axis.normalized());
   PectusPlannerDeviceState out{};
   for (int k = 0; k < 3; ++k) out.position_mm[k] = p[k];
   out.orientation_wxyz[0] = q.w();
@@ -139,9 +142,12 @@ void PointerDevice::Read(void* user, double time_s, PectusPlannerDeviceState* ou
   out->time_s = time_s;
 }
 
-PectusPlannerDevice PointerDevice::Callbacks() { return {this, &PointerDevice::Read, &PointerDevice::SetForce}; }
+PectusPlannerDevice PointerDevice::Callbacks() {
+  return {this, &PointerDevice::Read, &PointerDevice::SetForce};
+}
 
-// ---- the sessions -------------------------------------------------------------------------------------------
+// ---- the sessions
+// -------------------------------------------------------------------------------------------
 
 struct TrainerSessions::Session {
   std::mutex mutex;  // one request at a time per session
@@ -246,7 +252,8 @@ json TrainerSessions::Start(const planner::PlannerClient& planner, const std::st
   s->trainer->Start(s->device->Callbacks());
   s->running = true;
   json tunnel_points = json::array();
-  for (Eigen::Index i = 0; i < points.rows(); ++i) tunnel_points.push_back(Vec(Eigen::Vector3d(points.row(i))));
+  for (Eigen::Index i = 0; i < points.rows(); ++i)
+    tunnel_points.push_back(Vec(Eigen::Vector3d(points.row(i))));
   json meshes = json::object();
   const char* names[] = {"pericardium", "right_lung", "left_lung"};
   for (int part = 1; part <= 3; ++part) {
@@ -273,7 +280,8 @@ std::shared_ptr<TrainerSessions::Session> TrainerSessions::Find(const std::strin
   std::lock_guard<std::mutex> lock(mutex_);
   Expire();
   const auto it = sessions_.find(id);
-  if (it == sessions_.end()) ThrowUsage("no trainer session '" + id + "' (finished long ago, or never started)");
+  if (it == sessions_.end())
+    ThrowUsage("no trainer session '" + id + "' (finished long ago, or never started)");
   return it->second;
 }
 
@@ -285,7 +293,8 @@ std::string TrainerSessions::Meshes(const std::string& id) {
   return out;
 }
 
-json TrainerSessions::Device(const std::string& id, const Eigen::Vector3d& position_mm, std::uint32_t buttons) {
+json TrainerSessions::Device(const std::string& id, const Eigen::Vector3d& position_mm,
+                             std::uint32_t buttons) {
   const auto s = Find(id);
   std::lock_guard<std::mutex> lock(s->mutex);
   s->last_used = Clock::now();
@@ -330,8 +339,8 @@ json TrainerSessions::Device(const std::string& id, const Eigen::Vector3d& posit
 }
 
 std::uint32_t TrainerSessions::DriverMove(const std::string& id, const Eigen::Vector3d& position_mm,
-                                         const Eigen::Quaterniond& orientation, std::uint32_t buttons,
-                                         PectusPlannerTrainerTick* tick) {
+                                          const Eigen::Quaterniond& orientation, std::uint32_t buttons,
+                                          PectusPlannerTrainerTick* tick) {
   std::shared_ptr<Session> s;
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -356,7 +365,8 @@ json TrainerSessions::Finish(const std::string& id) {
 std::string TrainerSessions::Record(const std::string& id) {
   const auto s = Find(id);
   std::lock_guard<std::mutex> lock(s->mutex);
-  if (s->report.is_null()) ThrowUsage("trainer session " + id + " is not finished: its record is not complete");
+  if (s->report.is_null())
+    ThrowUsage("trainer session " + id + " is not finished: its record is not complete");
   return s->record;
 }
 

@@ -70,7 +70,8 @@ class TrainerSessions {
   std::string Meshes(const std::string& session);
   /// Moves the device (position in mm, buttons) and answers the latest tick, the scope's view and the
   /// score so far (recomputed at most five times a second).
-  nlohmann::json Device(const std::string& session, const Eigen::Vector3d& position_mm, std::uint32_t buttons);
+  nlohmann::json Device(const std::string& session, const Eigen::Vector3d& position_mm,
+                        std::uint32_t buttons);
   /// A driver's device state (device_protocol.h): the session's device set to it; the latest tick into
   /// `tick`. Returns a DeviceProtocolStatus (0 ok, 1 no such session, 3 finished). Quick: no JSON.
   std::uint32_t DriverMove(const std::string& session, const Eigen::Vector3d& position_mm,

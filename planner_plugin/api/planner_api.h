@@ -224,10 +224,10 @@ typedef struct PectusPlannerEmulatorEvaluation {
 
 /** A haptic device's reading (CHAI3D's generic device in spirit). Scene frame (LPS, mm). */
 typedef struct PectusPlannerDeviceState {
-  double time_s;               /**< since the session's start */
-  double position_mm[3];       /**< the tool's tip */
-  double orientation_wxyz[4];  /**< unit quaternion; the tool's axis, handle to tip, is R (0, 0, 1) */
-  uint32_t buttons;            /**< bit i: button i pressed */
+  double time_s;              /**< since the session's start */
+  double position_mm[3];      /**< the tool's tip */
+  double orientation_wxyz[4]; /**< unit quaternion; the tool's axis, handle to tip, is R (0, 0, 1) */
+  uint32_t buttons;           /**< bit i: button i pressed */
 } PectusPlannerDeviceState;
 
 /** The host's haptic device, called by the plugin's servo thread (trainer_start): `read` gives the state
@@ -241,15 +241,15 @@ typedef struct PectusPlannerDevice {
 
 /** One servo tick's outcome. */
 typedef struct PectusPlannerTrainerTick {
-  int64_t tick;                 /**< ticks of the session so far, this one included */
+  int64_t tick; /**< ticks of the session so far, this one included */
   double time_s;
-  double device_mm[3];          /**< the device's tip (the proxy's goal) */
-  double proxy_mm[3];           /**< the introducer's tip as drawn: never inside a surface */
-  double axis[3];               /**< the introducer's axis, handle to tip */
-  double force_n[3];            /**< sent to the device */
-  double torque_nmm[3];         /**< sent to the device: the shaft's forces about the tip */
-  uint32_t organs_touched;      /**< bit 0 bone, bit 1 pericardium, bit 2 lung */
-  double pericardium_force_n;   /**< the force the pericardium takes */
+  double device_mm[3];            /**< the device's tip (the proxy's goal) */
+  double proxy_mm[3];             /**< the introducer's tip as drawn: never inside a surface */
+  double axis[3];                 /**< the introducer's axis, handle to tip */
+  double force_n[3];              /**< sent to the device */
+  double torque_nmm[3];           /**< sent to the device: the shaft's forces about the tip */
+  uint32_t organs_touched;        /**< bit 0 bone, bit 1 pericardium, bit 2 lung */
+  double pericardium_force_n;     /**< the force the pericardium takes */
   double pericardium_distance_mm; /**< from the proxy to the pericardium */
 } PectusPlannerTrainerTick;
 
@@ -265,7 +265,7 @@ typedef struct PectusPlannerTunnel {
   double scope_port_mm[3]; /**< where the thoracoscope enters (the right space below the entry) */
   double level_z_mm;       /**< the bar's level: the slice of deepest depression */
   double length_mm;
-  int64_t num_points;      /**< of the polyline (tunnel_points) */
+  int64_t num_points; /**< of the polyline (tunnel_points) */
 } PectusPlannerTunnel;
 
 /** A session's scores (docs/trainer.md, "Scores": each a definition over the recorded ticks). */
@@ -292,8 +292,8 @@ typedef struct PectusPlannerLoopStatistics {
 typedef struct PectusPlannerScopeView {
   double orientation_wxyz[4]; /**< R: the scope's axis, handle to tip, is R (0, 0, 1) */
   double insertion_mm;
-  double eye_mm[3];           /**< the camera at the scope's tip */
-  double forward[3], up[3];   /**< the view direction and the image's up, unit */
+  double eye_mm[3];         /**< the camera at the scope's tip */
+  double forward[3], up[3]; /**< the view direction and the image's up, unit */
   double horizontal_fov_deg, vertical_fov_deg;
   int32_t width_px, height_px;
   double focal_px;
@@ -472,8 +472,8 @@ typedef struct PectusPlannerInterface {
                                   PectusPlannerStatus* status);
   /** Replays the record at `path` in this trainer's scene (it must be this patient's) and scores it: the
    *  session's scores bit for bit if it is this session's record. */
-  int32_t (*trainer_replay)(const PectusPlannerTrainer* trainer, const char* path, PectusPlannerTrainerScore* out,
-                            PectusPlannerStatus* status);
+  int32_t (*trainer_replay)(const PectusPlannerTrainer* trainer, const char* path,
+                            PectusPlannerTrainerScore* out, PectusPlannerStatus* status);
   /** The thoracoscope's view at the scope port: with `orientation_wxyz` (the tracked scope's R) as given;
    *  with NULL aimed so that the oblique view's centre looks at `target_mm` (NULL: the proxy of the latest
    *  tick), the image's up as near the patient's head as it can be. `insertion_mm` from the port to the

@@ -86,7 +86,8 @@ Eigen::VectorXd DepthProbe::Depth(const Projected& projected, const Faces3& face
   const Eigen::MatrixX2d& uv = projected.uv;
   const Eigen::VectorXd& h = projected.h;
   // Points outside the surface's box across the direction miss it.
-  const Eigen::Vector2d box_lo = uv.colwise().minCoeff().transpose(), box_hi = uv.colwise().maxCoeff().transpose();
+  const Eigen::Vector2d box_lo = uv.colwise().minCoeff().transpose(),
+                        box_hi = uv.colwise().maxCoeff().transpose();
   auto clamp_u = [&](double value) { return BinOf(value, lo_.x(), scale_.x(), nu_); };
   auto clamp_v = [&](double value) { return BinOf(value, lo_.y(), scale_.y(), nv_); };
   constexpr double kEps = 1e-9;  // barycentric tolerance: a point on an edge belongs to both faces
@@ -94,9 +95,11 @@ Eigen::VectorXd DepthProbe::Depth(const Projected& projected, const Faces3& face
   // face's stays.
   for (Eigen::Index f = 0; f < faces.rows(); ++f) {
     const int i0 = faces(f, 0), i1 = faces(f, 1), i2 = faces(f, 2);
-    const Eigen::Vector2d a0 = uv.row(i0).transpose(), a1 = uv.row(i1).transpose(), a2 = uv.row(i2).transpose();
+    const Eigen::Vector2d a0 = uv.row(i0).transpose(), a1 = uv.row(i1).transpose(),
+                          a2 = uv.row(i2).transpose();
     const Eigen::Vector2d fmin = a0.cwiseMin(a1).cwiseMin(a2), fmax = a0.cwiseMax(a1).cwiseMax(a2);
-    if (fmax.x() < lo_.x() || fmin.x() > hi_.x() || fmax.y() < lo_.y() || fmin.y() > hi_.y()) continue;  // no point
+    if (fmax.x() < lo_.x() || fmin.x() > hi_.x() || fmax.y() < lo_.y() || fmin.y() > hi_.y())
+      continue;  // no point
     const Eigen::Vector2d e1 = a1 - a0, e2 = a2 - a0;
     const double det = e1.x() * e2.y() - e1.y() * e2.x();
     if (std::abs(det) < 1e-15) continue;  // seen edge-on
@@ -110,7 +113,8 @@ Eigen::VectorXd DepthProbe::Depth(const Projected& projected, const Faces3& face
         const double qu = binned_uv_[2 * static_cast<std::size_t>(s)],
                      qv = binned_uv_[2 * static_cast<std::size_t>(s) + 1];
         // Within the face's box (widened by the barycentric tolerance's reach) and the surface's.
-        if (qu < fmin.x() - reach || qu > fmax.x() + reach || qv < fmin.y() - reach || qv > fmax.y() + reach) continue;
+        if (qu < fmin.x() - reach || qu > fmax.x() + reach || qv < fmin.y() - reach || qv > fmax.y() + reach)
+          continue;
         if (qu < box_lo.x() || qu > box_hi.x() || qv < box_lo.y() || qv > box_hi.y()) continue;
         const std::int32_t k = order_[static_cast<std::size_t>(s)];
         const double du = qu - a0.x(), dv = qv - a0.y();

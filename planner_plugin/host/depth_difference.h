@@ -43,7 +43,8 @@ class DepthProbe {
   Eigen::VectorXd h_;          // per point: height along a_
   // Bins of the points over their (u, v) box: bin (i, j) holds points start_[i nv + j] .. start_[.. + 1]
   // of order_.
-  Eigen::Vector2d lo_ = Eigen::Vector2d::Zero(), hi_ = Eigen::Vector2d::Zero(), scale_ = Eigen::Vector2d::Zero();
+  Eigen::Vector2d lo_ = Eigen::Vector2d::Zero(), hi_ = Eigen::Vector2d::Zero(),
+                  scale_ = Eigen::Vector2d::Zero();
   int nu_ = 0, nv_ = 0;
   std::vector<std::int32_t> start_, order_;
   std::vector<double> binned_uv_;  // (u, v) of order_[s] at 2 s, 2 s + 1: the bins' points side by side

@@ -53,8 +53,8 @@ struct PlacementSearchResult {
   int position_at_edge = 0;
   bool force_at_limit = false;
   PlanScore best_score;
-  int evaluations = 0;  ///< chests scored
-  int solves = 0;       ///< positions solved by the plugin (from its basis if it has one)
+  int evaluations = 0;      ///< chests scored
+  int solves = 0;           ///< positions solved by the plugin (from its basis if it has one)
   bool from_basis = false;  ///< the unit responses came from the plugin's exact response basis
   /// Wall time, s: "search" (the grid and its refinement), within it "unit_responses" (the plugin's
   /// responses to 1 N) and "scoring" (the chests scored against the average).

@@ -23,7 +23,8 @@ DistanceStats StatsOf(const Eigen::VectorXd& values, const Eigen::Matrix<bool, E
 // Points (#points by 3) moved by T.
 Points3 ToAverage(const Similarity3& T, const Points3& x) {
   Points3 y(x.rows(), 3);
-  for (Eigen::Index i = 0; i < x.rows(); ++i) y.row(i) = (T * Eigen::Vector3d(x.row(i).transpose())).transpose();
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    y.row(i) = (T * Eigen::Vector3d(x.row(i).transpose())).transpose();
   return y;
 }
 

@@ -89,8 +89,9 @@ class PlanScorer {
  public:
   /// Arguments as ScorePlan's (`skin` gives the faces; its vertices are not used). The scorer keeps
   /// references to `average`, which must outlive it. Throws as ScorePlan.
-  PlanScorer(const TriangleMesh& skin, const Points3& without_deformity, const ChestRegistrationResult& registration,
-             const AverageChest& average, const PlanScoreOptions& options = {});
+  PlanScorer(const TriangleMesh& skin, const Points3& without_deformity,
+             const ChestRegistrationResult& registration, const AverageChest& average,
+             const PlanScoreOptions& options = {});
   /// The score of the skin with vertices `positions` (#skin vertices by 3, patient frame, mm).
   PlanScore Score(const Points3& positions) const;
   /// Score(positions).roi.rms (or .central_roi.rms if `central`) alone, as a search needs it, mm.
@@ -109,10 +110,10 @@ class PlanScorer {
   const AverageChest* average_;
   PlanScoreOptions options_;
   ChestRegistrationResult registration_;
-  TriangleMesh moved_;                // the skin's faces; vertices set per Score()
-  Eigen::Vector3d anterior_;          // of the average chest
-  DepthProbe probe_;                  // the average chest's vertices along anterior_
-  Eigen::VectorXd reference_depth_;   // relative model: depth of the skin without the deformity
+  TriangleMesh moved_;               // the skin's faces; vertices set per Score()
+  Eigen::Vector3d anterior_;         // of the average chest
+  DepthProbe probe_;                 // the average chest's vertices along anterior_
+  Eigen::VectorXd reference_depth_;  // relative model: depth of the skin without the deformity
   Eigen::Matrix<bool, Eigen::Dynamic, 1> central_;
   double RmsOf(Eigen::VectorXd difference, bool central) const;  // of a depth over the average chest
 };

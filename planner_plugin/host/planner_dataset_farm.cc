@@ -67,8 +67,8 @@ class PartStore {
 
 // The leader's part of BuildPlannerDatasetOnFarm: the patients' outcomes, and the dataset from the parts
 // of those that made it, in table order.
-void Assemble(const PlannerPlugin& plugin, const fs::path& table, const fs::path& output, const PartStore& parts,
-              int n, DatasetFarmResult* result) {
+void Assemble(const PlannerPlugin& plugin, const fs::path& table, const fs::path& output,
+              const PartStore& parts, int n, DatasetFarmResult* result) {
   std::vector<std::string> paths;
   for (int i = 0; i < n; ++i) {
     result->patients.push_back(parts.Outcome(i));

@@ -8,8 +8,8 @@ TrainerClient::TrainerClient(const PlannerClient& planner, const PlannerPlugin& 
                              const std::string& introducer, std::int64_t capacity_ticks)
     : api_(&plugin.api()) {
   PectusPlannerStatus status{};
-  ThrowIfFailed(api_->trainer_create(planner.handle(), introducer.c_str(), capacity_ticks, &trainer_, &status),
-                status);
+  ThrowIfFailed(
+      api_->trainer_create(planner.handle(), introducer.c_str(), capacity_ticks, &trainer_, &status), status);
   try {
     ThrowIfFailed(api_->trainer_tunnel(trainer_, &tunnel_, nullptr, 0, &status), status);
     tunnel_points_.resize(tunnel_.num_points, 3);
@@ -70,7 +70,8 @@ PectusPlannerTrainerScore TrainerClient::Replay(const std::filesystem::path& pat
   return out;
 }
 
-PectusPlannerScopeView TrainerClient::ScopeViewAt(const Eigen::Vector3d& target_mm, double insertion_mm) const {
+PectusPlannerScopeView TrainerClient::ScopeViewAt(const Eigen::Vector3d& target_mm,
+                                                  double insertion_mm) const {
   PectusPlannerStatus status{};
   PectusPlannerScopeView out{};
   const double target[3] = {target_mm.x(), target_mm.y(), target_mm.z()};

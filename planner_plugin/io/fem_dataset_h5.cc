@@ -163,7 +163,8 @@ FemDatasetWriter::~FemDatasetWriter() {
 
 double RestChecksum(const Eigen::VectorXd& rest_positions) {
   double sum = 0.0;
-  for (Eigen::Index i = 0; i < rest_positions.size(); ++i) sum += rest_positions[i] * static_cast<double>(1 + i % 7);
+  for (Eigen::Index i = 0; i < rest_positions.size(); ++i)
+    sum += rest_positions[i] * static_cast<double>(1 + i % 7);
   return sum;
 }
 
@@ -177,10 +178,16 @@ void WriteResponseBasis(hid_t patient, const StoredResponseBasis& b, const std::
   const BarResponseBasis::Stored& s = b.arrays;
   const hid_t group = Group(patient, "response_basis", path);
   WriteAttribute(group, "scalars_order", kBasisScalars, path);
-  const double scalars[10] = {static_cast<double>(s.num_points), s.contact_width_mm, s.notch_z_mm,
-                              s.sternal_length_mm, s.truncation_bound_mm_per_n, static_cast<double>(b.bone_vertices),
-                              static_cast<double>(b.skin_vertices), static_cast<double>(b.skin_landmarks),
-                              static_cast<double>(b.mesh_nodes), b.rest_checksum_mm};
+  const double scalars[10] = {static_cast<double>(s.num_points),
+                              s.contact_width_mm,
+                              s.notch_z_mm,
+                              s.sternal_length_mm,
+                              s.truncation_bound_mm_per_n,
+                              static_cast<double>(b.bone_vertices),
+                              static_cast<double>(b.skin_vertices),
+                              static_cast<double>(b.skin_landmarks),
+                              static_cast<double>(b.mesh_nodes),
+                              b.rest_checksum_mm};
   WriteDataset(group, "scalars", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {10}, scalars, path);
   using RowMajorF = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   using RowMajorD = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -191,8 +198,8 @@ void WriteResponseBasis(hid_t patient, const StoredResponseBasis& b, const std::
   const auto dims = [](Eigen::Index rows, Eigen::Index cols) {
     return std::vector<hsize_t>{static_cast<hsize_t>(rows), static_cast<hsize_t>(cols)};
   };
-  WriteDataset(group, "modes", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, dims(modes.rows(), modes.cols()), modes.data(),
-               path);
+  WriteDataset(group, "modes", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, dims(modes.rows(), modes.cols()),
+               modes.data(), path);
   WriteDataset(group, "mixing", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, dims(mixing.rows(), mixing.cols()),
                mixing.data(), path);
   WriteDataset(group, "lift", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {static_cast<hsize_t>(s.lift.size())},
@@ -374,7 +381,8 @@ template <typename Out>
 void WholeNumbers(const Reader& r, const std::vector<double>& values, const std::string& path, Out* out) {
   for (std::size_t i = 0; i < values.size(); ++i) {
     const double v = values[i];
-    if (v != std::floor(v) || std::abs(v) > 2e9) r.Bad("/" + path + " holds " + std::to_string(v) + ", not an index");
+    if (v != std::floor(v) || std::abs(v) > 2e9)
+      r.Bad("/" + path + " holds " + std::to_string(v) + ", not an index");
     (*out)[static_cast<Eigen::Index>(i)] = static_cast<std::int32_t>(v);
   }
 }
@@ -408,7 +416,8 @@ StoredResponseBasis ReadResponseBasis(const Reader& r, const std::string& group,
     return extent;
   };
   std::vector<hsize_t> shape;
-  const std::vector<double> modes = r.Numbers(g + "modes", {static_cast<hsize_t>(3 * s.num_points), 0}, &shape);
+  const std::vector<double> modes =
+      r.Numbers(g + "modes", {static_cast<hsize_t>(3 * s.num_points), 0}, &shape);
   const auto rank = static_cast<Eigen::Index>(positive(shape[1], "modes"));
   s.modes = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
                 modes.data(), 3 * s.num_points, rank)
@@ -527,7 +536,8 @@ StoredResponseBasis ReadStoredResponseBasis(const std::filesystem::path& path, c
   if (patient.empty() || patient.find('/') != std::string::npos || !r.Exists("patients/" + patient))
     r.Bad("has no patient '" + patient + "' (under /patients)");
   if (!r.Exists("patients/" + patient + "/response_basis"))
-    r.Bad("has no response basis for patient " + patient + " (write the dataset with `pectus surrogate build`)");
+    r.Bad("has no response basis for patient " + patient +
+          " (write the dataset with `pectus surrogate build`)");
   return ReadResponseBasis(r, "patients/" + patient + "/", path.string());
 }
 

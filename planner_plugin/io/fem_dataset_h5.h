@@ -45,8 +45,9 @@ namespace pectus::planner {
 struct StoredResponseBasis {
   BarResponseBasis::Stored arrays;
   std::int64_t bone_vertices = 0, skin_vertices = 0, skin_landmarks = 0;
-  std::int64_t mesh_nodes = 0;    ///< of the mesh it was built on
-  double rest_checksum_mm = 0.0;  ///< RestChecksum() of the points' rest positions: another mesh or skin differs
+  std::int64_t mesh_nodes = 0;  ///< of the mesh it was built on
+  double rest_checksum_mm =
+      0.0;  ///< RestChecksum() of the points' rest positions: another mesh or skin differs
 };
 
 /// A fingerprint of rest positions (3 #points, row-major): sum of x_i (1 + i mod 7), mm.
@@ -56,10 +57,10 @@ double RestChecksum(const Eigen::VectorXd& rest_positions);
 struct FemDataset {
   /// One patient's arrays.
   struct Patient {
-    std::string id;                         ///< the group name under /patients
-    Points3 nodes_mm;                       ///< #surface nodes by 3, undeformed positions
-    std::vector<Points3> displacements_mm;  ///< one #surface nodes by 3 block per load case
-    Eigen::VectorXd sternum_lift_mm;        ///< one per load case
+    std::string id;                            ///< the group name under /patients
+    Points3 nodes_mm;                          ///< #surface nodes by 3, undeformed positions
+    std::vector<Points3> displacements_mm;     ///< one #surface nodes by 3 block per load case
+    Eigen::VectorXd sternum_lift_mm;           ///< one per load case
     std::optional<StoredResponseBasis> basis;  ///< if the dataset was written with bases
   };
   Eigen::VectorXd position;     ///< #cases, bar position as a fraction of the sternal length (0-1)

@@ -64,7 +64,8 @@ trainer::DeviceState HostDevice::Read(double time_s) noexcept {
   return last_;
 }
 
-void HostDevice::SetForceAndTorque(const Eigen::Vector3d& force_n, const Eigen::Vector3d& torque_nmm) noexcept {
+void HostDevice::SetForceAndTorque(const Eigen::Vector3d& force_n,
+                                   const Eigen::Vector3d& torque_nmm) noexcept {
   if (callbacks_.set_force == nullptr) return;
   const double f[3] = {force_n.x(), force_n.y(), force_n.z()};
   const double t[3] = {torque_nmm.x(), torque_nmm.y(), torque_nmm.z()};
@@ -107,8 +108,8 @@ void PlannerTrainer::Reset() {
   }
   last_time_s_ = -INFINITY;
   device_.UseHeld();
-  session_ = std::make_unique<trainer::TrainerSession>(scene_, &device_, *introducer_, trainer::ProxyOptions{},
-                                                       0.001, capacity_);
+  session_ = std::make_unique<trainer::TrainerSession>(scene_, &device_, *introducer_,
+                                                       trainer::ProxyOptions{}, 0.001, capacity_);
 }
 
 void PlannerTrainer::TickAndPublish(double time_s) noexcept {
@@ -211,7 +212,8 @@ trainer::SessionScore PlannerTrainer::Score() const {
 
 PectusPlannerScopeView PlannerTrainer::ScopeView(const Eigen::Quaterniond* orientation,
                                                  const Eigen::Vector3d& target, double insertion_mm) const {
-  if (!(insertion_mm > 0 && insertion_mm < 500)) ThrowUsage("trainer_scope_view: insertion_mm must be in (0, 500)");
+  if (!(insertion_mm > 0 && insertion_mm < 500))
+    ThrowUsage("trainer_scope_view: insertion_mm must be in (0, 500)");
   trainer::ScopePose pose;
   pose.port_mm = scope_port_;
   pose.insertion_mm = insertion_mm;

@@ -261,7 +261,8 @@ std::int32_t WriteDatasetPart(const char* table_path, std::int64_t row, const ch
                                            basis != nullptr ? &basis_options : nullptr);
     // The part's own time: without the generic ribcage, which the process made (or waited for) once.
     const double seconds =
-        std::chrono::duration<double>((std::chrono::steady_clock::now() - start) - (setup_end - setup)).count();
+        std::chrono::duration<double>((std::chrono::steady_clock::now() - start) - (setup_end - setup))
+            .count();
     if (out != nullptr)
       *out = {summary.patients, summary.load_cases, summary.results, summary.surface_nodes, seconds};
   });
@@ -546,9 +547,7 @@ std::int32_t TrainerMesh(const PectusPlannerTrainer* trainer, std::int32_t part,
       return PectusPlannerMesh{v.rows(), v.data(), f.rows(), f.data(), labels};
     };
     switch (part) {
-      case 0:
-        *out = view(scene.bone_vertices, scene.bone_faces, scene.bone_parts.data());
-        return;
+      case 0: *out = view(scene.bone_vertices, scene.bone_faces, scene.bone_parts.data()); return;
       case 1:
         *out = view(scene.pericardium.mesh.vertices.positions, scene.pericardium.mesh.faces, nullptr);
         return;
@@ -600,7 +599,8 @@ std::int32_t TrainerReset(PectusPlannerTrainer* trainer, PectusPlannerStatus* st
 
 std::int32_t TrainerTick(PectusPlannerTrainer* trainer, const PectusPlannerDeviceState* state,
                          PectusPlannerTrainerTick* out, PectusPlannerStatus* status) noexcept {
-  if (trainer == nullptr || state == nullptr) return RealTimeFailure(status, "trainer and state must not be NULL");
+  if (trainer == nullptr || state == nullptr)
+    return RealTimeFailure(status, "trainer and state must not be NULL");
   const char* why = "";
   if (!trainer->trainer.Tick(*state, out, &why)) return RealTimeFailure(status, why);
   return RealTimeOk(status);
@@ -621,8 +621,8 @@ std::int32_t TrainerStop(PectusPlannerTrainer* trainer, PectusPlannerLoopStatist
     Require(trainer, "trainer");
     const pectus::trainer::ServoLoopStatistics s = trainer->trainer.Stop();
     if (out != nullptr) {
-      *out = {s.ticks,         s.late_ticks,    s.period_mean_ms, s.period_p50_ms, s.period_p99_ms,
-              s.period_max_ms, s.tick_p50_us,   s.tick_p99_us,    s.tick_max_us};
+      *out = {s.ticks,         s.late_ticks,  s.period_mean_ms, s.period_p50_ms, s.period_p99_ms,
+              s.period_max_ms, s.tick_p50_us, s.tick_p99_us,    s.tick_max_us};
     }
   });
 }
@@ -676,8 +676,8 @@ std::int32_t TrainerWriteRecord(const PectusPlannerTrainer* trainer, const char*
   });
 }
 
-std::int32_t TrainerReplay(const PectusPlannerTrainer* trainer, const char* path, PectusPlannerTrainerScore* out,
-                           PectusPlannerStatus* status) {
+std::int32_t TrainerReplay(const PectusPlannerTrainer* trainer, const char* path,
+                           PectusPlannerTrainerScore* out, PectusPlannerStatus* status) {
   return Guard(status, [&] {
     Require(trainer, "trainer");
     Require(path, "path");
@@ -690,7 +690,8 @@ std::int32_t TrainerReplay(const PectusPlannerTrainer* trainer, const char* path
     }
     if (record.samples.size() < 2) pectus::ThrowBadInput(path, "the record has fewer than two ticks");
     const pectus::trainer::SessionRecord replayed = pectus::trainer::ReplaySession(scene, record);
-    *out = ScoreOf(pectus::trainer::ScoreSession(scene, replayed), static_cast<std::int64_t>(replayed.samples.size()));
+    *out = ScoreOf(pectus::trainer::ScoreSession(scene, replayed),
+                   static_cast<std::int64_t>(replayed.samples.size()));
   });
 }
 
@@ -701,7 +702,8 @@ std::int32_t TrainerScopeView(const PectusPlannerTrainer* trainer, const double*
     Require(trainer, "trainer");
     Require(out, "out");
     if (orientation_wxyz != nullptr) {
-      const Eigen::Quaterniond q(orientation_wxyz[0], orientation_wxyz[1], orientation_wxyz[2], orientation_wxyz[3]);
+      const Eigen::Quaterniond q(orientation_wxyz[0], orientation_wxyz[1], orientation_wxyz[2],
+                                 orientation_wxyz[3]);
       *out = trainer->trainer.ScopeView(&q, Eigen::Vector3d::Zero(), insertion_mm);
       return;
     }

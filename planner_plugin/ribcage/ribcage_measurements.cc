@@ -155,7 +155,8 @@ Setup Prepare(const RibcageSurface& s, const RibcageMeasurementOptions& o) {
   for (const Reach& r : reach) z_lo = std::min(z_lo, r.zmin), z_hi = std::max(z_hi, r.zmax);
   FacesByHeight& by_height = setup.faces;
   by_height.z0 = reach.empty() ? 0.0 : z_lo;
-  by_height.bins.resize(reach.empty() ? 0 : static_cast<std::size_t>((z_hi - z_lo) / FacesByHeight::kBinMm) + 1);
+  by_height.bins.resize(reach.empty() ? 0
+                                      : static_cast<std::size_t>((z_hi - z_lo) / FacesByHeight::kBinMm) + 1);
   for (const Reach& r : reach) {
     const auto first = static_cast<std::size_t>((r.zmin - z_lo) / FacesByHeight::kBinMm);
     const auto last = std::min(by_height.bins.size() - 1,

@@ -40,8 +40,7 @@ class Error : public std::runtime_error {
 };
 
 /// Throws Error(kBadInput) naming the file (and line when > 0).
-[[noreturn]] void ThrowBadInput(const std::string& file, const std::string& message,
-                                std::int64_t line = 0);
+[[noreturn]] void ThrowBadInput(const std::string& file, const std::string& message, std::int64_t line = 0);
 /// Throws Error(kUsage).
 [[noreturn]] void ThrowUsage(const std::string& message);
 /// Throws Error(kFailure).

@@ -148,8 +148,10 @@ Similarity3 Similarity3::FromMatrix(const Eigen::Matrix4d& M, const std::string&
   S.rotation = A / S.scale;
   const double orthogonality = (S.rotation.transpose() * S.rotation - Eigen::Matrix3d::Identity()).norm();
   if (orthogonality > 1e-5) {
-    ThrowBadInput(what, "transform is not a rotation, uniform scale and translation (shear or non-uniform "
-                        "scale: |R^T R - I| = " + std::to_string(orthogonality) + ")");
+    ThrowBadInput(what,
+                  "transform is not a rotation, uniform scale and translation (shear or non-uniform "
+                  "scale: |R^T R - I| = " +
+                      std::to_string(orthogonality) + ")");
   }
   S.translation = M.topRightCorner<3, 1>();
   return S;

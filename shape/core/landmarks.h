@@ -12,9 +12,9 @@ namespace pectus {
 /// One named landmark. Position in mm in the pectus frame, which is the frame of the scan it was placed
 /// on. Files written by 3D Slicer in RAS are converted to LPS on reading (docs/architecture.md, "Frames").
 struct Landmark {
-  std::string label;          ///< unique within a set, UTF-8, non-empty
-  Eigen::Vector3d position;   ///< mm
-  std::string description;    ///< free text, may be empty
+  std::string label;         ///< unique within a set, UTF-8, non-empty
+  Eigen::Vector3d position;  ///< mm
+  std::string description;   ///< free text, may be empty
 };
 
 /// An ordered set of landmarks with unique labels.

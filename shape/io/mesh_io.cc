@@ -54,7 +54,8 @@ TriangleMesh ReadMesh(const fs::path& path, const ReadOptions& options, FileSumm
   }
   mesh.Validate(name);
   if (options.warn_units) {
-    const std::string warning = UnitsWarning(name, ComputeBounds(mesh.vertices.positions), options.input_units);
+    const std::string warning =
+        UnitsWarning(name, ComputeBounds(mesh.vertices.positions), options.input_units);
     if (!warning.empty()) Warn(warning);
   }
   const double scale = MillimetresPer(options.input_units);
@@ -71,7 +72,8 @@ void WriteMesh(const fs::path& path, const TriangleMesh& mesh, const WriteOption
   if (format == FileFormat::kStl && mesh.num_faces() == 0) {
     ThrowUsage(path.string() + ": STL holds triangles only and this is a point cloud; write .ply instead");
   }
-  if (format == FileFormat::kPcd) ThrowUsage(path.string() + ": pectus reads PCD but does not write it; use .ply");
+  if (format == FileFormat::kPcd)
+    ThrowUsage(path.string() + ": pectus reads PCD but does not write it; use .ply");
   AtomicOutput out(path);
   switch (format) {
     case FileFormat::kPly: WritePly(out.stream(), mesh, options); break;

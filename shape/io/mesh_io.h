@@ -34,14 +34,15 @@ PointCloud ReadPointCloud(const std::filesystem::path& path, const ReadOptions& 
 
 /// Options for writing.
 struct WriteOptions {
-  bool binary = true;     ///< PLY and STL: binary (default) or ASCII
-  std::string comment;    ///< written into the header where the format has one
+  bool binary = true;   ///< PLY and STL: binary (default) or ASCII
+  std::string comment;  ///< written into the header where the format has one
 };
 
 /// Writes a mesh (or, with no faces, a point cloud) atomically; the format comes from the extension.
 /// PLY keeps normals, colours and every scalar; OBJ keeps normals; STL keeps triangles only (a point
 /// cloud cannot be written as STL: Error(kUsage)).
 void WriteMesh(const std::filesystem::path& path, const TriangleMesh& mesh, const WriteOptions& options = {});
-void WritePointCloud(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options = {});
+void WritePointCloud(const std::filesystem::path& path, const PointCloud& cloud,
+                     const WriteOptions& options = {});
 
 }  // namespace pectus

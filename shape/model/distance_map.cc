@@ -149,9 +149,9 @@ DistanceMapResult ComputeDistanceMap(const Points3& points, const TriangleMesh& 
       for (const auto& [v, unused] : near) {
         for (std::int32_t f : faces_of[v]) {
           int feature = 6;
-          const Eigen::Vector3d q = ClosestPointOnTriangle(p, x.row(reference.faces(f, 0)).transpose(),
-                                                      x.row(reference.faces(f, 1)).transpose(),
-                                                      x.row(reference.faces(f, 2)).transpose(), &feature);
+          const Eigen::Vector3d q = ClosestPointOnTriangle(
+              p, x.row(reference.faces(f, 0)).transpose(), x.row(reference.faces(f, 1)).transpose(),
+              x.row(reference.faces(f, 2)).transpose(), &feature);
           const double d = (p - q).squaredNorm();
           if (d < best) {
             best = d;

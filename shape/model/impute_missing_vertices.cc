@@ -189,18 +189,21 @@ Eigen::MatrixXd CoreGram(const Eigen::MatrixXd& X, Eigen::Index K, TaskRunner& r
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   const Eigen::Index kGramRows = BlockRows(K, 32);
   RowMajor table(K, K);
-  runner.ComputeBlocks(BlockOffsets(K, kGramRows, K), [&](int b, double* out) {
-    const Eigen::Index first = b * kGramRows, rows = std::min(kGramRows, K - first);
-    Eigen::Map<RowMajor>(out, rows, K).noalias() = X.middleRows(first, rows) * X.topRows(K).transpose();
-  }, table.data());
+  runner.ComputeBlocks(
+      BlockOffsets(K, kGramRows, K),
+      [&](int b, double* out) {
+        const Eigen::Index first = b * kGramRows, rows = std::min(kGramRows, K - first);
+        Eigen::Map<RowMajor>(out, rows, K).noalias() = X.middleRows(first, rows) * X.topRows(K).transpose();
+      },
+      table.data());
   Eigen::MatrixXd G = table;
   G.triangularView<Eigen::StrictlyUpper>() = G.transpose();
   return G;
 }
 
-// Work on subjects `rows` in blocks (BlockRows: up to 8 subjects), one block per task: block b holds, for each of its
-// subjects in turn, that subject's unseen coordinates (their new values); fill(n, g, out) writes subject
-// n's, given g = X_S x_n if `with_g` (the block's columns of X_S X', one product for the block).
+// Work on subjects `rows` in blocks (BlockRows: up to 8 subjects), one block per task: block b holds, for
+// each of its subjects in turn, that subject's unseen coordinates (their new values); fill(n, g, out) writes
+// subject n's, given g = X_S x_n if `with_g` (the block's columns of X_S X', one product for the block).
 std::vector<Eigen::VectorXd> PerSubject(
     const Eigen::MatrixXd& X, Eigen::Index K, const std::vector<Eigen::Index>& rows,
     const std::vector<std::vector<Eigen::Index>>& unseen, bool with_g, TaskRunner& runner,
@@ -213,20 +216,25 @@ std::vector<Eigen::VectorXd> PerSubject(
       offsets.push_back(starts.back() + static_cast<std::int64_t>(unseen[rows[k]].size()));
   }
   std::vector<double> table(static_cast<std::size_t>(offsets.back()));
-  runner.ComputeBlocks(offsets, [&](int b, double* out) {
-    const std::size_t first = static_cast<std::size_t>(b) * kSubjects;
-    const std::size_t count = std::min(kSubjects, rows.size() - first);
-    Eigen::MatrixXd g;
-    if (with_g) {
-      Eigen::MatrixXd block(static_cast<Eigen::Index>(count), X.cols());
-      for (std::size_t j = 0; j < count; ++j) block.row(static_cast<Eigen::Index>(j)) = X.row(rows[first + j]);
-      g = X.topRows(K) * block.transpose();
-    }
-    for (std::size_t j = 0; j < count; ++j) {
-      fill(rows[first + j], with_g ? Eigen::VectorXd(g.col(static_cast<Eigen::Index>(j))) : Eigen::VectorXd(),
-           out + (starts[first + j] - starts[first]));
-    }
-  }, table.data());
+  runner.ComputeBlocks(
+      offsets,
+      [&](int b, double* out) {
+        const std::size_t first = static_cast<std::size_t>(b) * kSubjects;
+        const std::size_t count = std::min(kSubjects, rows.size() - first);
+        Eigen::MatrixXd g;
+        if (with_g) {
+          Eigen::MatrixXd block(static_cast<Eigen::Index>(count), X.cols());
+          for (std::size_t j = 0; j < count; ++j)
+            block.row(static_cast<Eigen::Index>(j)) = X.row(rows[first + j]);
+          g = X.topRows(K) * block.transpose();
+        }
+        for (std::size_t j = 0; j < count; ++j) {
+          fill(rows[first + j],
+               with_g ? Eigen::VectorXd(g.col(static_cast<Eigen::Index>(j))) : Eigen::VectorXd(),
+               out + (starts[first + j] - starts[first]));
+        }
+      },
+      table.data());
   std::vector<Eigen::VectorXd> values(rows.size());
   for (std::size_t k = 0; k < rows.size(); ++k) {
     values[k] = Eigen::Map<const Eigen::VectorXd>(table.data() + starts[k],
@@ -301,12 +309,12 @@ ImputationResult ImputeMissingVertices(const Eigen::MatrixXd& shapes,
   // Each subject of `rows` filled from the others' current fills (Jacobi: all from the same X).
   auto fill_from_others = [&](const std::vector<Eigen::Index>& rows, const Eigen::MatrixXd& G) {
     const bool late = rows.front() >= core;  // all beyond the core, or all in it
-    return PerSubject(X, core, rows, unseen, late, farm, [&](Eigen::Index n, const Eigen::VectorXd& g, double* out) {
-      const Eigen::VectorXd f =
-          FillFromOthers(X, G, n < core ? Eigen::VectorXd(G.col(n)) : g, n, unseen[as_size(n)],
-                         noise_variance, options.max_others);
-      std::copy(f.data(), f.data() + f.size(), out);
-    });
+    return PerSubject(
+        X, core, rows, unseen, late, farm, [&](Eigen::Index n, const Eigen::VectorXd& g, double* out) {
+          const Eigen::VectorXd f = FillFromOthers(X, G, n < core ? Eigen::VectorXd(G.col(n)) : g, n,
+                                                   unseen[as_size(n)], noise_variance, options.max_others);
+          std::copy(f.data(), f.data() + f.size(), out);
+        });
   };
   // The sweeps move every fill at once (Jacobi), which overshoots where the subjects' fills lean on each
   // other strongly (large holes in a small cohort: 60 subjects with 60 % holed diverged to 386 mm): a sweep
@@ -320,7 +328,8 @@ ImputationResult ImputeMissingVertices(const Eigen::MatrixXd& shapes,
     for (std::size_t k = 0; k < core_fill.size(); ++k) {
       const std::vector<Eigen::Index>& c = unseen[as_size(core_fill[k])];
       for (std::size_t j = 0; j < c.size(); ++j)
-        distance = std::max(distance, std::abs(fills[k][static_cast<Eigen::Index>(j)] - X(core_fill[k], c[j])));
+        distance =
+            std::max(distance, std::abs(fills[k][static_cast<Eigen::Index>(j)] - X(core_fill[k], c[j])));
     }
     if (distance > previous) step = std::max(step / 2.0, 1.0 / 64.0);
     previous = distance;

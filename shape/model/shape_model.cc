@@ -13,8 +13,8 @@
 #include "shape/model/shape_grid.h"
 
 // LAPACK: the eigenvalues (ascending) and eigenvectors of a symmetric matrix by divide and conquer.
-extern "C" void dsyevd_(const char* jobz, const char* uplo, const int* n, double* a, const int* lda, double* w,
-                        double* work, const int* lwork, int* iwork, const int* liwork, int* info);
+extern "C" void dsyevd_(const char* jobz, const char* uplo, const int* n, double* a, const int* lda,
+                        double* w, double* work, const int* lwork, int* iwork, const int* liwork, int* info);
 
 namespace pectus {
 
@@ -30,7 +30,8 @@ bool SymmetricEigen(const Eigen::MatrixXd& G, Eigen::VectorXd* values, Eigen::Ma
   liwork = iwork_size;
   std::vector<double> work(static_cast<std::size_t>(std::max(1, lwork)));
   std::vector<int> iwork(static_cast<std::size_t>(std::max(1, liwork)));
-  dsyevd_("V", "L", &n, vectors->data(), &n, values->data(), work.data(), &lwork, iwork.data(), &liwork, &info);
+  dsyevd_("V", "L", &n, vectors->data(), &n, values->data(), work.data(), &lwork, iwork.data(), &liwork,
+          &info);
   return info == 0;
 }
 
@@ -139,12 +140,16 @@ ShapeModel BuildShapeModel(const Eigen::MatrixXd& shapes, const ShapeModelOption
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   const Eigen::Index kRows = BlockRows(n, 32);
   RowMajor lower(n, n);
-  farm.ComputeBlocks(BlockOffsets(n, kRows, n), [&](int b, double* out) {
-    const Eigen::Index first = b * kRows, rows = std::min(kRows, n - first);
-    Eigen::Map<RowMajor> block(out, rows, n);
-    block.setZero();
-    block.leftCols(first + rows).noalias() = X.middleRows(first, rows) * X.topRows(first + rows).transpose();
-  }, lower.data());
+  farm.ComputeBlocks(
+      BlockOffsets(n, kRows, n),
+      [&](int b, double* out) {
+        const Eigen::Index first = b * kRows, rows = std::min(kRows, n - first);
+        Eigen::Map<RowMajor> block(out, rows, n);
+        block.setZero();
+        block.leftCols(first + rows).noalias() =
+            X.middleRows(first, rows) * X.topRows(first + rows).transpose();
+      },
+      lower.data());
   Eigen::MatrixXd G = lower;
   G.triangularView<Eigen::StrictlyUpper>() = G.transpose();
   model.total_variance = std::max(0.0, G.trace()) / static_cast<double>(n - 1);
@@ -162,7 +167,8 @@ ShapeModel BuildShapeModel(const Eigen::MatrixXd& shapes, const ShapeModelOption
       const auto start = std::chrono::steady_clock::now();
       const bool done = SymmetricEigen(G, &values, &vectors);
       if (decomposition_seconds != nullptr)
-        *decomposition_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        *decomposition_seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       return done;
     };
     if (while_decomposing) {
@@ -193,10 +199,13 @@ ShapeModel BuildShapeModel(const Eigen::MatrixXd& shapes, const ShapeModelOption
   // then write the files made of the model); eigenvalues lambda_c = s_c^2 / (N - 1).
   const Eigen::Index kModes = BlockRows(k, 64);
   model.basis.resize(d, k);
-  farm.ComputeBlocks(BlockOffsets(k, kModes, d), [&](int b, double* out) {
-    const Eigen::Index first = b * kModes, modes = std::min(kModes, k - first);
-    Eigen::Map<Eigen::MatrixXd>(out, d, modes).noalias() = X.transpose() * V.middleCols(first, modes);
-  }, model.basis.data());
+  farm.ComputeBlocks(
+      BlockOffsets(k, kModes, d),
+      [&](int b, double* out) {
+        const Eigen::Index first = b * kModes, modes = std::min(kModes, k - first);
+        Eigen::Map<Eigen::MatrixXd>(out, d, modes).noalias() = X.transpose() * V.middleCols(first, modes);
+      },
+      model.basis.data());
   model.variances.resize(k);
   // Scores of the training shapes (Eq. 14's z_n): basis' (x_n - mean) = G v_c / |X' v_c|, signed as e_c.
   Eigen::VectorXd factor(k);
@@ -213,12 +222,15 @@ ShapeModel BuildShapeModel(const Eigen::MatrixXd& shapes, const ShapeModelOption
     factor[c] = sign / (s * norm);
   }
   model.scores.resize(n, k);  // on every process: each subject's own record takes its scores
-  farm.ComputeBlocks(BlockOffsets(k, kModes, n), [&](int b, double* out) {
-    const Eigen::Index first = b * kModes, modes = std::min(kModes, k - first);
-    Eigen::Map<Eigen::MatrixXd> block(out, n, modes);
-    block.noalias() = G * V.middleCols(first, modes);
-    block *= factor.segment(first, modes).asDiagonal();
-  }, model.scores.data());
+  farm.ComputeBlocks(
+      BlockOffsets(k, kModes, n),
+      [&](int b, double* out) {
+        const Eigen::Index first = b * kModes, modes = std::min(kModes, k - first);
+        Eigen::Map<Eigen::MatrixXd> block(out, n, modes);
+        block.noalias() = G * V.middleCols(first, modes);
+        block *= factor.segment(first, modes).asDiagonal();
+      },
+      model.scores.data());
   return model;
 }
 

@@ -134,26 +134,30 @@ void BuildModel(const PipelineOptions& options, TaskRunner& runner, const std::v
   Clock::time_point start = Clock::now();
   const Eigen::Index width = 1 + 4 * m;
   RowMajor table(n, width);
-  runner.ComputeBlocks(BlockOffsets(n, per_block, width), [&](int b, double* out) {
-    const auto [first, end] = rows_of(b);
-    for (std::int64_t i = first; i < end; ++i) {
-      Eigen::Map<Eigen::RowVectorXd> row(out + (i - first) * width, width);
-      row.setZero();
-      const SubjectOutcome s = light(static_cast<int>(i));
-      if (!s.ok) continue;
-      const Points3& grid = s.grid.mesh.vertices.positions;
-      if (grid.rows() != m) {
-        ThrowBadInput(s.name, "has a grid of " + std::to_string(grid.rows()) + " vertices; the pipeline's has " +
-                                  std::to_string(m));
-      }
-      row[0] = 1.0;
-      row.segment(1, 3 * m) = ToShapeVector(grid).transpose();
-      const auto gap = s.grid.mesh.vertices.scalars.find("scan_gap_mm");
-      for (Eigen::Index v = 0; v < m; ++v) {
-        row[1 + 3 * m + v] = !gaps || gap == s.grid.mesh.vertices.scalars.end() || gap->second[v] <= gap_mm;
-      }
-    }
-  }, table.data());
+  runner.ComputeBlocks(
+      BlockOffsets(n, per_block, width),
+      [&](int b, double* out) {
+        const auto [first, end] = rows_of(b);
+        for (std::int64_t i = first; i < end; ++i) {
+          Eigen::Map<Eigen::RowVectorXd> row(out + (i - first) * width, width);
+          row.setZero();
+          const SubjectOutcome s = light(static_cast<int>(i));
+          if (!s.ok) continue;
+          const Points3& grid = s.grid.mesh.vertices.positions;
+          if (grid.rows() != m) {
+            ThrowBadInput(s.name, "has a grid of " + std::to_string(grid.rows()) +
+                                      " vertices; the pipeline's has " + std::to_string(m));
+          }
+          row[0] = 1.0;
+          row.segment(1, 3 * m) = ToShapeVector(grid).transpose();
+          const auto gap = s.grid.mesh.vertices.scalars.find("scan_gap_mm");
+          for (Eigen::Index v = 0; v < m; ++v) {
+            row[1 + 3 * m + v] =
+                !gaps || gap == s.grid.mesh.vertices.scalars.end() || gap->second[v] <= gap_mm;
+          }
+        }
+      },
+      table.data());
   std::vector<int> good;
   for (std::int64_t i = 0; i < n; ++i) {
     if (table(i, 0) == 1.0) good.push_back(static_cast<int>(i));
@@ -178,7 +182,8 @@ void BuildModel(const PipelineOptions& options, TaskRunner& runner, const std::v
     std::vector<Eigen::Index> common;
     for (Eigen::Index v = 0; v < m; ++v)
       if (seen.col(v).all()) common.push_back(v);
-    const bool subset = static_cast<Eigen::Index>(common.size()) < m && 2 * static_cast<Eigen::Index>(common.size()) >= m;
+    const bool subset =
+        static_cast<Eigen::Index>(common.size()) < m && 2 * static_cast<Eigen::Index>(common.size()) >= m;
     std::vector<Points3> grids;
     std::vector<std::string> grid_names;
     for (int i : good) {
@@ -199,18 +204,21 @@ void BuildModel(const PipelineOptions& options, TaskRunner& runner, const std::v
   start = Clock::now();
   Eigen::MatrixXd shapes(count, 3 * m);
   const Eigen::Index per_vertices = BlockRows(m, 64);
-  runner.ComputeBlocks(BlockOffsets(m, per_vertices, 3 * count), [&](int b, double* out) {
-    const Eigen::Index first = b * per_vertices, vertices = std::min(m, first + per_vertices) - first;
-    Eigen::Map<Eigen::MatrixXd> block(out, count, 3 * vertices);
-    for (Eigen::Index k = 0; k < count; ++k) {
-      const Eigen::Matrix3d A = T[k].scale * T[k].rotation;
-      const double* x = table.data() + good[k] * width + 1 + 3 * first;
-      for (Eigen::Index v = 0; v < vertices; ++v) {
-        const Eigen::Vector3d y = A * Eigen::Map<const Eigen::Vector3d>(x + 3 * v) + T[k].translation;
-        block(k, 3 * v) = y[0], block(k, 3 * v + 1) = y[1], block(k, 3 * v + 2) = y[2];
-      }
-    }
-  }, shapes.data());
+  runner.ComputeBlocks(
+      BlockOffsets(m, per_vertices, 3 * count),
+      [&](int b, double* out) {
+        const Eigen::Index first = b * per_vertices, vertices = std::min(m, first + per_vertices) - first;
+        Eigen::Map<Eigen::MatrixXd> block(out, count, 3 * vertices);
+        for (Eigen::Index k = 0; k < count; ++k) {
+          const Eigen::Matrix3d A = T[k].scale * T[k].rotation;
+          const double* x = table.data() + good[k] * width + 1 + 3 * first;
+          for (Eigen::Index v = 0; v < vertices; ++v) {
+            const Eigen::Vector3d y = A * Eigen::Map<const Eigen::Vector3d>(x + 3 * v) + T[k].translation;
+            block(k, 3 * v) = y[0], block(k, 3 * v + 1) = y[1], block(k, 3 * v + 2) = y[2];
+          }
+        }
+      },
+      shapes.data());
   table.resize(0, 0);
   timed("model align", start);
 
@@ -232,35 +240,38 @@ void BuildModel(const PipelineOptions& options, TaskRunner& runner, const std::v
   for (const Landmark& l : light(good[0]).landmarks.items) labels.push_back(l.label);
   const auto L = static_cast<std::int64_t>(labels.size());
   std::vector<double> landmark_sums(static_cast<std::size_t>(blocks * 4 * L));
-  runner.ComputeBlocks(BlockOffsets(blocks, 1, 4 * L), [&](int b, double* out) {
-    std::fill(out, out + 4 * L, 0.0);
-    const auto [first, end] = rows_of(b);
-    for (std::int64_t i = first; i < end; ++i) {
-      const int k = k_of[i];
-      if (k < 0) continue;
-      SubjectOutcome s = light(static_cast<int>(i));
-      MoveSubject(T[k], &s);
-      s.grid.shape_vector = shapes.row(k).transpose();  // aligned as the model has it, and filled
-      s.grid.mesh.vertices.positions = FromShapeVector(s.grid.shape_vector);
-      if (filled) {
-        Eigen::VectorXd mark = (!seen.row(k).array()).cast<double>().transpose();
-        if (std::find(filled->too_little_seen.begin(), filled->too_little_seen.end(), k) !=
-            filled->too_little_seen.end()) {
-          mark.setZero();
+  runner.ComputeBlocks(
+      BlockOffsets(blocks, 1, 4 * L),
+      [&](int b, double* out) {
+        std::fill(out, out + 4 * L, 0.0);
+        const auto [first, end] = rows_of(b);
+        for (std::int64_t i = first; i < end; ++i) {
+          const int k = k_of[i];
+          if (k < 0) continue;
+          SubjectOutcome s = light(static_cast<int>(i));
+          MoveSubject(T[k], &s);
+          s.grid.shape_vector = shapes.row(k).transpose();  // aligned as the model has it, and filled
+          s.grid.mesh.vertices.positions = FromShapeVector(s.grid.shape_vector);
+          if (filled) {
+            Eigen::VectorXd mark = (!seen.row(k).array()).cast<double>().transpose();
+            if (std::find(filled->too_little_seen.begin(), filled->too_little_seen.end(), k) !=
+                filled->too_little_seen.end()) {
+              mark.setZero();
+            }
+            s.grid.mesh.vertices.scalars["filled_from_cohort"] = mark;
+            s.vertices_filled_from_cohort = filled->filled_vertices[k];
+            s.largest_fill_change_mm = filled->largest_change_mm[k];
+          }
+          for (std::int64_t j = 0; j < L; ++j) {
+            if (const Landmark* l = s.landmarks.Find(labels[j])) {
+              Eigen::Map<Eigen::Vector3d>(out + 4 * j) += l->position;
+              out[4 * j + 3] += 1.0;
+            }
+          }
+          keep(static_cast<int>(i), std::move(s));
         }
-        s.grid.mesh.vertices.scalars["filled_from_cohort"] = mark;
-        s.vertices_filled_from_cohort = filled->filled_vertices[k];
-        s.largest_fill_change_mm = filled->largest_change_mm[k];
-      }
-      for (std::int64_t j = 0; j < L; ++j) {
-        if (const Landmark* l = s.landmarks.Find(labels[j])) {
-          Eigen::Map<Eigen::Vector3d>(out + 4 * j) += l->position;
-          out[4 * j + 3] += 1.0;
-        }
-      }
-      keep(static_cast<int>(i), std::move(s));
-    }
-  }, landmark_sums.data());
+      },
+      landmark_sums.data());
   timed("model records", start);
 
   // The mean (as BuildShapeModel has it) for the subjects' third tasks, which run (while_decomposing) while
@@ -270,15 +281,19 @@ void BuildModel(const PipelineOptions& options, TaskRunner& runner, const std::v
   (*mean)->faces = GridFaces(options.resample.grid);
   start = Clock::now();
   double while_seconds = 0.0, eig_seconds = 0.0;
-  ShapeModel model = BuildShapeModel(shapes, options.model, "resampled subjects", &runner, [&] {
-    const Clock::time_point begin = Clock::now();
-    while_decomposing();
-    while_seconds = SecondsSince(begin);
-  }, &eig_seconds);
+  ShapeModel model = BuildShapeModel(
+      shapes, options.model, "resampled subjects", &runner,
+      [&] {
+        const Clock::time_point begin = Clock::now();
+        while_decomposing();
+        while_seconds = SecondsSince(begin);
+      },
+      &eig_seconds);
   if (leader) {
     result->timings_s.Add("model pca", SecondsSince(start) - std::max(while_seconds, eig_seconds));
     result->timings_s.Add("model eig", eig_seconds);
-    for (std::size_t k = 0; k < good.size(); ++k) result->subjects[good[k]].scores = model.scores.row(k).transpose();
+    for (std::size_t k = 0; k < good.size(); ++k)
+      result->subjects[good[k]].scores = model.scores.row(k).transpose();
   }
   for (int i : good) model.names.push_back(names[i]);
   model.faces = GridFaces(options.resample.grid);
@@ -295,7 +310,8 @@ void BuildModel(const PipelineOptions& options, TaskRunner& runner, const std::v
   LandmarkSet mean_landmarks;
   for (std::int64_t j = 0; j < L; ++j) {
     Eigen::Vector4d sum = Eigen::Vector4d::Zero();
-    for (std::int64_t b = 0; b < blocks; ++b) sum += Eigen::Map<const Eigen::Vector4d>(&landmark_sums[(b * L + j) * 4]);
+    for (std::int64_t b = 0; b < blocks; ++b)
+      sum += Eigen::Map<const Eigen::Vector4d>(&landmark_sums[(b * L + j) * 4]);
     mean_landmarks.items.push_back({labels[j], sum.head<3>() / sum[3], ""});
   }
   try {
@@ -460,25 +476,28 @@ void RemoveSubjectResults(const fs::path& work) {
   if (fs::is_empty(work, ec)) fs::remove(work, ec);
 }
 
-double RemoveSubjectResultsOnFarm(TaskRunner& runner, const fs::path& work, const std::vector<std::string>& names,
-                                  bool remove) {
+double RemoveSubjectResultsOnFarm(TaskRunner& runner, const fs::path& work,
+                                  const std::vector<std::string>& names, bool remove) {
   std::string why;
   if (!runner.BroadcastOutcome(remove, &why) || work.empty()) return 0.0;
   const Clock::time_point start = Clock::now();
   const auto n = static_cast<std::int64_t>(names.size());
   std::vector<double> done(static_cast<std::size_t>(n));
   const std::int64_t per_block = BlockRows(n, 8);
-  runner.ComputeBlocks(BlockOffsets(n, per_block, 1), [&](int b, double* out) {
-    const std::int64_t first = b * per_block, end = std::min(n, first + per_block);
-    for (std::int64_t i = first; i < end; ++i) {
-      std::error_code ec;
-      for (const char* phase : {"surface", "registered", "grids", "model", "outputs", "summary"}) {
-        fs::remove(work / phase / (names[i] + ".rec"), ec);
-      }
-      fs::remove_all(SubjectFilesFolder(work, names[i]), ec);
-      out[i - first] = 1.0;
-    }
-  }, done.data());
+  runner.ComputeBlocks(
+      BlockOffsets(n, per_block, 1),
+      [&](int b, double* out) {
+        const std::int64_t first = b * per_block, end = std::min(n, first + per_block);
+        for (std::int64_t i = first; i < end; ++i) {
+          std::error_code ec;
+          for (const char* phase : {"surface", "registered", "grids", "model", "outputs", "summary"}) {
+            fs::remove(work / phase / (names[i] + ".rec"), ec);
+          }
+          fs::remove_all(SubjectFilesFolder(work, names[i]), ec);
+          out[i - first] = 1.0;
+        }
+      },
+      done.data());
   if (runner.IsLeader()) RemoveSubjectResults(work);  // what is left: the phases' folders, the mean
   return SecondsSince(start);
 }
@@ -619,8 +638,8 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
   // colour scale of all of them). If the model stops short of that, they run after it.
   SubjectStore modelled(run.work, "model", inputs), finished(run.work, "outputs", inputs);
   SubjectStore summaries(run.work, "summary", inputs);
-  std::exception_ptr model_error;  // the leader's: reported once the others are let go
-  bool model_failed = false;        // every process's: the model threw (a collective's error reaches all)
+  std::exception_ptr model_error;    // the leader's: reported once the others are let go
+  bool model_failed = false;         // every process's: the model threw (a collective's error reaches all)
   std::optional<TriangleMesh> mean;  // the mean shape, on every process (BuildModel)
   const std::vector<int> no_tasks;
 
@@ -663,7 +682,8 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
   bool subjects_done = false;
   auto finish_subjects = [&] {
     runner.Run(model_error ? no_tasks : finished.Missing(largest_first), finish);
-    std::future<double> read_back;  // its seconds; a failure is the leader's, thrown once the others are let go
+    std::future<double>
+        read_back;  // its seconds; a failure is the leader's, thrown once the others are let go
     std::exception_ptr read_back_error;
     if (runner.IsLeader() && !in_memory && !model_error) {
       read_back = std::async(std::launch::async, [&] {
@@ -682,12 +702,15 @@ PipelineResult RunCohortPipeline(const std::vector<CohortSubject>& inputs, const
       if (run.picture_scale && !model_failed) {  // after a failure the summaries may not all be there
         const std::int64_t per_block = BlockRows(n, 8);
         std::vector<double> scales(static_cast<std::size_t>((n + per_block - 1) / per_block));
-        runner.ComputeBlocks(BlockOffsets(static_cast<std::int64_t>(scales.size()), 1, 1), [&](int b, double* out) {
-          std::vector<SubjectOutcome> block;
-          for (std::int64_t i = b * per_block; i < std::min<std::int64_t>(n, (b + 1) * per_block); ++i)
-            block.push_back(in_memory ? result.subjects[i] : summaries.Get(static_cast<int>(i)));
-          *out = run.picture_scale(block);
-        }, scales.data());
+        runner.ComputeBlocks(
+            BlockOffsets(static_cast<std::int64_t>(scales.size()), 1, 1),
+            [&](int b, double* out) {
+              std::vector<SubjectOutcome> block;
+              for (std::int64_t i = b * per_block; i < std::min<std::int64_t>(n, (b + 1) * per_block); ++i)
+                block.push_back(in_memory ? result.subjects[i] : summaries.Get(static_cast<int>(i)));
+              *out = run.picture_scale(block);
+            },
+            scales.data());
         scale = *std::max_element(scales.begin(), scales.end());
       }
       std::mutex seconds_mutex;

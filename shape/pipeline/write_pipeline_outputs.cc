@@ -122,8 +122,8 @@ std::vector<fs::path> WritePipelineOutputs(
   };
   // The model and its tables.
   if (!model_files_written) {
-    written = WriteModelFiles(result.model ? &*result.model : nullptr, result.quality ? &*result.quality : nullptr,
-                              model_info, folder, stage);
+    written = WriteModelFiles(result.model ? &*result.model : nullptr,
+                              result.quality ? &*result.quality : nullptr, model_info, folder, stage);
   }
   // Each subject's meshes and landmarks (and its picture in the report): made on the farm, or here.
   for (const SubjectOutcome& s : result.subjects) {

@@ -5,8 +5,8 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <vector>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 namespace pectus::render {
 namespace {
@@ -47,12 +47,9 @@ const Table& TableOf(Colormap map) {
   static const Table turbo = OpenCvTable(cv::COLORMAP_TURBO);
   static const Table diverging = DivergingTable();
   switch (map) {
-    case Colormap::kViridis:
-      return viridis;
-    case Colormap::kTurbo:
-      return turbo;
-    case Colormap::kDiverging:
-      return diverging;
+    case Colormap::kViridis: return viridis;
+    case Colormap::kTurbo: return turbo;
+    case Colormap::kDiverging: return diverging;
   }
   return viridis;
 }
@@ -60,7 +57,8 @@ const Table& TableOf(Colormap map) {
 // Fewest decimals that write every multiple of `step` exactly: 0 for 5, 1 for 2.5 or 0.5, 2 for 0.25.
 std::string FormatTick(double v, double step) {
   int decimals = 0;
-  for (double scaled = step; decimals < 6 && std::abs(scaled - std::round(scaled)) > 1e-9 * scaled; ++decimals) {
+  for (double scaled = step; decimals < 6 && std::abs(scaled - std::round(scaled)) > 1e-9 * scaled;
+       ++decimals) {
     scaled *= 10.0;
   }
   char buf[32];
@@ -90,7 +88,7 @@ Colors3 MapColors(const Eigen::VectorXd& values, double lo, double hi, Colormap 
 
 Rgb CategoryColor(int index) {
   // The twelve colours of ColorBrewer's "Paired" scheme, reordered so neighbours differ in hue.
-  static const Rgb kPalette[12] = {{31, 120, 180},  {227, 26, 28},   {51, 160, 44},  {255, 127, 0},
+  static const Rgb kPalette[12] = {{31, 120, 180},  {227, 26, 28},   {51, 160, 44},   {255, 127, 0},
                                    {106, 61, 154},  {177, 89, 40},   {166, 206, 227}, {251, 154, 153},
                                    {178, 223, 138}, {253, 191, 111}, {202, 178, 214}, {255, 230, 100}};
   const int i = ((index % 12) + 12) % 12;
@@ -141,7 +139,9 @@ Image ColorBar(double lo, double hi, Colormap map, const std::string& label, int
   } else {
     const std::vector<double> values = NiceTicks(lo, hi, std::max(2, ticks));
     const double step = values.size() >= 2 ? values[1] - values[0] : range;
-    const auto y_of = [&](double v) { return top + bar_h - 1 - static_cast<int>(std::lround((bar_h - 1) * (v - lo) / range)); };
+    const auto y_of = [&](double v) {
+      return top + bar_h - 1 - static_cast<int>(std::lround((bar_h - 1) * (v - lo) / range));
+    };
     const auto tick = [&](double v) {
       const int y = y_of(v);
       DrawLine(&im, 10 + bar_w, y, 10 + bar_w + 5, y, kBlack);

@@ -27,7 +27,6 @@ std::vector<double> NiceTicks(double lo, double hi, int about);
 
 /// A vertical colour bar `height` pixels tall with tick labels and a label, as its own image, to be
 /// put beside a render with HStack so two pictures can share one fixed scale.
-Image ColorBar(double lo, double hi, Colormap map, const std::string& label, int height = 600,
-               int ticks = 6);
+Image ColorBar(double lo, double hi, Colormap map, const std::string& label, int height = 600, int ticks = 6);
 
 }  // namespace pectus::render

@@ -15,12 +15,13 @@ namespace {
 // Screen mapping of an orthographic camera: pixel x, pixel y and depth of a world point.
 struct Camera {
   Eigen::Vector3d right, up, forward;
-  double scale = 1;              // pixels per mm
-  double cx = 0, cy = 0;         // world centre projected on right / up (mm)
+  double scale = 1;       // pixels per mm
+  double cx = 0, cy = 0;  // world centre projected on right / up (mm)
   int width = 0, height = 0;
 
   Eigen::Vector3d Project(const Eigen::Vector3d& p) const {
-    return {width * 0.5 + (p.dot(right) - cx) * scale, height * 0.5 - (p.dot(up) - cy) * scale, p.dot(forward)};
+    return {width * 0.5 + (p.dot(right) - cx) * scale, height * 0.5 - (p.dot(up) - cy) * scale,
+            p.dot(forward)};
   }
 };
 
@@ -134,7 +135,9 @@ Image RenderMesh(const TriangleMesh& mesh, const View& view, const Colors3* colo
         double& zb = zbuf[static_cast<std::size_t>(y) * view.width + x];
         if (z >= zb) continue;
         zb = z;
-        image.Set(x, y, ToRgb(w0 * lit[mesh.faces(f, 0)] + w1 * lit[mesh.faces(f, 1)] + w2 * lit[mesh.faces(f, 2)]));
+        image.Set(
+            x, y,
+            ToRgb(w0 * lit[mesh.faces(f, 0)] + w1 * lit[mesh.faces(f, 1)] + w2 * lit[mesh.faces(f, 2)]));
       }
     }
   }

@@ -21,9 +21,9 @@ struct View {
   std::optional<Bounds3> frame;         ///< framed region (mm); default: the bounds of what is drawn.
                                         ///< Give the same frame to pictures that should share a scale.
   Rgb background = kWhite;
-  Rgb base_colour{200, 190, 180};       ///< colour where no per-vertex/point colour is given
-  bool shading = true;                  ///< Lambert shading with a headlight
-  int point_radius = 1;                 ///< pixels, for point clouds
+  Rgb base_colour{200, 190, 180};  ///< colour where no per-vertex/point colour is given
+  bool shading = true;             ///< Lambert shading with a headlight
+  int point_radius = 1;            ///< pixels, for point clouds
 
   /// A view from the front of a chest in the pectus frame (x left-right, y up, z out of the chest).
   static View Front(int width = 800, int height = 800);

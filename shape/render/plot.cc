@@ -34,7 +34,9 @@ struct Axes {
   double x0, x1, y0, y1;  // data range (y in log10 when log_y)
   int left = 80, right, top = 40, bottom;
   bool log_y = false;
-  int X(double x) const { return left + static_cast<int>(std::lround((x - x0) / (x1 - x0) * (right - left))); }
+  int X(double x) const {
+    return left + static_cast<int>(std::lround((x - x0) / (x1 - x0) * (right - left)));
+  }
   int Y(double y) const {
     if (log_y) y = std::log10(std::max(y, 1e-300));
     return bottom - static_cast<int>(std::lround((y - y0) / (y1 - y0) * (bottom - top)));
@@ -54,12 +56,18 @@ Axes MakeAxes(const PlotOptions& o, double xlo, double xhi, double ylo, double y
   a.right = o.width - 20;
   a.bottom = o.height - 60;
   a.log_y = o.log_y;
-  if (!(xhi > xlo)) { xlo -= 0.5; xhi += 0.5; }
+  if (!(xhi > xlo)) {
+    xlo -= 0.5;
+    xhi += 0.5;
+  }
   if (o.log_y) {
     ylo = std::log10(std::max(ylo, 1e-300));
     yhi = std::log10(std::max(yhi, 1e-300));
   }
-  if (!(yhi > ylo)) { ylo -= 0.5; yhi += 0.5; }
+  if (!(yhi > ylo)) {
+    ylo -= 0.5;
+    yhi += 0.5;
+  }
   const double pad_y = o.log_y ? 0.05 * (yhi - ylo) : 0.05 * (yhi - ylo);
   a.x0 = o.x_min.value_or(xlo);
   a.x1 = o.x_max.value_or(xhi);
@@ -225,7 +233,8 @@ Image PlotHistogram(const std::vector<double>& values, int bins, const PlotOptio
   for (int b = 0; b < bins; ++b) {
     const double x0 = l + (h - l) * b / bins, x1 = l + (h - l) * (b + 1) / bins;
     if (counts[static_cast<std::size_t>(b)] <= 0) continue;
-    FillRect(&im, a.X(x0) + 1, a.Y(counts[static_cast<std::size_t>(b)]), a.X(x1) - 1, a.Y(0), Rgb{31, 119, 180});
+    FillRect(&im, a.X(x0) + 1, a.Y(counts[static_cast<std::size_t>(b)]), a.X(x1) - 1, a.Y(0),
+             Rgb{31, 119, 180});
   }
   return im;
 }

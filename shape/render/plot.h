@@ -11,11 +11,11 @@ namespace pectus::render {
 
 /// One curve of a line chart.
 struct Series {
-  std::string label;        ///< legend entry (empty: no entry)
-  std::vector<double> x;    ///< abscissae
-  std::vector<double> y;    ///< ordinates, one per x
+  std::string label;      ///< legend entry (empty: no entry)
+  std::vector<double> x;  ///< abscissae
+  std::vector<double> y;  ///< ordinates, one per x
   Rgb colour{31, 119, 180};
-  bool markers = true;      ///< draw a dot at each point
+  bool markers = true;  ///< draw a dot at each point
   bool dashed = false;
 };
 

@@ -70,8 +70,8 @@ class PipelineCluster : public testing_support::ScratchDirTest {
     CliRun run = Pectus("synth cohort --subjects 6 --seed 3 --sweeps 3 --spacing 3 --no-sweep-truth -o " +
                         Cohort() + " --quiet");
     ASSERT_EQ(run.code, 0) << run.output;
-    run = Pectus("pipeline " + Cohort() + " --out " + (suite_ / "serial").string() + kOptions +
-                 " --report " + (suite_ / "serial.json").string());
+    run = Pectus("pipeline " + Cohort() + " --out " + (suite_ / "serial").string() + kOptions + " --report " +
+                 (suite_ / "serial.json").string());
     ASSERT_EQ(run.code, 0) << run.output;
     serial_ = Outputs(suite_ / "serial");
     // Subjects beyond the imputation's core had vertices to fill (else its shared steps went untested).

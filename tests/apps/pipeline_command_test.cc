@@ -85,8 +85,9 @@ TEST_F(PipelineCommand, AWorkFileThatCannotBeWrittenIsTheErrorReportedAndNothing
   ASSERT_EQ(run.code, 0) << run.output;
   fs::create_directories(P("out/.pectus-work"));
   std::ofstream(P("out/.pectus-work/summary")) << "not a folder";
-  run = Pectus("pipeline " + P("cohort") + " --out " + P("out") +
-               " --grid 21x41 --surface-spacing 3 --merge-spacing 0 --no-quality --no-surfaces --resume --quiet");
+  run = Pectus(
+      "pipeline " + P("cohort") + " --out " + P("out") +
+      " --grid 21x41 --surface-spacing 3 --merge-spacing 0 --no-quality --no-surfaces --resume --quiet");
   EXPECT_EQ(run.code, 1) << run.output;
   // The write's own message ("…/summary: cannot create folder: Not a directory"), not the read of a
   // summary that was never written ("…/summary/NAME.rec: cannot open", which it was until 2026-11-28).

@@ -103,7 +103,8 @@ TEST_F(SurrogateCluster, ThreadsAndMpiRanksGiveTheSerialBytes) {
 #ifdef PECTUS_MPIEXEC
   for (int ranks : {1, 2, 3}) {
     const fs::path out = P("ranks" + std::to_string(ranks) + ".h5");
-    // The FE code is leak-checked in the serial and threaded runs above; the ranks without it, 4 times faster.
+    // The FE code is leak-checked in the serial and threaded runs above; the ranks without it, 4 times
+    // faster.
     const CliRun mpi = Pectus(Build(out), testing_support::MpiLauncher(ranks, /*check_leaks=*/false));
     ASSERT_EQ(mpi.code, 0) << ranks << " ranks: " << mpi.output;
     ExpectSerialBytes(out, std::to_string(ranks) + " ranks");
@@ -114,7 +115,8 @@ TEST_F(SurrogateCluster, ThreadsAndMpiRanksGiveTheSerialBytes) {
   const std::string bases = "surrogate build --patient-table " + P("one.csv") + kOptions + " -o ";
   const CliRun serial = Pectus(bases + P("bases_serial.h5") + " --threads 1");
   ASSERT_EQ(serial.code, 0) << serial.output;
-  const CliRun two = Pectus(bases + P("bases_ranks.h5"), testing_support::MpiLauncher(2, /*check_leaks=*/false));
+  const CliRun two =
+      Pectus(bases + P("bases_ranks.h5"), testing_support::MpiLauncher(2, /*check_leaks=*/false));
   ASSERT_EQ(two.code, 0) << two.output;
   const std::string with_bases = ReadBytes(P("bases_serial.h5"));
   EXPECT_GT(with_bases.size(), 1000000u) << "no basis in the dataset";

@@ -1,5 +1,5 @@
-// merge_bias_benchmark: its flags, one correspondence with its truth, and the small statistics the probe reports
-// (PCA normals, distances to a sweep's border, RMS and median, eigenvalue bands).
+// merge_bias_benchmark: its flags, one correspondence with its truth, and the small statistics the probe
+// reports (PCA normals, distances to a sweep's border, RMS and median, eigenvalue bands).
 #pragma once
 
 #include <Eigen/Dense>
@@ -72,7 +72,7 @@ struct Probe {
 
 // PCA normal (smallest eigenvector) and centroid of rows of `points`.
 inline void Pca(const Points3& points, const std::uint32_t* rows, int count, Eigen::Vector3d* normal,
-         Eigen::Vector3d* centroid) {
+                Eigen::Vector3d* centroid) {
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
   for (int k = 0; k < count; ++k) c += points.row(rows[k]).transpose() / double(count);
   Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
@@ -127,6 +127,5 @@ inline std::string Band(double lambda) {
   if (lambda < 3000) return "300-3000";
   return ">=3000";
 }
-
 
 }  // namespace pectus::merge_bias

@@ -40,8 +40,9 @@ struct Figures {
   /// comparison makes when the correspondences are not known. G above also weighs how far each sweep slid
   /// along the surface, which is pose, not shape, and can tilt the whole to undo a slide.
   double surface_fit_shape_rms_mm = 0.0, surface_fit_shape_max_mm = 0.0;
-  double surface_fit_interior_shape_rms_mm = 0.0, surface_fit_interior_shape_max_mm = 0.0;  ///< inside the patch
-  Rigid3 G = Rigid3::Identity();  ///< the common rigid motion removed
+  double surface_fit_interior_shape_rms_mm = 0.0,
+         surface_fit_interior_shape_max_mm = 0.0;  ///< inside the patch
+  Rigid3 G = Rigid3::Identity();                   ///< the common rigid motion removed
 };
 
 /// The noise-free hit of every inlier of a sweep, in the sweep's (reported) frame, #points by 3.

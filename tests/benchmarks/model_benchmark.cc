@@ -437,12 +437,12 @@ int main(int argc, char** argv) {
       std::ifstream in(fs::path(argv[3]) / "pipeline.json");
       result = CompareWithTruth(argv[2], argv[3], nlohmann::json::parse(in), reference);
     } else {
-      std::cerr
-          << "usage: model_benchmark pca [N] | impute [N] | model [N] | holefill COHORT OUT [PNG] | cohort COHORT OUT | "
-             "population COHORT OUT FILE [--work DIR] | all [WORK] [PECTUS]\n"
-             "  [--population M=2000] [--pool P=1000]: the population reference's subjects, and the\n"
-             "  independent pool from which cohorts of N are drawn for the sampling spread (0: none)\n"
-             "  (OUT is the folder of `pectus pipeline COHORT --out OUT --report OUT/pipeline.json`)\n";
+      std::cerr << "usage: model_benchmark pca [N] | impute [N] | model [N] | holefill COHORT OUT [PNG] | "
+                   "cohort COHORT OUT | "
+                   "population COHORT OUT FILE [--work DIR] | all [WORK] [PECTUS]\n"
+                   "  [--population M=2000] [--pool P=1000]: the population reference's subjects, and the\n"
+                   "  independent pool from which cohorts of N are drawn for the sampling spread (0: none)\n"
+                   "  (OUT is the folder of `pectus pipeline COHORT --out OUT --report OUT/pipeline.json`)\n";
       return 2;
     }
     std::cout << result.dump(2) << std::endl;

@@ -12,8 +12,8 @@
 #include "datasets/chest_population.h"
 #include "datasets/surface_query.h"
 #include "registration/landmark_alignment.h"
-#include "shape/pipeline/cohort_pipeline.h"
 #include "shape/model/shape_grid.h"
+#include "shape/pipeline/cohort_pipeline.h"
 
 namespace pectus::bench {
 

@@ -7,6 +7,8 @@
 
 namespace pectus::datasets {
 
-inline ChestSurface SampleChest() { return ChestSurface(SampleSubject(PopulationModel::Default(), 11).parameters); }
+inline ChestSurface SampleChest() {
+  return ChestSurface(SampleSubject(PopulationModel::Default(), 11).parameters);
+}
 
 }  // namespace pectus::datasets

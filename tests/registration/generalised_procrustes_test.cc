@@ -4,7 +4,6 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-
 #include <omp.h>
 
 #include <cstring>
@@ -127,7 +126,9 @@ TEST(GeneralisedProcrustes, TheBitsDoNotDependOnTheThreads) {
   const ProcrustesResult four = GeneralisedProcrustes(shapes, o, {}, &runner);
   omp_set_num_threads(threads);
   ASSERT_EQ(one.mean_points.size(), four.mean_points.size());
-  EXPECT_EQ(std::memcmp(one.mean_points.data(), four.mean_points.data(), sizeof(double) * one.mean_points.size()), 0);
+  EXPECT_EQ(
+      std::memcmp(one.mean_points.data(), four.mean_points.data(), sizeof(double) * one.mean_points.size()),
+      0);
   for (std::size_t i = 0; i < shapes.size(); ++i) {
     EXPECT_EQ(one.T_mean_shape[i].Matrix(), four.T_mean_shape[i].Matrix()) << i;
   }

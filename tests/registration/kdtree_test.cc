@@ -87,7 +87,8 @@ TEST(KdTree3, BuildsTheTreeNanoflannBuilds) {
         moved.emplace_back(*points, leaf, parallel);
         moved.reserve(moved.capacity() + 1);  // the tree moves: its index and adaptor go with it
         const KdTree3::Index& built = moved.front().index();
-        SCOPED_TRACE(::testing::Message() << points->rows() << " points, leaf " << leaf << ", parallel " << parallel);
+        SCOPED_TRACE(::testing::Message()
+                     << points->rows() << " points, leaf " << leaf << ", parallel " << parallel);
         ASSERT_EQ(built.vAcc, reference.vAcc);
         ASSERT_EQ(built.m_size, reference.m_size);
         for (int i = 0; i < 3; ++i) {

@@ -2,9 +2,9 @@
 
 #include <cstdint>
 #include <cstring>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
-#include <nlohmann/json.hpp>
 
 #include "shape/core/atomic_file.h"
 #include "shape/core/error.h"
@@ -32,7 +32,8 @@ void FromBlob(std::string_view arrays, const json& j, M* m) {
   m->resize(j.at("r").get<Eigen::Index>(), j.at("c").get<Eigen::Index>());
   const std::size_t offset = j.at("o").get<std::size_t>();
   const std::size_t bytes = static_cast<std::size_t>(m->size()) * sizeof(typename M::Scalar);
-  if (offset > arrays.size() || bytes > arrays.size() - offset) throw std::runtime_error("an array beyond the file");
+  if (offset > arrays.size() || bytes > arrays.size() - offset)
+    throw std::runtime_error("an array beyond the file");
   if (bytes > 0) std::memcpy(m->data(), arrays.data() + offset, bytes);
 }
 
@@ -51,7 +52,8 @@ TriangleMesh MeshFrom(std::string_view a, const json& j) {
   FromBlob(a, j.at("positions"), &mesh.vertices.positions);
   FromBlob(a, j.at("normals"), &mesh.vertices.normals);
   FromBlob(a, j.at("colors"), &mesh.vertices.colors);
-  for (const auto& [name, values] : j.at("scalars").items()) FromBlob(a, values, &mesh.vertices.scalars[name]);
+  for (const auto& [name, values] : j.at("scalars").items())
+    FromBlob(a, values, &mesh.vertices.scalars[name]);
   FromBlob(a, j.at("faces"), &mesh.faces);
   return mesh;
 }
@@ -69,8 +71,9 @@ Timings TimingsFrom(const json& j) {
 }
 
 json RoiJson(std::string& a, const ChestRoi& roi) {
-  return {{"origin", Blob(a, roi.origin)}, {"lateral", Blob(a, roi.lateral)}, {"sternal", Blob(a, roi.sternal)},
-          {"normal", Blob(a, roi.normal)}, {"u", {roi.u_min, roi.u_max}},  {"v", {roi.v_min, roi.v_max}}};
+  return {{"origin", Blob(a, roi.origin)},   {"lateral", Blob(a, roi.lateral)},
+          {"sternal", Blob(a, roi.sternal)}, {"normal", Blob(a, roi.normal)},
+          {"u", {roi.u_min, roi.u_max}},     {"v", {roi.v_min, roi.v_max}}};
 }
 
 ChestRoi RoiFrom(std::string_view a, const json& j) {
@@ -180,7 +183,8 @@ void WriteSubjectRecord(const std::filesystem::path& path, const SubjectOutcome&
   json sweeps = json::array(), poses = json::array(), landmarks = json::array();
   for (const auto& f : s.sweep_files) sweeps.push_back(f.string());
   for (const Rigid3& T : s.T_subject_sweep) poses.push_back(Blob(a, T.matrix()));
-  for (const Landmark& l : s.landmarks.items) landmarks.push_back({l.label, Blob(a, l.position), l.description});
+  for (const Landmark& l : s.landmarks.items)
+    landmarks.push_back({l.label, Blob(a, l.position), l.description});
   const json j = {{"pectus_subject_record", kVersion},
                   {"name", s.name},
                   {"ok", s.ok},

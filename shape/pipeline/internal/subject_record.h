@@ -1,6 +1,7 @@
 // pectus pipeline: one subject's outcome as a file, bit for bit (its fields as CBOR, numbers as IEEE
-// doubles; its arrays as raw little-endian bytes after the CBOR, each referred to by its offset), so that a subject computed by another process, or by an earlier run that was
-// killed, reads back exactly as if it had been computed here (docs/cluster.md).
+// doubles; its arrays as raw little-endian bytes after the CBOR, each referred to by its offset), so that a
+// subject computed by another process, or by an earlier run that was killed, reads back exactly as if it had
+// been computed here (docs/cluster.md).
 #pragma once
 
 #include <filesystem>

@@ -14,8 +14,8 @@
 
 #include "planner_plugin/plugin/planner_session.h"
 #include "planner_plugin/plugin/run_fem_dataset.h"
-#include "shape/io/patient_table_io.h"
 #include "shape/core/error.h"
+#include "shape/io/patient_table_io.h"
 #include "tests/support/bad_input.h"
 
 namespace pectus::planner {
@@ -128,7 +128,8 @@ TEST(FemDataset, TheResponseBasisIsStoredAndTakenBackByTheSamePlannerOnly) {
   settings.skin.rows = 16;
   settings.skin.columns = 24;
   const BarResponseBasisOptions basis_options;
-  const FemDatasetSummary s = RunFemDataset(dir / "one.csv", dir / "fem.h5", settings, nullptr, &basis_options);
+  const FemDatasetSummary s =
+      RunFemDataset(dir / "one.csv", dir / "fem.h5", settings, nullptr, &basis_options);
   EXPECT_GT(s.timings_s.Seconds("response_basis"), 0.0);
   const FemDataset d = ReadFemDataset(dir / "fem.h5");
   ASSERT_EQ(d.patients.size(), 1u);
@@ -165,9 +166,10 @@ TEST(FemDataset, TheResponseBasisIsStoredAndTakenBackByTheSamePlannerOnly) {
   PlannerSettings softer = settings;
   softer.fem.materials.cartilage.youngs_modulus_mpa = 20.0;
   PlannerSession other(patient, softer);
-  EXPECT_NE(BadInputMessage([&] { other.LoadBasis(stored, (dir / "fem.h5").string()); }, (dir / "fem.h5").string())
-                .find("other materials"),
-            std::string::npos);
+  EXPECT_NE(
+      BadInputMessage([&] { other.LoadBasis(stored, (dir / "fem.h5").string()); }, (dir / "fem.h5").string())
+          .find("other materials"),
+      std::string::npos);
   // A patient the file lacks.
   EXPECT_NE(BadInputMessage([&] { ReadStoredResponseBasis(dir / "fem.h5", "12"); }, (dir / "fem.h5").string())
                 .find("has no patient '12'"),

@@ -10,7 +10,8 @@
 namespace pectus {
 namespace {
 
-Similarity3 MakeSimilarity(double scale, const Eigen::Vector3d& axis, double angle_rad, const Eigen::Vector3d& t) {
+Similarity3 MakeSimilarity(double scale, const Eigen::Vector3d& axis, double angle_rad,
+                           const Eigen::Vector3d& t) {
   Similarity3 S;
   S.scale = scale;
   S.rotation = Eigen::AngleAxisd(angle_rad, axis.normalized()).toRotationMatrix();

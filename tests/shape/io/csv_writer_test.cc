@@ -37,9 +37,18 @@ TEST(CsvText, WritesWhatPrintfWrites) {
   std::uniform_int_distribution<int> exponent(-320, 308);
   Eigen::MatrixXd v(1, 2000);
   for (Eigen::Index c = 0; c < v.cols(); ++c) v(0, c) = mantissa(rng) * std::pow(10.0, exponent(rng));
-  const double special[] = {0.0, -0.0, 1.0, -1.0, 0.1, 1e-5, 123456789012.0, 9999999999.5,
-                            std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
-                            std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::denorm_min(),
+  const double special[] = {0.0,
+                            -0.0,
+                            1.0,
+                            -1.0,
+                            0.1,
+                            1e-5,
+                            123456789012.0,
+                            9999999999.5,
+                            std::numeric_limits<double>::infinity(),
+                            -std::numeric_limits<double>::infinity(),
+                            std::numeric_limits<double>::quiet_NaN(),
+                            std::numeric_limits<double>::denorm_min(),
                             std::numeric_limits<double>::max()};
   for (std::size_t k = 0; k < std::size(special); ++k) v(0, static_cast<Eigen::Index>(k)) = special[k];
   std::string expected;

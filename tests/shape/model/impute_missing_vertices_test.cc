@@ -112,7 +112,8 @@ Eigen::MatrixXd ManyModeShapes(int N, std::mt19937* rng) {
       const double u = p(v, 0) / 60.0, w = p(v, 1) / 60.0;
       double z = 0.0;
       for (int i = 0; i < 6; ++i)
-        for (int j = 0; j < 6; ++j) z += a(i, j) * std::sin(M_PI * (i + 1) * u) * std::sin(M_PI * (j + 1) * w);
+        for (int j = 0; j < 6; ++j)
+          z += a(i, j) * std::sin(M_PI * (i + 1) * u) * std::sin(M_PI * (j + 1) * w);
       X.row(n).segment<3>(3 * v) = Eigen::RowVector3d(p(v, 0), p(v, 1), z);
     }
   }

@@ -24,7 +24,8 @@ TEST(Colormap, DivergingIsWhiteAtZeroAndClamps) {
   EXPECT_GE(mid.r, 240);
   EXPECT_GE(mid.g, 240);
   EXPECT_GE(mid.b, 240);
-  const Rgb below = MapColor(-100, -2, 2, Colormap::kDiverging), lo = MapColor(-2, -2, 2, Colormap::kDiverging);
+  const Rgb below = MapColor(-100, -2, 2, Colormap::kDiverging),
+            lo = MapColor(-2, -2, 2, Colormap::kDiverging);
   EXPECT_EQ(below.b, lo.b);
   EXPECT_GT(lo.b, lo.r);  // blue for negative
   const Rgb hi = MapColor(2, -2, 2, Colormap::kDiverging);

@@ -21,7 +21,8 @@ SubjectOutcome SomeSubject() {
   std::normal_distribution<double> g(0.0, 50.0);
   auto random = [&](auto* m, Eigen::Index rows, Eigen::Index cols) {
     m->resize(rows, cols);
-    for (Eigen::Index k = 0; k < m->size(); ++k) m->data()[k] = static_cast<typename std::decay_t<decltype(*m)>::Scalar>(g(rng));
+    for (Eigen::Index k = 0; k < m->size(); ++k)
+      m->data()[k] = static_cast<typename std::decay_t<decltype(*m)>::Scalar>(g(rng));
   };
   SubjectOutcome s;
   s.name = "subject_017";
@@ -54,7 +55,8 @@ SubjectOutcome SomeSubject() {
 template <class M>
 bool SameBits(const M& a, const M& b) {
   return a.rows() == b.rows() && a.cols() == b.cols() &&
-         std::memcmp(a.data(), b.data(), sizeof(typename M::Scalar) * static_cast<std::size_t>(a.size())) == 0;
+         std::memcmp(a.data(), b.data(), sizeof(typename M::Scalar) * static_cast<std::size_t>(a.size())) ==
+             0;
 }
 
 TEST(SubjectRecord, ReadsBackEveryFieldBitForBit) {
@@ -75,7 +77,8 @@ TEST(SubjectRecord, ReadsBackEveryFieldBitForBit) {
   EXPECT_TRUE(SameBits(r.surface.vertices.normals, s.surface.vertices.normals));
   EXPECT_TRUE(SameBits(r.surface.faces, s.surface.faces));
   EXPECT_EQ(r.surface.vertices.colors.rows(), 0);
-  EXPECT_TRUE(SameBits(r.surface.vertices.scalars.at("data_distance"), s.surface.vertices.scalars.at("data_distance")));
+  EXPECT_TRUE(SameBits(r.surface.vertices.scalars.at("data_distance"),
+                       s.surface.vertices.scalars.at("data_distance")));
   ASSERT_EQ(r.landmarks.size(), 1u);
   EXPECT_TRUE(SameBits(r.landmarks.items[0].position, s.landmarks.items[0].position));
   EXPECT_EQ(r.landmarks.items[0].description, "SN");
@@ -96,13 +99,14 @@ TEST(SubjectRecord, AFileThatIsNotARecordIsAClearError) {
   std::string bytes(size, '\0');
   std::ifstream(path, std::ios::binary).read(bytes.data(), static_cast<std::streamsize>(size));
   const std::vector<std::string> bad = {
-      bytes.substr(0, 5),              // shorter than the CBOR's length
-      bytes.substr(0, 40),             // the CBOR cut
-      bytes.substr(0, size - 1000),    // the arrays cut
-      std::string("\xa1\x61x\x01", 4), // a CBOR document of another version (no length first)
+      bytes.substr(0, 5),               // shorter than the CBOR's length
+      bytes.substr(0, 40),              // the CBOR cut
+      bytes.substr(0, size - 1000),     // the arrays cut
+      std::string("\xa1\x61x\x01", 4),  // a CBOR document of another version (no length first)
       std::string(200, '\xff')};
   for (const std::string& b : bad) {
-    std::ofstream(path, std::ios::binary | std::ios::trunc).write(b.data(), static_cast<std::streamsize>(b.size()));
+    std::ofstream(path, std::ios::binary | std::ios::trunc)
+        .write(b.data(), static_cast<std::streamsize>(b.size()));
     try {
       ReadSubjectRecord(path);
       ADD_FAILURE() << "read a file of " << b.size() << " bytes";
