@@ -11,7 +11,7 @@ SHARED     ?= $(abspath ../shared)
 FUZZ_SECONDS ?= 10
 CMAKE_ARGS ?=
 
-.PHONY: demo test shared bootstrap build unit-test sanitize sanitize-all fuzz-smoke fuzz-smoke-all bench format clean
+.PHONY: demo test shared bootstrap build unit-test sanitize sanitize-all fuzz-smoke fuzz-smoke-all bench format format-check clean
 
 # The sanitizers' settings for every sanitized program (tests, the programs they start, fuzzers): leaks
 # are errors; only third-party leaks are suppressed, each with its reason (cmake/sanitizers/lsan.supp);
@@ -34,6 +34,7 @@ demo: shared build
 # repeat without the checks, and the two builds together would not fit CI's 40 minutes on 2 cores. The
 # Release (GCC -O3) suite is `make build unit-test`; `make demo` builds Release.
 test: shared
+	$(MAKE) --no-print-directory format-check
 	$(MAKE) --no-print-directory fuzz-smoke-all
 	@echo "make test: all suites passed"
 
@@ -96,8 +97,15 @@ fuzz-smoke-all: sanitize-all
 bench: build
 	cmake --build $(BUILD) --target pectus_benchmarks -j$(JOBS)
 
+SOURCES = find apps datasets planner_plugin registration shape tests -name '*.h' -o -name '*.cc'
 format:
-	find apps datasets planner_plugin registration shape tests -name '*.h' -o -name '*.cc' | xargs clang-format -i
+	$(SOURCES) | xargs clang-format -i
+
+# The tree as `make format` leaves it (clang-format 14, .clang-format): names every file it would change
+# and fails, so that formatting does not drift (`make test` runs it first; a few seconds).
+format-check: bootstrap
+	@$(SOURCES) | xargs clang-format --dry-run -Werror
+	@echo "format-check: every source as make format leaves it"
 
 clean:
 	rm -rf $(BUILD) $(SANBUILD) $(SANBUILD)-all
