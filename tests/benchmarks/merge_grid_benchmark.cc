@@ -419,24 +419,22 @@ int main(int argc, char** argv) {
                        {"runs", runs}};
           for (const auto& [method, s] : success) {
             merge_grid::CellFigure c{skin, overlap, sampling, o.sweeps, method};
-            double ok = 0.0, sum = 0.0;
+            double ok = 0.0;
             for (double x : s) ok += x;
-            for (double x : rms[method]) sum += x;
             c.success = ok / static_cast<double>(s.size());
-            c.rms_mm = rms[method].empty() ? NAN : sum / static_cast<double>(rms[method].size());
             cell[method + "_success_rate"] = c.success;
-            cell[method + "_rms_mm_mean"] = rms[method].empty() ? json(nullptr) : json(c.rms_mm);
-            double shape = 0.0;
-            for (double x : rms[method + "_shape"]) shape += x;
-            const auto shapes = rms[method + "_shape"].size();
-            c.shape_rms_mm = shapes ? shape / double(shapes) : NAN;
-            cell[method + "_shape_rms_mm_mean"] = shapes ? json(c.shape_rms_mm) : json(nullptr);
-            const std::vector<double>& surface = rms[method + "_surface_shape"];
-            double surface_sum = 0.0;
-            for (double x : surface) surface_sum += x;
-            c.surface_fit_shape_rms_mm = surface.empty() ? NAN : surface_sum / double(surface.size());
-            cell[method + "_surface_fit_shape_rms_mm_mean"] =
-                surface.empty() ? json(nullptr) : json(c.surface_fit_shape_rms_mm);
+            // The mean of a figure over the runs that did not throw, into the picture and the cell (null:
+            // every run threw).
+            auto mean = [&](const std::string& figure, const std::string& key, double* out) {
+              const std::vector<double>& v = rms[figure];
+              double sum = 0.0;
+              for (double x : v) sum += x;
+              *out = v.empty() ? NAN : sum / double(v.size());
+              cell[method + key] = v.empty() ? json(nullptr) : json(*out);
+            };
+            mean(method, "_rms_mm_mean", &c.rms_mm);
+            mean(method + "_shape", "_shape_rms_mm_mean", &c.shape_rms_mm);
+            mean(method + "_surface_shape", "_surface_fit_shape_rms_mm_mean", &c.surface_fit_shape_rms_mm);
             picture.push_back(c);
           }
           std::string summary;
