@@ -425,12 +425,13 @@ int main(int argc, char** argv) {
             cell[method + "_success_rate"] = c.success;
             // The mean of a figure over the runs that did not throw, into the picture and the cell (null:
             // every run threw).
+            const std::string& name = method;  // a structured binding: not capturable before C++20
             auto mean = [&](const std::string& figure, const std::string& key, double* out) {
               const std::vector<double>& v = rms[figure];
               double sum = 0.0;
               for (double x : v) sum += x;
               *out = v.empty() ? NAN : sum / double(v.size());
-              cell[method + key] = v.empty() ? json(nullptr) : json(*out);
+              cell[name + key] = v.empty() ? json(nullptr) : json(*out);
             };
             mean(method, "_rms_mm_mean", &c.rms_mm);
             mean(method + "_shape", "_shape_rms_mm_mean", &c.shape_rms_mm);
